@@ -1,0 +1,9 @@
+//! The knowledge side of vmc-twin (DESIGN §3, §7–§9).
+//!
+//! This crate is the information boundary made structural: it does not depend on the twin crate,
+//! so nothing in it can name the twin's error functions, thermal nodes, parameters or seeds. It
+//! sees only what a real controller sees: nominal machine geometry, calibration datasets and
+//! sensor readings.
+pub mod metrics;
+pub mod nn;
+pub mod synthesis;

@@ -1,0 +1,1 @@
+//! Multilayer perceptrons and their training.
