@@ -1,9 +1,21 @@
 //! vmc-twin: a digital twin of a 3-axis vertical machining center.
+//!
+//! Truth side (this crate): [`machine`] descriptions, [`kinematics`] (full HTM product),
+//! the geometric [`errors`] field, the [`thermal`] network, [`sensors`], the [`twin`] that ties
+//! them together, the G-code front end ([`gcode`] syntax, [`interp`] semantics), the [`motion`]
+//! planner, the [`sim`] loop and [`report`]s. Knowledge side: the `vmc-predict` crate, re-exported
+//! as [`predict`]; it does not depend on this crate (the information boundary of DESIGN §3).
 pub use vmc_predict as predict;
 
 pub mod errors;
 pub mod gcode;
 pub mod interp;
 pub mod kinematics;
+pub mod machine;
+pub mod motion;
+pub mod program;
+pub mod report;
 pub mod sensors;
+pub mod sim;
 pub mod thermal;
+pub mod twin;

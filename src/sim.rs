@@ -1,0 +1,277 @@
+//! The simulation loop (DESIGN §2): one clock drives the thermal network, the planned motion,
+//! the (optional) compensating controller and the measurement of where the tool really was.
+//!
+//! Time advances in thermal steps (default 1 s). Within a step the heat load is what the program
+//! did during it: spindle speed in effect, mean |axis speed| and mean axis position (the ballscrew
+//! nut deposits its heat where it runs). Sensor readings are sampled once per step and held, as a
+//! controller sampling at 1 Hz would. Measurement points are taken either at the middle of every
+//! dwell (diagonal tests: the machine dwells while the laser reads) or at every interpolation
+//! cycle during motion as well.
+//!
+//! Before and after compensation are computed in the same pass: at each point the uncompensated
+//! machine is commanded `q = p` and the compensated one `q = controller(p, readings)`, under the
+//! same thermal state and the same random approach error, so they compare point by point.
+
+use thiserror::Error;
+
+use crate::motion::{Plan, SegmentKind};
+use crate::sensors::SensorReadings;
+use crate::thermal::Activity;
+use crate::twin::{Twin, TwinError};
+
+/// Where measurement points are taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SampleMode {
+    /// At the middle of each dwell (G4): the measurement points of a diagonal test.
+    Dwells,
+    /// At every interpolation cycle during motion, plus the middle of each dwell.
+    EveryCycle,
+}
+
+/// Settings of one simulated execution.
+#[derive(Debug, Clone, Copy)]
+pub struct SimConfig {
+    /// Thermal integration and sensor sampling step, s (default 1 s).
+    pub thermal_step_s: f64,
+    /// Interpolation cycle for [`SampleMode::EveryCycle`], s (default 0.001 s).
+    pub interp_cycle_s: f64,
+    /// Where to measure.
+    pub sample_mode: SampleMode,
+    /// Sub-samples per thermal step used to average the axis activity (default 8).
+    pub activity_subsamples: usize,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            thermal_step_s: 1.0,
+            interp_cycle_s: 0.001,
+            sample_mode: SampleMode::Dwells,
+            activity_subsamples: 8,
+        }
+    }
+}
+
+/// A controller that turns a commanded tool position into axis commands (the compensation).
+/// It gets nothing of the twin but the held sensor readings.
+pub trait Compensator {
+    /// Axis command `q` (mm) for the commanded tool position `p_mm`.
+    fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3];
+}
+
+/// One measurement point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointRecord {
+    /// Index of the point in this run (0-based).
+    pub index: usize,
+    /// Twin time, s.
+    pub time_s: f64,
+    /// Source line of the segment being executed.
+    pub line: usize,
+    /// Commanded tool position (workpiece coordinates), mm.
+    pub commanded_mm: [f64; 3],
+    /// True error without compensation, µm.
+    pub error_before_um: [f64; 3],
+    /// Thermal part of the uncompensated error (error now minus the same point with the machine
+    /// at its reference temperature), µm. Truth, for reports only.
+    pub thermal_part_um: [f64; 3],
+    /// Axis command issued by the compensator, mm (None without compensation).
+    pub compensated_command_mm: Option<[f64; 3]>,
+    /// True error with compensation, µm (None without compensation).
+    pub error_after_um: Option<[f64; 3]>,
+    /// Whether the point is a dwell (measurement) point.
+    pub at_dwell: bool,
+}
+
+/// Receives what happens during a run (report, recorder, progress bar).
+pub trait Observer {
+    /// A measurement point was taken.
+    fn on_point(&mut self, _point: &PointRecord, _readings: &SensorReadings) {}
+    /// A thermal step ended at `time_s` with these (new) readings.
+    fn on_thermal_step(&mut self, _time_s: f64, _readings: &SensorReadings) {}
+}
+
+/// An observer that ignores everything (warm-up programs).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NullObserver;
+
+impl Observer for NullObserver {}
+
+/// An observer that keeps every point.
+#[derive(Debug, Default, Clone)]
+pub struct CollectPoints {
+    /// The points, in time order.
+    pub points: Vec<PointRecord>,
+}
+
+impl Observer for CollectPoints {
+    fn on_point(&mut self, point: &PointRecord, _readings: &SensorReadings) {
+        self.points.push(point.clone());
+    }
+}
+
+/// Why a run failed.
+#[derive(Debug, Error)]
+pub enum SimError {
+    /// The twin rejected a step.
+    #[error(transparent)]
+    Twin(#[from] TwinError),
+    /// Bad settings.
+    #[error("simulation settings: {0}")]
+    Config(String),
+}
+
+/// Executes `plan` on `twin` from its current state. Plan time 0 is the twin's current time.
+pub fn execute(
+    twin: &mut Twin,
+    plan: &Plan,
+    cfg: &SimConfig,
+    mut compensator: Option<&mut dyn Compensator>,
+    observer: &mut dyn Observer,
+) -> Result<(), SimError> {
+    if !(cfg.thermal_step_s > 0.0 && cfg.thermal_step_s.is_finite()) {
+        return Err(SimError::Config(format!("thermal step must be > 0 s, got {}", cfg.thermal_step_s)));
+    }
+    if !(cfg.interp_cycle_s > 0.0 && cfg.interp_cycle_s.is_finite()) {
+        return Err(SimError::Config(format!("interpolation cycle must be > 0 s, got {}", cfg.interp_cycle_s)));
+    }
+    let mut clock = Clock {
+        plan_t_s: 0.0,
+        step_s: cfg.thermal_step_s,
+        subsamples: cfg.activity_subsamples.max(1),
+        readings: twin.sensor_readings(),
+        last_motion_segment: None,
+    };
+    let mut index = 0;
+    for (si, seg) in plan.segments().iter().enumerate() {
+        let moving = matches!(seg.kind, SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc);
+        match (seg.kind, cfg.sample_mode) {
+            (SegmentKind::Dwell, _) => {
+                let t = seg.t_start_s + 0.5 * seg.duration_s;
+                clock.run_until(twin, plan, t, observer)?;
+                clock.note_direction(twin, plan, si);
+                let p = seg.end_mm;
+                measure(twin, &clock.readings, &mut compensator, observer, index, seg.line, p, true);
+                index += 1;
+            }
+            (_, SampleMode::EveryCycle) if moving && seg.duration_s > 0.0 => {
+                let n = (seg.duration_s / cfg.interp_cycle_s).ceil() as usize;
+                for k in 0..n {
+                    let t = seg.t_start_s + k as f64 * cfg.interp_cycle_s;
+                    clock.run_until(twin, plan, t, observer)?;
+                    twin.note_motion(plan.velocity_at(t));
+                    let p = plan.position_at(t);
+                    measure(twin, &clock.readings, &mut compensator, observer, index, seg.line, p, false);
+                    index += 1;
+                }
+            }
+            _ => {}
+        }
+        if moving {
+            clock.last_motion_segment = Some(si);
+        }
+    }
+    clock.run_until(twin, plan, plan.duration_s(), observer)?;
+    Ok(())
+}
+
+/// Keeps the thermal clock in step with plan time.
+struct Clock {
+    plan_t_s: f64,
+    step_s: f64,
+    subsamples: usize,
+    readings: SensorReadings,
+    last_motion_segment: Option<usize>,
+}
+
+impl Clock {
+    /// Advances the twin in whole thermal steps while a step fits before `t_s`, then a final
+    /// partial step so the twin's time equals plan time `t_s`.
+    fn run_until(
+        &mut self,
+        twin: &mut Twin,
+        plan: &Plan,
+        t_s: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<(), SimError> {
+        while self.plan_t_s < t_s - 1e-12 {
+            let dt = self.step_s.min(t_s - self.plan_t_s);
+            // A partial step only moves time on; the readings are re-sampled at whole steps.
+            let activity = activity_over(plan, self.plan_t_s, self.plan_t_s + dt, self.subsamples);
+            twin.advance(dt, &activity)?;
+            let before = (self.plan_t_s / self.step_s).floor();
+            self.plan_t_s += dt;
+            if (self.plan_t_s / self.step_s + 1e-9).floor() > before {
+                self.readings = twin.sensor_readings();
+                observer.on_thermal_step(twin.time_s(), &self.readings);
+            }
+        }
+        Ok(())
+    }
+
+    /// Tells the twin the direction of the last motion (reversal error) before a dwell point.
+    fn note_direction(&mut self, twin: &mut Twin, plan: &Plan, _dwell_segment: usize) {
+        if let Some(si) = self.last_motion_segment {
+            let s = &plan.segments()[si];
+            twin.note_motion([0, 1, 2].map(|a| s.end_mm[a] - s.start_mm[a]));
+        }
+    }
+}
+
+/// Mean spindle speed, mean |axis speed| and mean position over [t0, t1].
+pub fn activity_over(plan: &Plan, t0_s: f64, t1_s: f64, subsamples: usize) -> Activity {
+    let n = subsamples.max(1);
+    let mut speed = [0.0; 3];
+    let mut pos = [0.0; 3];
+    let mut rpm = 0.0;
+    for k in 0..n {
+        let t = t0_s + (k as f64 + 0.5) / n as f64 * (t1_s - t0_s);
+        let v = plan.velocity_at(t);
+        let p = plan.position_at(t);
+        for a in 0..3 {
+            speed[a] += v[a].abs() * 60.0 / n as f64;
+            pos[a] += p[a] / n as f64;
+        }
+        rpm += plan.spindle_rpm_at(t) / n as f64;
+    }
+    Activity {
+        spindle_rpm: rpm,
+        axis_pos_mm: pos,
+        axis_speed_mm_per_min: speed,
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn measure(
+    twin: &mut Twin,
+    readings: &SensorReadings,
+    compensator: &mut Option<&mut dyn Compensator>,
+    observer: &mut dyn Observer,
+    index: usize,
+    line: usize,
+    p_mm: [f64; 3],
+    at_dwell: bool,
+) {
+    let approach = twin.draw_approach_mm();
+    let before = twin.tool_error_mm(p_mm, p_mm, approach);
+    let cold = twin.tool_error_at_ref_temp_mm(p_mm, p_mm, approach);
+    let (q, after) = match compensator {
+        Some(c) => {
+            let q = c.axis_command_mm(p_mm, readings);
+            (Some(q), Some(twin.tool_error_mm(p_mm, q, approach)))
+        }
+        None => (None, None),
+    };
+    let point = PointRecord {
+        index,
+        time_s: twin.time_s(),
+        line,
+        commanded_mm: p_mm,
+        error_before_um: [before.x * 1e3, before.y * 1e3, before.z * 1e3],
+        thermal_part_um: [0, 1, 2].map(|a| (before[a] - cold[a]) * 1e3),
+        compensated_command_mm: q,
+        error_after_um: after.map(|e| [e.x * 1e3, e.y * 1e3, e.z * 1e3]),
+        at_dwell,
+    };
+    observer.on_point(&point, readings);
+}
