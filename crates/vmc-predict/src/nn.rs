@@ -1,1 +1,0 @@
-//! Multilayer perceptrons and their training.
