@@ -4,5 +4,6 @@ pub use vmc_predict as predict;
 pub mod gcode;
 pub mod interp;
 pub mod kinematics;
+pub mod motion;
 pub mod thermal;
 pub mod sensors;
