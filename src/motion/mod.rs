@@ -1,0 +1,622 @@
+//! Motion planner: canonical moves (from [`crate::interp`]) → timed segments of machine motion.
+//!
+//! # Model
+//! Every motion is an **exact stop** (like G61): each segment starts and ends at rest, with a
+//! trapezoidal speed profile along its path length (triangular when the path is too short to
+//! reach the speed cap; see [`profile`]). This is the simplest honest model for measurement
+//! programs (which stop at every point anyway) and makes every segment independent. There is no
+//! look-ahead blending (G64), no jerk limit and no servo lag: the planned position *is* the
+//! commanded setpoint.
+//!
+//! Speed caps (all speeds converted to mm/s internally):
+//! - **Rapid (G0)**, straight line with unit direction `u`: path speed
+//!   `v = min_i rapid_i / |u_i|`, so no axis exceeds its own rapid rate.
+//! - **Feed (G1)**: `v = min(F, max_feed, min_i rapid_i / |u_i|)`; `F ≤ 0` is an error.
+//! - **Lines**, acceleration: `a = min_i accel_i / |u_i|` (direction cosines), so no axis exceeds
+//!   its own acceleration.
+//! - **Arcs (G2/G3)**, with `a_min` the smallest axis acceleration: the tangential acceleration
+//!   and the centripetal acceleration `v_plane² / r` are each held to `a_min / √2`, so their
+//!   vector sum — and hence every axis's acceleration — stays within `a_min`. Speed is also
+//!   capped by `min(F, max_feed)`, by the in-plane axes' rapid rates and, for a helix, by the
+//!   axis rapid rate along the helix.
+//!
+//! Non-motion actions: **dwell (G4)** and **tool change (M6)** are zero-motion segments
+//! (a tool change lasts [`MotionLimits::tool_change_s`]; the tool-change travel itself is not
+//! modelled). **Spindle** commands take no time (no spindle run-up is modelled): they change the
+//! spindle state attached to every following segment, so the thermal model sees the spindle
+//! load over time. **Program end (M2/M30)** ends the plan; the spindle is off after it and moves
+//! after it are ignored. A zero-length move is kept (its line stays in the plan) as a
+//! zero-duration segment.
+//!
+//! Units: positions mm (machine coordinates), times s, speeds mm/s inside segments (limits and
+//! activity reports use mm/min as G-code does), accelerations mm/s², angles rad.
+
+mod geometry;
+mod profile;
+mod sampling;
+mod travel;
+
+#[cfg(test)]
+mod tests;
+
+pub use geometry::{plane_axes, ArcGeometry, Geometry, MIN_ARC_RADIUS_MM};
+pub use profile::SpeedProfile;
+pub use sampling::{AxisActivity, DwellPoint, Sample, Samples, DEFAULT_INTERPOLATION_CYCLE_S};
+pub use travel::check_travel;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::interp::{CanonKind, CanonMove, SpindleDir};
+
+/// Errors of the motion planner.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MotionError {
+    /// A field of [`MotionLimits`] is out of range.
+    #[error("motion limit `{field}` = {value} is invalid: {reason}")]
+    InvalidLimit {
+        /// Field name, with the axis index for arrays (e.g. `rapid_mm_per_min[1]`).
+        field: String,
+        /// Offending value.
+        value: f64,
+        /// What the value must satisfy.
+        reason: &'static str,
+    },
+    /// A feed move (G1/G2/G3) with a feed rate that is not positive and finite.
+    #[error("line {line}: feed rate {feed_mm_per_min} mm/min must be positive")]
+    NonPositiveFeed {
+        /// Source line.
+        line: usize,
+        /// Programmed feed (mm/min).
+        feed_mm_per_min: f64,
+    },
+    /// A dwell with a negative or non-finite duration.
+    #[error("line {line}: dwell of {duration_s} s must be non-negative")]
+    InvalidDwell {
+        /// Source line.
+        line: usize,
+        /// Programmed dwell (s).
+        duration_s: f64,
+    },
+    /// A spindle speed that is negative or non-finite.
+    #[error("line {line}: spindle speed {rpm} rpm must be non-negative")]
+    InvalidSpindleSpeed {
+        /// Source line.
+        line: usize,
+        /// Programmed speed (rpm).
+        rpm: f64,
+    },
+    /// A position (end point, centre or start) with a NaN or infinite coordinate.
+    #[error("line {line}: {what} has a non-finite coordinate {pos_mm:?} mm")]
+    NonFinitePosition {
+        /// Source line (0 for the plan's start position).
+        line: usize,
+        /// Which position (`"end point"`, `"arc centre"`, `"start position"`).
+        what: &'static str,
+        /// The offending position (mm).
+        pos_mm: [f64; 3],
+    },
+    /// An arc whose start or end lies on its centre.
+    #[error("line {line}: arc radius below {min_radius_mm} mm")]
+    DegenerateArc {
+        /// Source line.
+        line: usize,
+        /// Smallest radius accepted (mm).
+        min_radius_mm: f64,
+    },
+    /// An interpolation cycle that is not positive and finite.
+    #[error("sampling period {dt_s} s must be positive and finite")]
+    InvalidSamplePeriod {
+        /// Requested period (s).
+        dt_s: f64,
+    },
+    /// A travel range whose minimum is not below its maximum (or not finite).
+    #[error("travel range of axis {axis} is invalid: [{min_mm}, {max_mm}] mm")]
+    InvalidTravel {
+        /// Axis letter.
+        axis: char,
+        /// Lower travel limit (mm).
+        min_mm: f64,
+        /// Upper travel limit (mm).
+        max_mm: f64,
+    },
+    /// A segment reaches outside an axis's travel.
+    #[error("line {line}: axis {axis} reaches {pos_mm} mm, outside travel [{min_mm}, {max_mm}] mm")]
+    AxisOutOfTravel {
+        /// Source line of the offending segment.
+        line: usize,
+        /// Axis letter (`'X'`, `'Y'`, `'Z'`).
+        axis: char,
+        /// The extreme position reached (mm).
+        pos_mm: f64,
+        /// Lower travel limit (mm).
+        min_mm: f64,
+        /// Upper travel limit (mm).
+        max_mm: f64,
+    },
+}
+
+/// Kinematic limits of the machine's axes, as given in the machine description.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionLimits {
+    /// Rapid (G0) rate per axis X, Y, Z (mm/min); typical `[30000.0; 3]`.
+    pub rapid_mm_per_min: [f64; 3],
+    /// Largest programmable path feed (mm/min); typical `10000.0`. Higher F words are capped.
+    pub max_feed_mm_per_min: f64,
+    /// Maximum acceleration per axis X, Y, Z (mm/s²); typical `[2000.0; 3]`.
+    pub max_accel_mm_per_s2: [f64; 3],
+    /// Duration of an M6 tool change (s); optional, default `5.0` (a typical VMC carousel).
+    #[serde(default = "default_tool_change_s")]
+    pub tool_change_s: f64,
+}
+
+fn default_tool_change_s() -> f64 {
+    5.0
+}
+
+impl Default for MotionLimits {
+    /// A mid-size VMC: 30 m/min rapids, 10 m/min max feed, 2 m/s² on every axis, 5 s tool change.
+    fn default() -> Self {
+        Self {
+            rapid_mm_per_min: [30_000.0; 3],
+            max_feed_mm_per_min: 10_000.0,
+            max_accel_mm_per_s2: [2_000.0; 3],
+            tool_change_s: default_tool_change_s(),
+        }
+    }
+}
+
+impl MotionLimits {
+    /// Checks every field is finite and positive (`tool_change_s` may be 0), naming the bad one.
+    pub fn validate(&self) -> Result<(), MotionError> {
+        fn positive(field: String, value: f64) -> Result<(), MotionError> {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(MotionError::InvalidLimit {
+                    field,
+                    value,
+                    reason: "must be positive and finite",
+                })
+            }
+        }
+        for (i, &v) in self.rapid_mm_per_min.iter().enumerate() {
+            positive(format!("rapid_mm_per_min[{i}]"), v)?;
+        }
+        positive("max_feed_mm_per_min".into(), self.max_feed_mm_per_min)?;
+        for (i, &v) in self.max_accel_mm_per_s2.iter().enumerate() {
+            positive(format!("max_accel_mm_per_s2[{i}]"), v)?;
+        }
+        if !(self.tool_change_s.is_finite() && self.tool_change_s >= 0.0) {
+            return Err(MotionError::InvalidLimit {
+                field: "tool_change_s".into(),
+                value: self.tool_change_s,
+                reason: "must be non-negative and finite",
+            });
+        }
+        Ok(())
+    }
+
+    /// Rapid rates per axis in mm/s.
+    fn rapid_mm_per_s(&self) -> [f64; 3] {
+        self.rapid_mm_per_min.map(|v| v / 60.0)
+    }
+
+    /// Smallest axis acceleration (mm/s²).
+    fn min_accel_mm_per_s2(&self) -> f64 {
+        self.max_accel_mm_per_s2.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// What a segment does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SegmentKind {
+    /// G0 straight-line rapid.
+    Rapid,
+    /// G1 straight feed move.
+    Feed,
+    /// G2/G3 arc or helix at feed.
+    Arc,
+    /// G4 dwell: no motion.
+    Dwell,
+    /// M6 tool change to `tool`: no modelled motion.
+    ToolChange {
+        /// Tool number loaded.
+        tool: u32,
+    },
+}
+
+/// One timed piece of the plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segment {
+    /// Source line (1-based) of the canonical move.
+    pub line: usize,
+    /// What the segment does.
+    pub kind: SegmentKind,
+    /// Position at the segment's start (mm).
+    pub start_mm: [f64; 3],
+    /// Position at the segment's end (mm).
+    pub end_mm: [f64; 3],
+    /// Time at which the segment starts, from the start of the plan (s).
+    pub t_start_s: f64,
+    /// Duration (s); 0 for a zero-length move.
+    pub duration_s: f64,
+    /// Path shape.
+    pub geometry: Geometry,
+    /// Speed along the path over time.
+    pub profile: SpeedProfile,
+    /// Spindle direction in effect during the segment.
+    pub spindle_dir: SpindleDir,
+    /// Spindle speed in effect during the segment (rpm); 0 when the spindle is off.
+    pub spindle_rpm: f64,
+}
+
+impl Segment {
+    /// Time at which the segment ends (s).
+    pub fn t_end_s(&self) -> f64 {
+        self.t_start_s + self.duration_s
+    }
+
+    /// Position at local time `t_local_s` from the segment's start (clamped to the segment; mm).
+    pub fn position_at_local(&self, t_local_s: f64) -> [f64; 3] {
+        if t_local_s >= self.duration_s {
+            return self.end_mm;
+        }
+        if t_local_s <= 0.0 {
+            return self.start_mm;
+        }
+        self.geometry
+            .point_at(self.start_mm, self.profile.distance_at(t_local_s))
+    }
+
+    /// Velocity at local time `t_local_s` (mm/s); zero outside the segment and at its ends.
+    pub fn velocity_at_local(&self, t_local_s: f64) -> [f64; 3] {
+        let speed = self.profile.speed_at(t_local_s);
+        if speed == 0.0 {
+            return [0.0; 3];
+        }
+        let tangent = self
+            .geometry
+            .tangent_at(self.profile.distance_at(t_local_s));
+        tangent.map(|c| c * speed)
+    }
+}
+
+/// A timed motion plan: consecutive segments from `start_mm`, beginning at time 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    segments: Vec<Segment>,
+    start_mm: [f64; 3],
+    program_end_line: Option<usize>,
+}
+
+/// Builds the timed plan of `moves`, starting at rest at `start_mm` (machine coordinates, mm).
+pub fn plan(
+    moves: &[CanonMove],
+    start_mm: [f64; 3],
+    limits: &MotionLimits,
+) -> Result<Plan, MotionError> {
+    limits.validate()?;
+    check_finite(0, "start position", start_mm)?;
+    let mut builder = PlanBuilder {
+        limits,
+        pos_mm: start_mm,
+        t_s: 0.0,
+        spindle_dir: SpindleDir::Off,
+        spindle_rpm: 0.0,
+        segments: Vec::with_capacity(moves.len()),
+    };
+    let mut program_end_line = None;
+    for mv in moves {
+        if builder.apply(mv)? {
+            program_end_line = Some(mv.line);
+            break;
+        }
+    }
+    Ok(Plan {
+        segments: builder.segments,
+        start_mm,
+        program_end_line,
+    })
+}
+
+fn check_finite(line: usize, what: &'static str, pos_mm: [f64; 3]) -> Result<(), MotionError> {
+    if pos_mm.iter().all(|c| c.is_finite()) {
+        Ok(())
+    } else {
+        Err(MotionError::NonFinitePosition { line, what, pos_mm })
+    }
+}
+
+/// Running state while the plan is built.
+struct PlanBuilder<'a> {
+    limits: &'a MotionLimits,
+    pos_mm: [f64; 3],
+    t_s: f64,
+    spindle_dir: SpindleDir,
+    spindle_rpm: f64,
+    segments: Vec<Segment>,
+}
+
+impl PlanBuilder<'_> {
+    /// Applies one canonical move; returns true at program end.
+    fn apply(&mut self, mv: &CanonMove) -> Result<bool, MotionError> {
+        let line = mv.line;
+        match mv.kind {
+            CanonKind::Traverse { end_mm } => {
+                check_finite(line, "end point", end_mm)?;
+                let geometry = Geometry::line(self.pos_mm, end_mm);
+                let (speed, accel) = self.line_caps(&geometry, f64::INFINITY);
+                self.push(line, SegmentKind::Rapid, end_mm, geometry, speed, accel);
+            }
+            CanonKind::Feed {
+                end_mm,
+                feed_mm_per_min,
+            } => {
+                check_finite(line, "end point", end_mm)?;
+                let feed_mm_per_s = self.feed_mm_per_s(line, feed_mm_per_min)?;
+                let geometry = Geometry::line(self.pos_mm, end_mm);
+                let (speed, accel) = self.line_caps(&geometry, feed_mm_per_s);
+                self.push(line, SegmentKind::Feed, end_mm, geometry, speed, accel);
+            }
+            CanonKind::Arc {
+                end_mm,
+                center_mm,
+                plane,
+                clockwise,
+                extra_turns,
+                feed_mm_per_min,
+            } => {
+                check_finite(line, "end point", end_mm)?;
+                check_finite(line, "arc centre", center_mm)?;
+                let feed_mm_per_s = self.feed_mm_per_s(line, feed_mm_per_min)?;
+                let arc = ArcGeometry::new(
+                    self.pos_mm,
+                    end_mm,
+                    center_mm,
+                    plane,
+                    clockwise,
+                    extra_turns,
+                )
+                .ok_or(MotionError::DegenerateArc {
+                    line,
+                    min_radius_mm: MIN_ARC_RADIUS_MM,
+                })?;
+                let (speed, accel) = self.arc_caps(&arc, feed_mm_per_s);
+                self.push(line, SegmentKind::Arc, end_mm, Geometry::Arc(arc), speed, accel);
+            }
+            CanonKind::Dwell { duration_s } => {
+                if !(duration_s.is_finite() && duration_s >= 0.0) {
+                    return Err(MotionError::InvalidDwell { line, duration_s });
+                }
+                self.push_stationary(line, SegmentKind::Dwell, duration_s);
+            }
+            CanonKind::ToolChange { tool } => {
+                let duration_s = self.limits.tool_change_s;
+                self.push_stationary(line, SegmentKind::ToolChange { tool }, duration_s);
+            }
+            CanonKind::Spindle { dir, rpm } => {
+                if !(rpm.is_finite() && rpm >= 0.0) {
+                    return Err(MotionError::InvalidSpindleSpeed { line, rpm });
+                }
+                self.spindle_dir = dir;
+                self.spindle_rpm = if dir == SpindleDir::Off { 0.0 } else { rpm };
+            }
+            CanonKind::ProgramEnd => {
+                self.spindle_dir = SpindleDir::Off;
+                self.spindle_rpm = 0.0;
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
+    /// Programmed feed in mm/s, capped by the machine's max feed; errors if not positive.
+    fn feed_mm_per_s(&self, line: usize, feed_mm_per_min: f64) -> Result<f64, MotionError> {
+        if !(feed_mm_per_min.is_finite() && feed_mm_per_min > 0.0) {
+            return Err(MotionError::NonPositiveFeed {
+                line,
+                feed_mm_per_min,
+            });
+        }
+        Ok(feed_mm_per_min.min(self.limits.max_feed_mm_per_min) / 60.0)
+    }
+
+    /// Path speed and acceleration caps of a straight line (mm/s, mm/s²), given the path speed
+    /// requested (`∞` for a rapid).
+    fn line_caps(&self, geometry: &Geometry, requested_mm_per_s: f64) -> (f64, f64) {
+        let dir = match geometry {
+            Geometry::Line { dir, .. } => *dir,
+            _ => [0.0; 3],
+        };
+        let rapid = self.limits.rapid_mm_per_s();
+        let mut speed = requested_mm_per_s;
+        let mut accel = f64::INFINITY;
+        for i in 0..3 {
+            let cos = dir[i].abs();
+            if cos > 0.0 {
+                speed = speed.min(rapid[i] / cos);
+                accel = accel.min(self.limits.max_accel_mm_per_s2[i] / cos);
+            }
+        }
+        // A zero-length line has no direction: any finite caps give the zero-duration profile.
+        if !accel.is_finite() {
+            accel = self.limits.min_accel_mm_per_s2();
+        }
+        if !speed.is_finite() {
+            speed = rapid[0];
+        }
+        (speed, accel)
+    }
+
+    /// Path speed and acceleration caps of an arc or helix (mm/s, mm/s²).
+    fn arc_caps(&self, arc: &ArcGeometry, feed_mm_per_s: f64) -> (f64, f64) {
+        let [iu, iv, iw] = plane_axes(arc.plane);
+        let rapid = self.limits.rapid_mm_per_s();
+        // Half the acceleration budget each way: |a_t e_t + a_c e_n| ≤ a_min (e_t ⟂ e_n).
+        let a_budget = self.limits.min_accel_mm_per_s2() / std::f64::consts::SQRT_2;
+        let turns_rad = arc.sweep_angle_rad.abs();
+        let min_radius_mm = arc.radius_mm.min(arc.end_radius_mm);
+        // In-plane share of the path speed (1 for a flat arc) and axis share (helix).
+        let plane_share = (arc.radius_mm.max(arc.end_radius_mm) * turns_rad / arc.length_mm).min(1.0);
+        let axis_share = arc.axis_travel_mm.abs() / arc.length_mm;
+        let mut speed = feed_mm_per_s.min(rapid[iu]).min(rapid[iv]);
+        if axis_share > 0.0 {
+            speed = speed.min(rapid[iw] / axis_share);
+        }
+        if plane_share > 0.0 {
+            speed = speed.min((a_budget * min_radius_mm).sqrt() / plane_share);
+        }
+        (speed, a_budget)
+    }
+
+    fn push(
+        &mut self,
+        line: usize,
+        kind: SegmentKind,
+        end_mm: [f64; 3],
+        geometry: Geometry,
+        speed_mm_per_s: f64,
+        accel_mm_per_s2: f64,
+    ) {
+        let profile = SpeedProfile::new(geometry.length_mm(), speed_mm_per_s, accel_mm_per_s2);
+        let duration_s = profile.duration_s();
+        self.segments.push(Segment {
+            line,
+            kind,
+            start_mm: self.pos_mm,
+            end_mm,
+            t_start_s: self.t_s,
+            duration_s,
+            geometry,
+            profile,
+            spindle_dir: self.spindle_dir,
+            spindle_rpm: self.spindle_rpm,
+        });
+        self.pos_mm = end_mm;
+        self.t_s += duration_s;
+    }
+
+    fn push_stationary(&mut self, line: usize, kind: SegmentKind, duration_s: f64) {
+        self.segments.push(Segment {
+            line,
+            kind,
+            start_mm: self.pos_mm,
+            end_mm: self.pos_mm,
+            t_start_s: self.t_s,
+            duration_s,
+            geometry: Geometry::Point,
+            profile: SpeedProfile::stationary(),
+            spindle_dir: self.spindle_dir,
+            spindle_rpm: self.spindle_rpm,
+        });
+        self.t_s += duration_s;
+    }
+}
+
+impl Plan {
+    /// The timed segments, in execution order.
+    pub fn segments(&self) -> &[Segment] {
+        &self.segments
+    }
+
+    /// Position at time 0 (mm).
+    pub fn start_mm(&self) -> [f64; 3] {
+        self.start_mm
+    }
+
+    /// Position at the end of the plan (mm).
+    pub fn end_mm(&self) -> [f64; 3] {
+        self.segments.last().map_or(self.start_mm, |s| s.end_mm)
+    }
+
+    /// Line of the M2/M30 that ended the plan, if the program had one.
+    pub fn program_end_line(&self) -> Option<usize> {
+        self.program_end_line
+    }
+
+    /// Total duration of the plan (s).
+    pub fn duration_s(&self) -> f64 {
+        self.segments.last().map_or(0.0, Segment::t_end_s)
+    }
+
+    /// Index of the segment in effect at time `t_s`: the last one starting at or before `t_s`
+    /// (the last segment after the end); `None` before time 0 or for an empty plan. O(log n).
+    pub fn segment_index_at(&self, t_s: f64) -> Option<usize> {
+        let after = self.segments.partition_point(|s| s.t_start_s <= t_s);
+        after.checked_sub(1)
+    }
+
+    /// Commanded position at time `t_s` (mm); the start before 0, the end after the plan.
+    pub fn position_at(&self, t_s: f64) -> [f64; 3] {
+        match self.segment_index_at(t_s) {
+            Some(i) => {
+                let seg = &self.segments[i];
+                seg.position_at_local(t_s - seg.t_start_s)
+            }
+            None => self.start_mm,
+        }
+    }
+
+    /// Commanded velocity at time `t_s` (mm/s); zero outside the plan.
+    pub fn velocity_at(&self, t_s: f64) -> [f64; 3] {
+        match self.segment_index_at(t_s) {
+            Some(i) => {
+                let seg = &self.segments[i];
+                seg.velocity_at_local(t_s - seg.t_start_s)
+            }
+            None => [0.0; 3],
+        }
+    }
+
+    /// Spindle speed in effect at time `t_s` (rpm); 0 before the plan and after its end.
+    pub fn spindle_rpm_at(&self, t_s: f64) -> f64 {
+        if t_s >= self.duration_s() {
+            return 0.0;
+        }
+        self.segment_index_at(t_s)
+            .map_or(0.0, |i| self.segments[i].spindle_rpm)
+    }
+}
+
+#[cfg(test)]
+mod limit_tests {
+    use super::*;
+
+    #[test]
+    fn limits_parse_from_toml_with_default_tool_change() {
+        let text = "rapid_mm_per_min = [30000.0, 30000.0, 24000.0]\n\
+                    max_feed_mm_per_min = 10000.0\n\
+                    max_accel_mm_per_s2 = [2000.0, 2000.0, 1500.0]\n";
+        let limits: MotionLimits = toml::from_str(text).expect("valid limits");
+        assert_eq!(limits.tool_change_s, 5.0);
+        assert_eq!(limits.rapid_mm_per_min[2], 24000.0);
+        assert!(limits.validate().is_ok());
+    }
+
+    #[test]
+    fn unknown_limit_field_is_rejected() {
+        let text = "rapid_mm_per_min = [1.0, 1.0, 1.0]\nmax_feed_mm_per_min = 1.0\n\
+                    max_accel_mm_per_s2 = [1.0, 1.0, 1.0]\njerk = 3.0\n";
+        assert!(toml::from_str::<MotionLimits>(text).is_err());
+    }
+
+    #[test]
+    fn validate_names_the_bad_axis_field() {
+        let mut limits = MotionLimits::default();
+        limits.max_accel_mm_per_s2[1] = 0.0;
+        match limits.validate() {
+            Err(MotionError::InvalidLimit { field, .. }) => {
+                assert_eq!(field, "max_accel_mm_per_s2[1]")
+            }
+            other => panic!("expected InvalidLimit, got {other:?}"),
+        }
+        let mut limits = MotionLimits::default();
+        limits.tool_change_s = f64::NAN;
+        assert!(matches!(
+            limits.validate(),
+            Err(MotionError::InvalidLimit { field, .. }) if field == "tool_change_s"
+        ));
+    }
+}
