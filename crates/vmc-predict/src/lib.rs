@@ -5,6 +5,7 @@
 //! sees only what a real controller sees: nominal machine geometry, calibration datasets and
 //! sensor readings.
 pub mod linreg;
+pub mod dataset;
 pub mod metrics;
 pub mod nn;
 pub mod synthesis;

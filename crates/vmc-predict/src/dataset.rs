@@ -1,0 +1,333 @@
+//! Calibration datasets (DESIGN §6): what virtual — or real — instruments measured, with the
+//! temperature sensor readings logged at the same instants. CSV with units in the column names,
+//! the same format a user would produce from a real machine.
+//!
+//! Columns: `cycle, time_s, instrument, x_mm, y_mm, z_mm, dx_um, dy_um, dz_um, rx_urad, ry_urad,
+//! rz_urad`, then one `<sensor>_degc` column per temperature sensor. The measurement columns mean,
+//! per instrument:
+//!
+//! | instrument   | dx, dy, dz (µm)               | rx, ry, rz (µrad)                    |
+//! |--------------|-------------------------------|--------------------------------------|
+//! | `laser_x`    | δx, δy, δz of the X axis      | εx, εy, εz of the X axis             |
+//! | `laser_y`    | … of the Y axis               | … of the Y axis                      |
+//! | `laser_z`    | … of the Z axis               | … of the Z axis                      |
+//! | `spindle`    | spindle drifts δx, δy, δz      | tilts εx, εy; rz empty               |
+//! | `squareness` | empty                         | α_yz (EA0Z), α_xz (EB0Z), α_xy (EC0Y) |
+//! | `volumetric` | volumetric error Ex, Ey, Ez    | empty                                |
+//!
+//! Empty cells are read as "not measured" (NaN in memory).
+
+use std::fmt::Write as _;
+
+use thiserror::Error;
+
+/// Which instrument produced a record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Instrument {
+    /// 6-DOF laser interferometer along X.
+    LaserX,
+    /// 6-DOF laser interferometer along Y.
+    LaserY,
+    /// 6-DOF laser interferometer along Z.
+    LaserZ,
+    /// 5-probe spindle test (ISO 230-3).
+    Spindle,
+    /// Squareness measurement (laser with optical square).
+    Squareness,
+    /// Direct volumetric error measurement at a point (e.g. laser tracker).
+    Volumetric,
+}
+
+impl Instrument {
+    /// All instruments, in file order.
+    pub const ALL: [Instrument; 6] = [
+        Instrument::LaserX,
+        Instrument::LaserY,
+        Instrument::LaserZ,
+        Instrument::Spindle,
+        Instrument::Squareness,
+        Instrument::Volumetric,
+    ];
+
+    /// The name used in the `instrument` column.
+    pub fn name(self) -> &'static str {
+        match self {
+            Instrument::LaserX => "laser_x",
+            Instrument::LaserY => "laser_y",
+            Instrument::LaserZ => "laser_z",
+            Instrument::Spindle => "spindle",
+            Instrument::Squareness => "squareness",
+            Instrument::Volumetric => "volumetric",
+        }
+    }
+
+    /// Parses a name of the `instrument` column.
+    pub fn from_name(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|i| i.name() == s)
+    }
+
+    /// The laser instrument of axis 0, 1, 2.
+    pub fn laser(axis: usize) -> Self {
+        [Instrument::LaserX, Instrument::LaserY, Instrument::LaserZ][axis.min(2)]
+    }
+}
+
+/// One reading of one instrument, with the temperatures logged at that instant.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    /// Thermal cycle the record belongs to (free text without commas).
+    pub cycle: String,
+    /// Time since the start of the cycle, s.
+    pub time_s: f64,
+    /// Which instrument.
+    pub instrument: Instrument,
+    /// Machine axis position where it was measured, mm.
+    pub pos_mm: [f64; 3],
+    /// dx, dy, dz in µm and rx, ry, rz in µrad (NaN = not measured).
+    pub values: [f64; 6],
+    /// Sensor readings, °C, in the dataset's sensor order.
+    pub temps_degc: Vec<f64>,
+}
+
+/// A calibration dataset.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Dataset {
+    /// Sensor names, in column order.
+    pub sensor_names: Vec<String>,
+    /// The records, in time order within each cycle.
+    pub records: Vec<Record>,
+}
+
+/// A dataset file that cannot be used.
+#[derive(Debug, Error, PartialEq)]
+pub enum DatasetError {
+    /// A required column is missing.
+    #[error("{source_name}: missing column `{column}`")]
+    MissingColumn {
+        /// File name.
+        source_name: String,
+        /// The column.
+        column: String,
+    },
+    /// A cell cannot be read.
+    #[error("{source_name}: line {line}, column `{column}`: {msg}")]
+    BadCell {
+        /// File name.
+        source_name: String,
+        /// 1-based line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// What is wrong.
+        msg: String,
+    },
+    /// The file has no header or no records.
+    #[error("{source_name}: {msg}")]
+    Empty {
+        /// File name.
+        source_name: String,
+        /// What is missing.
+        msg: String,
+    },
+}
+
+const FIXED: [&str; 12] = [
+    "cycle", "time_s", "instrument", "x_mm", "y_mm", "z_mm", "dx_um", "dy_um", "dz_um", "rx_urad",
+    "ry_urad", "rz_urad",
+];
+
+fn cell(v: f64) -> String {
+    if v.is_nan() {
+        String::new()
+    } else {
+        format!("{v}")
+    }
+}
+
+impl Dataset {
+    /// Records of one instrument.
+    pub fn of(&self, instrument: Instrument) -> impl Iterator<Item = &Record> {
+        self.records.iter().filter(move |r| r.instrument == instrument)
+    }
+
+    /// Writes the CSV text (shortest round-trip formatting of f64: reading it back gives the
+    /// same bits).
+    pub fn to_csv(&self) -> String {
+        let mut s = FIXED.join(",");
+        for n in &self.sensor_names {
+            let _ = write!(s, ",{n}_degc");
+        }
+        s.push('\n');
+        for r in &self.records {
+            let _ = write!(
+                s,
+                "{},{},{},{},{},{}",
+                r.cycle,
+                r.time_s,
+                r.instrument.name(),
+                r.pos_mm[0],
+                r.pos_mm[1],
+                r.pos_mm[2]
+            );
+            for v in r.values {
+                let _ = write!(s, ",{}", cell(v));
+            }
+            for t in &r.temps_degc {
+                let _ = write!(s, ",{t}");
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// Parses CSV text; `source_name` names the file in errors.
+    pub fn from_csv(text: &str, source_name: &str) -> Result<Dataset, DatasetError> {
+        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+        let (_, header) = lines.next().ok_or_else(|| DatasetError::Empty {
+            source_name: source_name.into(),
+            msg: "empty file (no header line)".into(),
+        })?;
+        let cols: Vec<&str> = header.split(',').map(|c| c.trim()).collect();
+        let mut idx = [0usize; 12];
+        for (k, name) in FIXED.iter().enumerate() {
+            idx[k] = cols.iter().position(|c| c == name).ok_or_else(|| DatasetError::MissingColumn {
+                source_name: source_name.into(),
+                column: name.to_string(),
+            })?;
+        }
+        let sensor_cols: Vec<(usize, String)> = cols
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| c.strip_suffix("_degc").map(|n| (i, n.to_string())))
+            .collect();
+        if sensor_cols.is_empty() {
+            return Err(DatasetError::MissingColumn {
+                source_name: source_name.into(),
+                column: "<sensor>_degc (no temperature columns)".into(),
+            });
+        }
+        let mut records = Vec::new();
+        for (ln, line) in lines {
+            let line_no = ln + 1;
+            let cells: Vec<&str> = line.split(',').map(|c| c.trim()).collect();
+            let bad = |col: &str, msg: String| DatasetError::BadCell {
+                source_name: source_name.into(),
+                line: line_no,
+                column: col.into(),
+                msg,
+            };
+            if cells.len() != cols.len() {
+                return Err(bad("*", format!("{} cells, the header has {}", cells.len(), cols.len())));
+            }
+            let num = |k: usize, required: bool| -> Result<f64, DatasetError> {
+                let c = cells[idx[k]];
+                if c.is_empty() && !required {
+                    return Ok(f64::NAN);
+                }
+                let v: f64 = c.parse().map_err(|_| bad(FIXED[k], format!("not a number: \"{c}\"")))?;
+                if !v.is_finite() {
+                    return Err(bad(FIXED[k], format!("not a finite number: \"{c}\"")));
+                }
+                Ok(v)
+            };
+            let instrument = Instrument::from_name(cells[idx[2]]).ok_or_else(|| {
+                bad("instrument", format!("unknown instrument \"{}\"", cells[idx[2]]))
+            })?;
+            let mut values = [f64::NAN; 6];
+            for (k, v) in values.iter_mut().enumerate() {
+                *v = num(6 + k, false)?;
+            }
+            let mut temps = Vec::with_capacity(sensor_cols.len());
+            for (i, name) in &sensor_cols {
+                let c = cells[*i];
+                let v: f64 = c
+                    .parse()
+                    .ok()
+                    .filter(|v: &f64| v.is_finite())
+                    .ok_or_else(|| bad(&format!("{name}_degc"), format!("not a finite temperature: \"{c}\"")))?;
+                temps.push(v);
+            }
+            records.push(Record {
+                cycle: cells[idx[0]].to_string(),
+                time_s: num(1, true)?,
+                instrument,
+                pos_mm: [num(3, true)?, num(4, true)?, num(5, true)?],
+                values,
+                temps_degc: temps,
+            });
+        }
+        if records.is_empty() {
+            return Err(DatasetError::Empty {
+                source_name: source_name.into(),
+                msg: "no records after the header".into(),
+            });
+        }
+        Ok(Dataset {
+            sensor_names: sensor_cols.into_iter().map(|(_, n)| n).collect(),
+            records,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Dataset {
+        Dataset {
+            sensor_names: vec!["BXH".into(), "Amb".into()],
+            records: vec![
+                Record {
+                    cycle: "c1".into(),
+                    time_s: 0.0,
+                    instrument: Instrument::LaserX,
+                    pos_mm: [40.0, 200.0, -225.0],
+                    values: [-1.25, 0.5, 0.1, 3.0, -2.0, 1.0],
+                    temps_degc: vec![20.0625, 20.0],
+                },
+                Record {
+                    cycle: "c1".into(),
+                    time_s: 30.5,
+                    instrument: Instrument::Spindle,
+                    pos_mm: [280.0, 200.0, -100.0],
+                    values: [0.3, -0.2, -12.7, 1.5, 0.25, f64::NAN],
+                    temps_degc: vec![25.125, 20.1],
+                },
+            ],
+        }
+    }
+
+    #[test]
+    fn csv_round_trip_keeps_every_bit_and_empty_cells() {
+        let d = sample();
+        let text = d.to_csv();
+        assert!(text.starts_with("cycle,time_s,instrument,x_mm,y_mm,z_mm,dx_um"));
+        assert!(text.contains(",1.5,0.25,,25.125,20.1\n"));
+        let back = Dataset::from_csv(&text, "d.csv").unwrap();
+        assert_eq!(back.sensor_names, d.sensor_names);
+        assert_eq!(back.records.len(), 2);
+        assert_eq!(back.records[0], d.records[0]);
+        assert!(back.records[1].values[5].is_nan());
+    }
+
+    #[test]
+    fn a_missing_column_is_named() {
+        let text = sample().to_csv().replace("ry_urad", "ry");
+        let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
+        assert_eq!(err.to_string(), "d.csv: missing column `ry_urad`");
+    }
+
+    #[test]
+    fn a_nan_temperature_names_line_and_column() {
+        let text = sample().to_csv().replace("25.125", "NaN");
+        let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
+        assert_eq!(err.to_string(), "d.csv: line 3, column `BXH_degc`: not a finite temperature: \"NaN\"");
+    }
+
+    #[test]
+    fn an_unknown_instrument_is_rejected() {
+        let text = sample().to_csv().replace("spindle", "ballbar");
+        let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
+        assert!(err.to_string().contains("unknown instrument \"ballbar\""), "{err}");
+    }
+}
