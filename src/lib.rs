@@ -5,5 +5,5 @@ pub mod gcode;
 pub mod interp;
 pub mod kinematics;
 pub mod motion;
-pub mod thermal;
 pub mod sensors;
+pub mod thermal;
