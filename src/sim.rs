@@ -37,8 +37,6 @@ pub struct SimConfig {
     pub interp_cycle_s: f64,
     /// Where to measure.
     pub sample_mode: SampleMode,
-    /// Sub-samples per thermal step used to average the axis activity (default 8).
-    pub activity_subsamples: usize,
 }
 
 impl Default for SimConfig {
@@ -47,7 +45,6 @@ impl Default for SimConfig {
             thermal_step_s: 1.0,
             interp_cycle_s: 0.001,
             sample_mode: SampleMode::Dwells,
-            activity_subsamples: 8,
         }
     }
 }
@@ -138,7 +135,6 @@ pub fn execute(
     let mut clock = Clock {
         plan_t_s: 0.0,
         step_s: cfg.thermal_step_s,
-        subsamples: cfg.activity_subsamples.max(1),
         readings: twin.sensor_readings(),
         last_motion_segment: None,
     };
@@ -179,7 +175,6 @@ pub fn execute(
 struct Clock {
     plan_t_s: f64,
     step_s: f64,
-    subsamples: usize,
     readings: SensorReadings,
     last_motion_segment: Option<usize>,
 }
@@ -197,7 +192,7 @@ impl Clock {
         while self.plan_t_s < t_s - 1e-12 {
             let dt = self.step_s.min(t_s - self.plan_t_s);
             // A partial step only moves time on; the readings are re-sampled at whole steps.
-            let activity = activity_over(plan, self.plan_t_s, self.plan_t_s + dt, self.subsamples);
+            let activity = activity_over(plan, self.plan_t_s, self.plan_t_s + dt);
             twin.advance(dt, &activity)?;
             let before = (self.plan_t_s / self.step_s).floor();
             self.plan_t_s += dt;
@@ -218,26 +213,14 @@ impl Clock {
     }
 }
 
-/// Mean spindle speed, mean |axis speed| and mean position over [t0, t1].
-pub fn activity_over(plan: &Plan, t0_s: f64, t1_s: f64, subsamples: usize) -> Activity {
-    let n = subsamples.max(1);
-    let mut speed = [0.0; 3];
-    let mut pos = [0.0; 3];
-    let mut rpm = 0.0;
-    for k in 0..n {
-        let t = t0_s + (k as f64 + 0.5) / n as f64 * (t1_s - t0_s);
-        let v = plan.velocity_at(t);
-        let p = plan.position_at(t);
-        for a in 0..3 {
-            speed[a] += v[a].abs() * 60.0 / n as f64;
-            pos[a] += p[a] / n as f64;
-        }
-        rpm += plan.spindle_rpm_at(t) / n as f64;
-    }
+/// Mean spindle speed, mean |axis speed| and mean position over [t0, t1] (exact per axis, from
+/// the planner), the spindle speed sampled at the interval's middle.
+pub fn activity_over(plan: &Plan, t0_s: f64, t1_s: f64) -> Activity {
+    let a = plan.axis_activity(t0_s, t1_s);
     Activity {
-        spindle_rpm: rpm,
-        axis_pos_mm: pos,
-        axis_speed_mm_per_min: speed,
+        spindle_rpm: plan.spindle_rpm_at(0.5 * (t0_s + t1_s)),
+        axis_pos_mm: a.mean_pos_mm,
+        axis_speed_mm_per_min: a.mean_abs_vel_mm_per_min,
     }
 }
 

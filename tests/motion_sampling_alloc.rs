@@ -52,12 +52,18 @@ fn sampling_a_one_hour_program_at_1_ms_does_not_allocate_per_sample() {
     let before = ALLOCATIONS.with(Cell::get);
     let mut count = 0usize;
     let mut x_sum_mm = 0.0;
-    for s in p.sample(DEFAULT_INTERPOLATION_CYCLE_S).expect("valid period") {
+    for s in p
+        .sample(DEFAULT_INTERPOLATION_CYCLE_S)
+        .expect("valid period")
+    {
         count += 1;
         x_sum_mm += s.pos_mm[0];
     }
     let allocations = ALLOCATIONS.with(Cell::get) - before;
     assert!(count > 3_600_000, "{count} samples");
     assert!(x_sum_mm > 0.0);
-    assert_eq!(allocations, 0, "{allocations} allocations for {count} samples");
+    assert_eq!(
+        allocations, 0,
+        "{allocations} allocations for {count} samples"
+    );
 }

@@ -303,13 +303,21 @@ mod tests {
 
     #[test]
     fn zero_radius_arc_is_rejected() {
-        assert!(ArcGeometry::new([0.0; 3], [1.0, 0.0, 0.0], [0.0; 3], Plane::Xy, true, 0).is_none());
+        assert!(
+            ArcGeometry::new([0.0; 3], [1.0, 0.0, 0.0], [0.0; 3], Plane::Xy, true, 0).is_none()
+        );
     }
 
     #[test]
     fn zero_length_line_has_zero_direction() {
         let g = Geometry::line([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]);
-        assert_eq!(g, Geometry::Line { dir: [0.0; 3], length_mm: 0.0 });
+        assert_eq!(
+            g,
+            Geometry::Line {
+                dir: [0.0; 3],
+                length_mm: 0.0
+            }
+        );
         assert_eq!(g.point_at([1.0, 2.0, 3.0], 0.0), [1.0, 2.0, 3.0]);
     }
 }

@@ -3,7 +3,7 @@
 //! # Model
 //! Every motion is an **exact stop** (like G61): each segment starts and ends at rest, with a
 //! trapezoidal speed profile along its path length (triangular when the path is too short to
-//! reach the speed cap; see [`profile`]). This is the simplest honest model for measurement
+//! reach the speed cap; see [`SpeedProfile`]). This is the simplest honest model for measurement
 //! programs (which stop at every point anyway) and makes every segment independent. There is no
 //! look-ahead blending (G64), no jerk limit and no servo lag: the planned position *is* the
 //! commanded setpoint.
@@ -121,7 +121,9 @@ pub enum MotionError {
         max_mm: f64,
     },
     /// A segment reaches outside an axis's travel.
-    #[error("line {line}: axis {axis} reaches {pos_mm} mm, outside travel [{min_mm}, {max_mm}] mm")]
+    #[error(
+        "line {line}: axis {axis} reaches {pos_mm} mm, outside travel [{min_mm}, {max_mm}] mm"
+    )]
     AxisOutOfTravel {
         /// Source line of the offending segment.
         line: usize,
@@ -205,7 +207,10 @@ impl MotionLimits {
 
     /// Smallest axis acceleration (mm/s²).
     fn min_accel_mm_per_s2(&self) -> f64 {
-        self.max_accel_mm_per_s2.iter().copied().fold(f64::INFINITY, f64::min)
+        self.max_accel_mm_per_s2
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -384,7 +389,14 @@ impl PlanBuilder<'_> {
                     min_radius_mm: MIN_ARC_RADIUS_MM,
                 })?;
                 let (speed, accel) = self.arc_caps(&arc, feed_mm_per_s);
-                self.push(line, SegmentKind::Arc, end_mm, Geometry::Arc(arc), speed, accel);
+                self.push(
+                    line,
+                    SegmentKind::Arc,
+                    end_mm,
+                    Geometry::Arc(arc),
+                    speed,
+                    accel,
+                );
             }
             CanonKind::Dwell { duration_s } => {
                 if !(duration_s.is_finite() && duration_s >= 0.0) {
@@ -459,7 +471,8 @@ impl PlanBuilder<'_> {
         let turns_rad = arc.sweep_angle_rad.abs();
         let min_radius_mm = arc.radius_mm.min(arc.end_radius_mm);
         // In-plane share of the path speed (1 for a flat arc) and axis share (helix).
-        let plane_share = (arc.radius_mm.max(arc.end_radius_mm) * turns_rad / arc.length_mm).min(1.0);
+        let plane_share =
+            (arc.radius_mm.max(arc.end_radius_mm) * turns_rad / arc.length_mm).min(1.0);
         let axis_share = arc.axis_travel_mm.abs() / arc.length_mm;
         let mut speed = feed_mm_per_s.min(rapid[iu]).min(rapid[iv]);
         if axis_share > 0.0 {
@@ -612,8 +625,10 @@ mod limit_tests {
             }
             other => panic!("expected InvalidLimit, got {other:?}"),
         }
-        let mut limits = MotionLimits::default();
-        limits.tool_change_s = f64::NAN;
+        let limits = MotionLimits {
+            tool_change_s: f64::NAN,
+            ..MotionLimits::default()
+        };
         assert!(matches!(
             limits.validate(),
             Err(MotionError::InvalidLimit { field, .. }) if field == "tool_change_s"

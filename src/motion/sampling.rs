@@ -161,7 +161,8 @@ impl Plan {
     /// the plan count as standing still at the start or end. For `t1_s ≤ t0_s` it returns the
     /// instantaneous speed and position at `t0_s`.
     pub fn axis_activity(&self, t0_s: f64, t1_s: f64) -> AxisActivity {
-        if !(t1_s > t0_s) {
+        let span_s = t1_s - t0_s;
+        if span_s.is_nan() || span_s <= 0.0 {
             let v = self.velocity_at(t0_s);
             return AxisActivity {
                 mean_abs_vel_mm_per_min: v.map(|c| c.abs() * 60.0),
@@ -200,7 +201,6 @@ impl Plan {
                 pos_integral_mm_s[i] += integral[i];
             }
         }
-        let span_s = t1_s - t0_s;
         AxisActivity {
             mean_abs_vel_mm_per_min: variation_mm.map(|v| v / span_s * 60.0),
             mean_pos_mm: pos_integral_mm_s.map(|p| p / span_s),

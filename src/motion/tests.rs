@@ -121,10 +121,10 @@ fn assert_kinematics_within(p: &Plan, v_max_mm_per_s: [f64; 3], limits: &MotionL
     let a_top = a_max.iter().copied().fold(0.0, f64::max);
     let mut prev: Option<Sample> = None;
     for s in p.sample(dt).expect("valid period") {
-        for i in 0..3 {
+        for (i, v_max) in v_max_mm_per_s.iter().enumerate() {
             assert!(s.pos_mm[i].is_finite() && s.vel_mm_per_s[i].is_finite());
             assert!(
-                s.vel_mm_per_s[i].abs() <= v_max_mm_per_s[i] * (1.0 + 1e-12),
+                s.vel_mm_per_s[i].abs() <= v_max * (1.0 + 1e-12),
                 "axis {i} at {} s: {} mm/s > {}",
                 s.time_s,
                 s.vel_mm_per_s[i],
@@ -133,11 +133,11 @@ fn assert_kinematics_within(p: &Plan, v_max_mm_per_s: [f64; 3], limits: &MotionL
         }
         if let Some(q) = prev {
             let h = s.time_s - q.time_s;
-            for i in 0..3 {
+            for (i, a_axis) in a_max.iter().enumerate() {
                 let dv = (s.vel_mm_per_s[i] - q.vel_mm_per_s[i]).abs();
                 // Mean acceleration over the step; 1e-9 mm/s of rounding slack.
                 assert!(
-                    dv <= a_max[i] * h * (1.0 + 1e-9) + 1e-9,
+                    dv <= a_axis * h * (1.0 + 1e-9) + 1e-9,
                     "axis {i} jumps {dv} mm/s in {h} s at {} s",
                     s.time_s
                 );
@@ -189,7 +189,11 @@ fn assert_on_circle_turning(
         assert!((r - radius_mm).abs() < NM, "radius {r} at {} s", s.time_s);
         let turn = cross(d, s.vel_mm_per_s)[iw];
         if norm(s.vel_mm_per_s) > 1e-6 {
-            assert!(turn * expected_sign > 0.0, "wrong direction at {} s", s.time_s);
+            assert!(
+                turn * expected_sign > 0.0,
+                "wrong direction at {} s",
+                s.time_s
+            );
             moving += 1;
         }
     }
@@ -217,7 +221,10 @@ fn g2_arcs_turn_clockwise_seen_from_the_plane_axis_in_all_planes() {
             };
             // Quarter turn clockwise, three quarters counter-clockwise.
             let expected_sweep = if clockwise { -PI / 2.0 } else { 1.5 * PI };
-            assert!((sweep - expected_sweep).abs() < 1e-12, "{plane:?} {clockwise}");
+            assert!(
+                (sweep - expected_sweep).abs() < 1e-12,
+                "{plane:?} {clockwise}"
+            );
             let sign = if clockwise { -1.0 } else { 1.0 };
             assert_on_circle_turning(&p, [0.0; 3], 10.0, plane, sign);
             assert_eq!(p.position_at(p.duration_s()), end);
@@ -232,8 +239,12 @@ fn helix_advances_linearly_with_the_swept_angle() {
     let center = [50.0, 50.0, 0.0];
     let start = [70.0, 50.0, 0.0];
     let end = [50.0, 70.0, 9.0];
-    let p = plan(&[arc(1, end, center, Plane::Xy, false, 2, 2000.0)], start, &limits)
-        .expect("valid helix");
+    let p = plan(
+        &[arc(1, end, center, Plane::Xy, false, 2, 2000.0)],
+        start,
+        &limits,
+    )
+    .expect("valid helix");
     let sweep = 2.0 * 2.0 * PI + PI / 2.0;
     for s in p.sample(1e-3).expect("valid period") {
         // The height gives the fraction; the in-plane point must be at the matching angle.
@@ -243,8 +254,16 @@ fn helix_advances_linearly_with_the_swept_angle() {
             center[0] + 20.0 * theta.cos(),
             center[1] + 20.0 * theta.sin(),
         ];
-        assert!((s.pos_mm[0] - expected[0]).abs() < NM, "x at {} s", s.time_s);
-        assert!((s.pos_mm[1] - expected[1]).abs() < NM, "y at {} s", s.time_s);
+        assert!(
+            (s.pos_mm[0] - expected[0]).abs() < NM,
+            "x at {} s",
+            s.time_s
+        );
+        assert!(
+            (s.pos_mm[1] - expected[1]).abs() < NM,
+            "y at {} s",
+            s.time_s
+        );
     }
     let v_cap = limits.rapid_mm_per_min.map(|v| v / 60.0);
     assert_kinematics_within(&p, v_cap, &limits);
@@ -255,24 +274,60 @@ fn helix_advances_linearly_with_the_swept_angle() {
 fn small_radius_arc_slows_down_for_centripetal_acceleration() {
     // r = 1 mm: v²/r ≤ 2000/√2 gives v ≤ √(1414.2) = 37.6 mm/s, below F6000 = 100 mm/s.
     let limits = MotionLimits::default();
-    let prog = [arc(1, [1.0, 0.0, 0.0], [0.0; 3], Plane::Xy, true, 0, 6000.0)];
-    let p = plan(&prog, [1.0, 0.0, 0.0], &limits).expect("valid circle");
-    let v_limit = p.segments()[0].profile.v_limit_mm_per_s;
-    assert!((v_limit - (2000.0 / 2f64.sqrt()).sqrt()).abs() < 1e-9, "{v_limit}");
-    assert_kinematics_within(&p, [100.0; 3], &limits);
+    // Full circles from several start angles, so the ramps fall at every orientation.
+    for k in 0..8 {
+        let phi = f64::from(k) * PI / 8.0;
+        let start = [phi.cos(), phi.sin(), 0.0];
+        let prog = [arc(1, start, [0.0; 3], Plane::Xy, true, 0, 6000.0)];
+        let p = plan(&prog, start, &limits).expect("valid circle");
+        let v_limit = p.segments()[0].profile.v_limit_mm_per_s;
+        assert!(
+            (v_limit - (2000.0 / 2f64.sqrt()).sqrt()).abs() < 1e-9,
+            "{v_limit}"
+        );
+        assert_kinematics_within(&p, [100.0; 3], &limits);
+    }
 }
 
 fn mixed_program() -> Vec<CanonMove> {
     vec![
-        mv(1, CanonKind::Spindle { dir: SpindleDir::Cw, rpm: 8000.0 }),
+        mv(
+            1,
+            CanonKind::Spindle {
+                dir: SpindleDir::Cw,
+                rpm: 8000.0,
+            },
+        ),
         rapid(2, [100.0, 50.0, 20.0]),
         feed(3, [150.0, 50.0, 20.0], 1200.0),
-        arc(4, [200.0, 50.0, 20.0], [175.0, 50.0, 20.0], Plane::Xy, true, 0, 1500.0),
+        arc(
+            4,
+            [200.0, 50.0, 20.0],
+            [175.0, 50.0, 20.0],
+            Plane::Xy,
+            true,
+            0,
+            1500.0,
+        ),
         dwell(5, 0.5),
-        arc(6, [175.0, 75.0, 10.0], [175.0, 50.0, 20.0], Plane::Xy, false, 1, 1500.0),
+        arc(
+            6,
+            [175.0, 75.0, 10.0],
+            [175.0, 50.0, 20.0],
+            Plane::Xy,
+            false,
+            1,
+            1500.0,
+        ),
         mv(7, CanonKind::ToolChange { tool: 3 }),
         feed(8, [175.0, 75.0, 10.0], 500.0),
-        mv(9, CanonKind::Spindle { dir: SpindleDir::Off, rpm: 8000.0 }),
+        mv(
+            9,
+            CanonKind::Spindle {
+                dir: SpindleDir::Off,
+                rpm: 8000.0,
+            },
+        ),
         rapid(10, [0.0, 0.0, 100.0]),
         mv(11, CanonKind::ProgramEnd),
         rapid(12, [999.0, 999.0, 999.0]),
@@ -300,17 +355,27 @@ fn program_end_stops_the_plan_and_the_spindle() {
     assert!(p.segments().iter().all(|s| s.line < 11));
     let rpm: Vec<f64> = p.segments().iter().map(|s| s.spindle_rpm).collect();
     // Lines 2..8 run with the spindle at 8000 rpm, line 10 after M5 at 0.
-    assert_eq!(rpm, vec![8000.0, 8000.0, 8000.0, 8000.0, 8000.0, 8000.0, 8000.0, 0.0]);
+    assert_eq!(
+        rpm,
+        vec![8000.0, 8000.0, 8000.0, 8000.0, 8000.0, 8000.0, 8000.0, 0.0]
+    );
     assert_eq!(p.spindle_rpm_at(0.1), 8000.0);
     assert_eq!(p.spindle_rpm_at(p.duration_s() + 1.0), 0.0);
-    let tc = p.segments().iter().find(|s| matches!(s.kind, SegmentKind::ToolChange { tool: 3 }));
+    let tc = p
+        .segments()
+        .iter()
+        .find(|s| matches!(s.kind, SegmentKind::ToolChange { tool: 3 }));
     assert_eq!(tc.map(|s| s.duration_s), Some(5.0));
 }
 
 #[test]
 fn dwell_holds_position_and_is_listed() {
     let p = plan(
-        &[feed(1, [10.0, 20.0, 30.0], 3000.0), dwell(2, 2.0), feed(3, [0.0; 3], 3000.0)],
+        &[
+            feed(1, [10.0, 20.0, 30.0], 3000.0),
+            dwell(2, 2.0),
+            feed(3, [0.0; 3], 3000.0),
+        ],
         [0.0; 3],
         &MotionLimits::default(),
     )
@@ -318,7 +383,10 @@ fn dwell_holds_position_and_is_listed() {
     let dwells: Vec<DwellPoint> = p.dwells().collect();
     assert_eq!(dwells.len(), 1);
     let d = dwells[0];
-    assert_eq!((d.line, d.pos_mm, d.duration_s), (2, [10.0, 20.0, 30.0], 2.0));
+    assert_eq!(
+        (d.line, d.pos_mm, d.duration_s),
+        (2, [10.0, 20.0, 30.0], 2.0)
+    );
     assert_eq!(d.t_start_s, p.segments()[0].duration_s);
     let held: Vec<Sample> = p
         .sample(1e-3)
@@ -343,7 +411,10 @@ fn position_is_continuous_across_segment_boundaries() {
         let at = p.position_at(t);
         let after = p.position_at(t + 1e-9);
         // Speed is zero at a boundary: within 1 ns the tool moves far less than 1 nm.
-        assert!(norm(sub(at, before)) < NM && norm(sub(after, at)) < NM, "at {t} s");
+        assert!(
+            norm(sub(at, before)) < NM && norm(sub(after, at)) < NM,
+            "at {t} s"
+        );
         assert!(norm(sub(at, w[0].end_mm)) < NM);
     }
     assert_eq!(p.position_at(-1.0), [0.0; 3]);
@@ -356,20 +427,42 @@ fn arc_bulging_past_travel_is_caught_though_its_end_points_are_inside() {
     let limits = MotionLimits::default();
     let (lo, hi) = ([-50.0, -50.0, -50.0], [50.0, 5.0, 50.0]);
     let ccw = plan(
-        &[arc(7, [-10.0, 0.0, 0.0], [0.0; 3], Plane::Xy, false, 0, 1000.0)],
+        &[arc(
+            7,
+            [-10.0, 0.0, 0.0],
+            [0.0; 3],
+            Plane::Xy,
+            false,
+            0,
+            1000.0,
+        )],
         [10.0, 0.0, 0.0],
         &limits,
     )
     .expect("valid arc");
     match check_travel(&ccw, lo, hi) {
-        Err(MotionError::AxisOutOfTravel { line, axis, pos_mm, max_mm, .. }) => {
+        Err(MotionError::AxisOutOfTravel {
+            line,
+            axis,
+            pos_mm,
+            max_mm,
+            ..
+        }) => {
             assert_eq!((line, axis, max_mm), (7, 'Y', 5.0));
             assert!((pos_mm - 10.0).abs() < NM);
         }
         other => panic!("expected AxisOutOfTravel, got {other:?}"),
     }
     let cw = plan(
-        &[arc(7, [-10.0, 0.0, 0.0], [0.0; 3], Plane::Xy, true, 0, 1000.0)],
+        &[arc(
+            7,
+            [-10.0, 0.0, 0.0],
+            [0.0; 3],
+            Plane::Xy,
+            true,
+            0,
+            1000.0,
+        )],
         [10.0, 0.0, 0.0],
         &limits,
     )
@@ -384,7 +477,10 @@ fn arc_bulging_past_travel_is_caught_though_its_end_points_are_inside() {
 #[test]
 fn line_out_of_travel_names_axis_and_line() {
     let p = plan(
-        &[rapid(1, [10.0, 10.0, 10.0]), feed(2, [10.0, 10.0, -3.0], 100.0)],
+        &[
+            rapid(1, [10.0, 10.0, 10.0]),
+            feed(2, [10.0, 10.0, -3.0], 100.0),
+        ],
         [0.0; 3],
         &MotionLimits::default(),
     )
@@ -418,26 +514,45 @@ fn zero_length_moves_give_zero_duration_and_no_nan() {
     assert_eq!(samples[0].pos_mm, start);
     assert_eq!(samples[0].vel_mm_per_s, [0.0; 3]);
     let act = p.axis_activity(0.0, 1.0);
-    assert!(act.mean_pos_mm.iter().chain(&act.mean_abs_vel_mm_per_min).all(|v| v.is_finite()));
+    assert!(act
+        .mean_pos_mm
+        .iter()
+        .chain(&act.mean_abs_vel_mm_per_min)
+        .all(|v| v.is_finite()));
 }
 
 #[test]
 fn bad_inputs_are_errors_not_nan() {
     let limits = MotionLimits::default();
     let err = plan(&[feed(4, [1.0, 0.0, 0.0], 0.0)], [0.0; 3], &limits);
-    assert!(matches!(err, Err(MotionError::NonPositiveFeed { line: 4, .. })));
+    assert!(matches!(
+        err,
+        Err(MotionError::NonPositiveFeed { line: 4, .. })
+    ));
     let err = plan(&[feed(4, [f64::NAN, 0.0, 0.0], 100.0)], [0.0; 3], &limits);
-    assert!(matches!(err, Err(MotionError::NonFinitePosition { line: 4, .. })));
+    assert!(matches!(
+        err,
+        Err(MotionError::NonFinitePosition { line: 4, .. })
+    ));
     let err = plan(&[dwell(2, -1.0)], [0.0; 3], &limits);
-    assert!(matches!(err, Err(MotionError::InvalidDwell { line: 2, .. })));
+    assert!(matches!(
+        err,
+        Err(MotionError::InvalidDwell { line: 2, .. })
+    ));
     let err = plan(
         &[arc(3, [5.0, 0.0, 0.0], [0.0; 3], Plane::Xy, true, 0, 100.0)],
         [0.0; 3],
         &limits,
     );
-    assert!(matches!(err, Err(MotionError::DegenerateArc { line: 3, .. })));
+    assert!(matches!(
+        err,
+        Err(MotionError::DegenerateArc { line: 3, .. })
+    ));
     let p = plan(&[], [0.0; 3], &limits).expect("empty program");
-    assert!(matches!(p.sample(0.0), Err(MotionError::InvalidSamplePeriod { .. })));
+    assert!(matches!(
+        p.sample(0.0),
+        Err(MotionError::InvalidSamplePeriod { .. })
+    ));
     assert_eq!(p.sample(1e-3).expect("valid period").count(), 0);
 }
 
@@ -454,7 +569,11 @@ fn axis_activity_of_a_line_matches_hand_computed_means() {
     let act = p.axis_activity(0.0, 1.05);
     assert!((act.mean_abs_vel_mm_per_min[0] - 100.0 / 1.05 * 60.0).abs() < 1e-9);
     assert_eq!(act.mean_abs_vel_mm_per_min[1], 0.0);
-    assert!((act.mean_pos_mm[0] - 50.0).abs() < 1e-9, "{:?}", act.mean_pos_mm);
+    assert!(
+        (act.mean_pos_mm[0] - 50.0).abs() < 1e-9,
+        "{:?}",
+        act.mean_pos_mm
+    );
     // Over [1.05, 3.05] the machine stands at 100 mm.
     let idle = p.axis_activity(1.05, 3.05);
     assert_eq!(idle.mean_abs_vel_mm_per_min, [0.0; 3]);
@@ -465,7 +584,15 @@ fn axis_activity_of_a_line_matches_hand_computed_means() {
 fn axis_activity_of_an_arc_matches_fine_sampling() {
     // Full circle r = 20 mm: x and y each travel 4r = 80 mm in total.
     let limits = MotionLimits::default();
-    let prog = [arc(1, [20.0, 0.0, 0.0], [0.0; 3], Plane::Xy, true, 0, 3000.0)];
+    let prog = [arc(
+        1,
+        [20.0, 0.0, 0.0],
+        [0.0; 3],
+        Plane::Xy,
+        true,
+        0,
+        3000.0,
+    )];
     let p = plan(&prog, [20.0, 0.0, 0.0], &limits).expect("valid circle");
     let t_end = p.duration_s();
     let act = p.axis_activity(0.0, t_end);
@@ -488,7 +615,10 @@ fn axis_activity_of_an_arc_matches_fine_sampling() {
         }
     }
     for i in 0..3 {
-        assert!((act.mean_abs_vel_mm_per_min[i] - v_sum[i] * 60.0).abs() < 1e-2, "v {i}");
+        assert!(
+            (act.mean_abs_vel_mm_per_min[i] - v_sum[i] * 60.0).abs() < 1e-2,
+            "v {i}"
+        );
         assert!((act.mean_pos_mm[i] - p_sum[i]).abs() < 1e-3, "p {i}");
     }
 }
@@ -496,12 +626,18 @@ fn axis_activity_of_an_arc_matches_fine_sampling() {
 #[test]
 fn sampling_an_hour_long_program_streams_every_period() {
     let p = plan(
-        &[feed(1, [100.0, 0.0, 0.0], 6000.0), dwell(2, 3600.0), rapid(3, [0.0; 3])],
+        &[
+            feed(1, [100.0, 0.0, 0.0], 6000.0),
+            dwell(2, 3600.0),
+            rapid(3, [0.0; 3]),
+        ],
         [0.0; 3],
         &MotionLimits::default(),
     )
     .expect("valid program");
-    let samples = p.sample(DEFAULT_INTERPOLATION_CYCLE_S).expect("valid period");
+    let samples = p
+        .sample(DEFAULT_INTERPOLATION_CYCLE_S)
+        .expect("valid period");
     let expected = samples.size_hint().0;
     assert!(expected > 3_600_000);
     let (mut count, mut last) = (0usize, None);
