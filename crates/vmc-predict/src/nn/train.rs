@@ -22,6 +22,7 @@
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
+use super::activation::Activation;
 use super::mlp::{Init, Mlp};
 use super::samples::Samples;
 use super::NnError;
@@ -37,6 +38,8 @@ pub struct TrainConfig {
     pub seed: u64,
     /// Initialisation scheme [Nguyen–Widrow].
     pub init: Init,
+    /// Hidden-layer activation of nets created by [`train`] [std tanh].
+    pub activation: Activation,
     /// Independent runs from different seeds; the best on validation is kept [1].
     pub restarts: usize,
     /// Maximum LM iterations per run [200].
@@ -62,6 +65,7 @@ impl Default for TrainConfig {
         Self {
             seed: 0,
             init: Init::NguyenWidrow,
+            activation: Activation::Tanh,
             restarts: 1,
             max_epochs: 200,
             patience: 10,
@@ -130,7 +134,8 @@ pub fn train(
         } else {
             splitmix64(config.seed ^ splitmix64(r as u64))
         };
-        let mut mlp = Mlp::random(sizes, config.init, init_seed)?;
+        let mut mlp =
+            Mlp::random(sizes, config.init, init_seed)?.with_activation(config.activation);
         let mut report = train_from(&mut mlp, train, val, config)?;
         report.restart = r;
         report.init_seed = init_seed;
@@ -401,7 +406,7 @@ fn check_config(c: &TrainConfig) -> Result<(), NnError> {
     if !(c.min_rel_improvement >= 0.0 && c.min_rel_improvement < 1.0) {
         return bad("min_rel_improvement", "must be in [0, 1)");
     }
-    if !(c.target_rmse >= 0.0) {
+    if c.target_rmse.is_nan() || c.target_rmse < 0.0 {
         return bad("target_rmse", "must be ≥ 0");
     }
     Ok(())
