@@ -25,7 +25,7 @@ pub use mlp::{Init, Mlp};
 pub use normalise::Normaliser;
 pub use regressor::Regressor;
 pub use samples::{DataError, Samples};
-pub use train::{train, train_from, StopReason, TrainConfig, TrainReport};
+pub use train::{train, train_from, Damping, StopReason, TrainConfig, TrainReport};
 
 use thiserror::Error;
 
