@@ -1,13 +1,14 @@
 //! The multilayer perceptron: forward pass, analytic Jacobian (backprop) and initialisation.
 //!
-//! Layer `l` maps `a_l` (width `sizes[l]`) to `a_{l+1} = φ(W_l a_l + b_l)` with `φ = tanh` on
-//! hidden layers and the identity on the output layer. Weights are one flat `Vec<f64>`: for each
-//! layer in order, `W_l` row-major (`sizes[l+1]` rows × `sizes[l]` columns) followed by `b_l`.
+//! Layer `l` maps `a_l` (width `sizes[l]`) to `a_{l+1} = φ(W_l a_l + b_l)` with `φ = tanh` (std
+//! or the fast approximation, see [`Activation`]) on hidden layers and the identity on the
+//! output layer. Weights are one flat `Vec<f64>`: for each layer in order, `W_l` row-major (`sizes[l+1]` rows × `sizes[l]` columns) followed by `b_l`.
 
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use serde::{Deserialize, Serialize};
 
+use super::activation::Activation;
 use super::NnError;
 
 /// How initial weights are drawn.
@@ -28,6 +29,7 @@ pub enum Init {
 pub struct Mlp {
     sizes: Vec<usize>,
     weights: Vec<f64>,
+    activation: Activation,
 }
 
 /// The serialised form of [`Mlp`], validated on the way in.
@@ -37,12 +39,15 @@ struct MlpData {
     sizes: Vec<usize>,
     /// Flat weights (layout in the module doc).
     weights: Vec<f64>,
+    /// Hidden-layer activation (absent in older files: std tanh).
+    #[serde(default)]
+    activation: Activation,
 }
 
 impl TryFrom<MlpData> for Mlp {
     type Error = NnError;
     fn try_from(d: MlpData) -> Result<Self, NnError> {
-        Mlp::from_weights(&d.sizes, d.weights)
+        Ok(Mlp::from_weights(&d.sizes, d.weights)?.with_activation(d.activation))
     }
 }
 
@@ -51,6 +56,7 @@ impl From<Mlp> for MlpData {
         MlpData {
             sizes: m.sizes,
             weights: m.weights,
+            activation: m.activation,
         }
     }
 }
@@ -62,6 +68,7 @@ impl Mlp {
         Ok(Self {
             sizes: sizes.to_vec(),
             weights: vec![0.0; param_count(sizes)],
+            activation: Activation::Tanh,
         })
     }
 
@@ -82,6 +89,7 @@ impl Mlp {
         Ok(Self {
             sizes: sizes.to_vec(),
             weights,
+            activation: Activation::Tanh,
         })
     }
 
@@ -114,6 +122,18 @@ impl Mlp {
             off += n_i * n_o + n_o;
         }
         Ok(mlp)
+    }
+
+    /// The same net with another hidden-layer activation (weights unchanged).
+    #[must_use]
+    pub fn with_activation(mut self, activation: Activation) -> Self {
+        self.activation = activation;
+        self
+    }
+
+    /// The hidden-layer activation.
+    pub fn activation(&self) -> Activation {
+        self.activation
     }
 
     /// Layer widths `[n_in, hidden…, n_out]`.
@@ -240,12 +260,12 @@ impl Mlp {
                     (_, 1) => &buf_a[..n_i],
                     _ => &buf_b[..n_i],
                 };
-                dense(w, prev, &mut out[..n_o], false);
+                dense(w, prev, &mut out[..n_o], |s| s);
             } else if l % 2 == 0 {
                 let prev: &[f64] = if l == 0 { x } else { &buf_b[..n_i] };
-                dense(w, prev, &mut buf_a[..n_o], true);
+                self.dense_hidden(w, prev, &mut buf_a[..n_o]);
             } else {
-                dense(w, &buf_a[..n_i], &mut buf_b[..n_o], true);
+                self.dense_hidden(w, &buf_a[..n_i], &mut buf_b[..n_o]);
             }
         }
     }
@@ -275,9 +295,9 @@ impl Mlp {
             let (done, rest) = acts.split_at_mut(a_off);
             let prev: &[f64] = if l == 0 { x } else { &done[a_off - n_i..] };
             if l + 1 == n_layers {
-                dense(w, prev, y, false);
+                dense(w, prev, y, |s| s);
             } else {
-                dense(w, prev, &mut rest[..n_o], true);
+                self.dense_hidden(w, prev, &mut rest[..n_o]);
                 a_off += n_o;
             }
         }
@@ -320,6 +340,15 @@ impl Mlp {
         }
     }
 
+    /// One hidden layer; the activation is matched once per layer so each arm is a tight loop.
+    #[inline]
+    fn dense_hidden(&self, w: &[f64], input: &[f64], out: &mut [f64]) {
+        match self.activation {
+            Activation::Tanh => dense(w, input, out, f64::tanh),
+            Activation::FastTanh => dense(w, input, out, super::activation::fast_tanh),
+        }
+    }
+
     fn max_hidden(&self) -> usize {
         self.sizes[1..self.sizes.len() - 1]
             .iter()
@@ -343,16 +372,29 @@ impl Mlp {
 
 /// `out = φ(W·input + b)` for one layer; `w` holds W row-major followed by b.
 #[inline]
-fn dense(w: &[f64], input: &[f64], out: &mut [f64], tanh: bool) {
+fn dense(w: &[f64], input: &[f64], out: &mut [f64], phi: impl Fn(f64) -> f64) {
     let n_i = input.len();
     let (wm, b) = w.split_at(out.len() * n_i);
     for ((o, row), bias) in out.iter_mut().zip(wm.chunks_exact(n_i)).zip(b) {
-        let s = row
-            .iter()
-            .zip(input)
-            .fold(*bias, |acc, (wij, xj)| acc + wij * xj);
-        *o = if tanh { s.tanh() } else { s };
+        *o = phi(*bias + dot(row, input));
     }
+}
+
+/// Dot product with four independent accumulators: a single running sum is one long chain of
+/// dependent additions, which (not the multiplications) bounds the speed of a small layer.
+/// The summation order is fixed, so results stay bit-reproducible.
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let (a4, a_rest) = a.split_at(a.len() / 4 * 4);
+    let (b4, b_rest) = b.split_at(a4.len());
+    let mut acc = [0.0; 4];
+    for (ca, cb) in a4.chunks_exact(4).zip(b4.chunks_exact(4)) {
+        for i in 0..4 {
+            acc[i] += ca[i] * cb[i];
+        }
+    }
+    let tail = a_rest.iter().zip(b_rest).fold(0.0, |s, (x, y)| s + x * y);
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 fn param_count(sizes: &[usize]) -> usize {

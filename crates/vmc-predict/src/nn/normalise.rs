@@ -23,7 +23,7 @@ impl Normaliser {
         if width == 0 {
             return Err(DataError::ZeroWidth { what: "features" });
         }
-        if rows.is_empty() || rows.len() % width != 0 {
+        if rows.is_empty() || !rows.len().is_multiple_of(width) {
             return Err(DataError::Shape {
                 what: "normaliser data (need at least one whole row)",
                 expected: (rows.len() / width).max(1) * width,

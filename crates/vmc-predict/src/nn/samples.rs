@@ -63,7 +63,7 @@ impl Samples {
         if n_out == 0 {
             return Err(DataError::ZeroWidth { what: "outputs" });
         }
-        if x.len() % n_in != 0 {
+        if !x.len().is_multiple_of(n_in) {
             return Err(DataError::Shape {
                 what: "inputs (not a whole number of rows)",
                 expected: x.len() / n_in * n_in,
