@@ -112,16 +112,18 @@ fn reference_network_conserves_energy_under_varying_activity_and_ambient() {
 fn day_of_extreme_inputs_stays_finite_and_physically_bounded() {
     let spec = reference().thermal;
     let mut net = ThermalNetwork::new(&spec, 20.0).unwrap();
-    // 24 h at 15 000 rpm with every axis at 30 m/min rapid, nut parked at one end, coolant off,
-    // ambient at 35 °C.
-    let a = Activity {
-        spindle_rpm: 15_000.0,
-        axis_pos_mm: [560.0, 0.0, 450.0],
-        axis_speed_mm_per_min: [30_000.0; 3],
-        coolant: false,
-    };
-    for _ in 0..(24 * 60) {
-        net.step(60.0, &a, 35.0).unwrap();
+    // 24 h at 15 000 rpm with every axis shuttling at 30 m/min (rapid) over its full travel,
+    // coolant off, ambient at 35 °C.
+    for k in 0..(24 * 3600) {
+        let time_s = k as f64 + 0.5;
+        let v = [30_000.0; 3];
+        let a = Activity {
+            spindle_rpm: 15_000.0,
+            axis_pos_mm: [0, 1, 2].map(|i| shuttle_mm(time_s, v[i], TRAVEL_MM[i])),
+            axis_speed_mm_per_min: v,
+            coolant: false,
+        };
+        net.step(1.0, &a, 35.0).unwrap();
     }
     let max = net.temps_degc().iter().copied().fold(f64::MIN, f64::max);
     let min = net.temps_degc().iter().copied().fold(f64::MAX, f64::min);
