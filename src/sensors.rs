@@ -122,7 +122,7 @@ pub fn validate_sensors(specs: &[SensorSpec], node_names: &[String]) -> Result<(
                 name: s.name.clone(),
             });
         }
-        if s.node != AMBIENT_NODE && !node_names.iter().any(|n| *n == s.node) {
+        if s.node != AMBIENT_NODE && !node_names.contains(&s.node) {
             return Err(SensorError::UnknownNode {
                 index: i,
                 sensor: s.name.clone(),
@@ -178,7 +178,11 @@ pub struct SensorBank {
 
 impl SensorBank {
     /// Builds a bank for `specs` on a network with `node_names`; noise drawn from `seed`.
-    pub fn new(specs: &[SensorSpec], node_names: &[String], seed: u64) -> Result<Self, SensorError> {
+    pub fn new(
+        specs: &[SensorSpec],
+        node_names: &[String],
+        seed: u64,
+    ) -> Result<Self, SensorError> {
         validate_sensors(specs, node_names)?;
         let inputs = specs
             .iter()
@@ -251,7 +255,11 @@ impl SensorBank {
             let z: f64 = StandardNormal.sample(&mut self.rng);
             let noisy = *lag + spec.noise_sigma_degc * z;
             let r = spec.resolution_degc;
-            let quantised = if r > 0.0 { (noisy / r).round() * r } else { noisy };
+            let quantised = if r > 0.0 {
+                (noisy / r).round() * r
+            } else {
+                noisy
+            };
             self.readings.values_degc[i] = quantised.clamp(spec.range_degc[0], spec.range_degc[1]);
         }
         self.primed = true;
@@ -263,5 +271,162 @@ impl SensorBank {
     #[must_use]
     pub fn read(&self) -> SensorReadings {
         self.readings.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sensor(name: &str, node: &str, sigma: f64, tau: f64) -> SensorSpec {
+        SensorSpec {
+            name: name.into(),
+            node: node.into(),
+            noise_sigma_degc: sigma,
+            time_constant_s: tau,
+            resolution_degc: 0.0625,
+            range_degc: [-20.0, 120.0],
+        }
+    }
+
+    fn nodes() -> Vec<String> {
+        vec!["a".into(), "b".into()]
+    }
+
+    #[test]
+    fn lagged_sensor_reaches_63_percent_of_a_step_after_one_time_constant() {
+        let mut bank = SensorBank::new(&[sensor("S", "a", 0.0, 60.0)], &nodes(), 1).unwrap();
+        bank.update(0.0, &[20.0, 0.0], 20.0).unwrap();
+        assert_eq!(bank.read().values_degc, [20.0]);
+        for _ in 0..60 {
+            bank.update(1.0, &[30.0, 0.0], 20.0).unwrap();
+        }
+        let r = bank.read();
+        // 20 + 10·(1 − e⁻¹) = 26.32 °C, read to within half a quantisation step (0.03125 °C).
+        assert!((r.values_degc[0] - 26.321).abs() <= 0.0313, "{r:?}");
+        assert!((r.time_s - 60.0).abs() < 1e-12);
+        for _ in 0..600 {
+            bank.update(1.0, &[30.0, 0.0], 20.0).unwrap();
+        }
+        assert_eq!(bank.read().values_degc, [30.0]);
+    }
+
+    #[test]
+    fn readings_are_quantised_to_0_0625_degc_steps_and_clamped_to_the_range() {
+        let specs = [sensor("A", "a", 0.0, 0.0), sensor("B", "b", 0.0, 0.0)];
+        let mut bank = SensorBank::new(&specs, &nodes(), 1).unwrap();
+        bank.update(1.0, &[20.03, 20.04], 20.0).unwrap();
+        assert_eq!(bank.read().values_degc, [20.0, 20.0625]);
+        bank.update(1.0, &[150.0, -40.0], 20.0).unwrap();
+        assert_eq!(bank.read().values_degc, [120.0, -20.0]);
+        // With noise every reading still sits on the 0.0625 °C grid.
+        let mut noisy = SensorBank::new(&[sensor("N", "a", 0.3, 5.0)], &nodes(), 7).unwrap();
+        for k in 0..200 {
+            noisy
+                .update(1.0, &[20.0 + 0.01 * k as f64, 0.0], 20.0)
+                .unwrap();
+            let v = noisy.read().values_degc[0];
+            assert_eq!((v / 0.0625).fract(), 0.0, "{v}");
+        }
+    }
+
+    fn trace(seed: u64) -> Vec<u64> {
+        let specs = [
+            sensor("A", "a", 0.2, 10.0),
+            sensor("Amb", "ambient", 0.2, 0.0),
+        ];
+        let mut bank = SensorBank::new(&specs, &nodes(), seed).unwrap();
+        let mut out = Vec::new();
+        for k in 0..100 {
+            bank.update(1.0, &[25.0 + 0.001 * k as f64, 0.0], 20.0)
+                .unwrap();
+            out.extend(bank.read().values_degc.iter().map(|v| v.to_bits()));
+        }
+        out
+    }
+
+    #[test]
+    fn same_seed_gives_the_same_bits_and_another_seed_other_noise() {
+        let (a, b, c) = (trace(42), trace(42), trace(43));
+        assert_eq!(a, b);
+        let differing = a.iter().zip(&c).filter(|(x, y)| x != y).count();
+        // σ = 0.2 °C is 3.2 quantisation steps: most readings must differ between seeds.
+        assert!(differing > 100, "only {differing} of 200 readings differ");
+    }
+
+    #[test]
+    fn noise_has_the_stated_standard_deviation() {
+        let mut bank = SensorBank::new(&[sensor("A", "a", 0.5, 0.0)], &nodes(), 3).unwrap();
+        let n = 20_000;
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for _ in 0..n {
+            bank.update(1.0, &[50.0, 0.0], 20.0).unwrap();
+            let e = bank.read().values_degc[0] - 50.0;
+            sum += e;
+            sum2 += e * e;
+        }
+        let mean = sum / n as f64;
+        let sd = (sum2 / n as f64 - mean * mean).sqrt();
+        // Standard error of σ over 20 000 draws ≈ 0.0025 °C; quantisation adds r²/12 in variance.
+        assert!(
+            mean.abs() < 0.02 && (sd - 0.5).abs() < 0.015,
+            "mean {mean} sd {sd}"
+        );
+    }
+
+    #[test]
+    fn ambient_sensor_reads_the_ambient_temperature() {
+        let mut bank = SensorBank::new(&[sensor("Amb", "ambient", 0.0, 0.0)], &nodes(), 1).unwrap();
+        bank.update(1.0, &[80.0, 80.0], 21.5).unwrap();
+        assert_eq!(bank.read().value_degc("Amb"), Some(21.5));
+        assert_eq!(bank.read().value_degc("BXH"), None);
+    }
+
+    #[test]
+    fn unknown_node_error_names_the_sensor_and_the_node() {
+        let err = SensorBank::new(&[sensor("XD", "x_motr", 0.0, 0.0)], &nodes(), 1).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "sensors[0] (XD) names unknown node `x_motr`"
+        );
+    }
+
+    #[test]
+    fn invalid_fields_are_named_in_the_error() {
+        let mut s = sensor("ZH", "a", -0.1, 0.0);
+        let err = validate_sensors(&[s.clone()], &nodes())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(err, "sensors[0].noise_sigma_degc must be >= 0, got -0.1");
+        s.noise_sigma_degc = 0.0;
+        s.range_degc = [50.0, 10.0];
+        let err = validate_sensors(&[s.clone()], &nodes())
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("sensors[0].range_degc[1]"), "{err}");
+        s.range_degc = [-20.0, 120.0];
+        let err = validate_sensors(&[s.clone(), s], &nodes())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("sensors[1].name"), "{err}");
+    }
+
+    #[test]
+    fn wrong_node_count_is_an_error() {
+        let mut bank = SensorBank::new(&[sensor("A", "a", 0.0, 0.0)], &nodes(), 1).unwrap();
+        assert!(bank.update(1.0, &[20.0], 20.0).is_err());
+        assert!(
+            bank.read().values_degc[0].is_nan(),
+            "no reading before a valid update"
+        );
+    }
+
+    #[test]
+    fn toml_sensor_gets_the_thermistor_defaults_and_rejects_unknown_fields() {
+        let s: SensorSpec = toml::from_str("name = \"ZT\"\nnode = \"work_zone\"").unwrap();
+        assert_eq!(s.resolution_degc, 0.0625);
+        assert_eq!(s.range_degc, [-20.0, 120.0]);
+        assert_eq!(s.noise_sigma_degc, 0.0);
+        assert!(toml::from_str::<SensorSpec>("name = \"ZT\"\nnode = \"w\"\nsigma = 1.0").is_err());
     }
 }

@@ -60,6 +60,6 @@ pub struct Activity {
 }
 
 #[cfg(test)]
-mod tests;
-#[cfg(test)]
 mod reference_tests;
+#[cfg(test)]
+mod tests;

@@ -51,7 +51,8 @@ fn run(net: &mut ThermalNetwork, duration_s: f64, rpm: f64) {
 }
 
 fn t(net: &ThermalNetwork, name: &str) -> f64 {
-    net.temp_degc(name).unwrap_or_else(|| panic!("node {name} missing"))
+    net.temp_degc(name)
+        .unwrap_or_else(|| panic!("node {name} missing"))
 }
 
 #[test]
@@ -60,11 +61,30 @@ fn reference_fragment_validates_and_has_the_contract_node_names() {
     f.thermal.validate().unwrap();
     let net = ThermalNetwork::new(&f.thermal, 20.0).unwrap();
     let mut contract: Vec<String> = [
-        "spindle_front_bearing", "spindle_rear_bearing", "spindle_motor", "spindle_housing",
-        "headstock_left", "headstock_right", "headstock_front", "headstock_back",
-        "column_top_front", "column_top_back", "column_mid_front", "column_mid_back",
-        "column_bottom_front", "column_bottom_back", "x_motor", "x_support", "y_motor",
-        "y_support", "z_motor", "saddle", "table", "bed_top", "bed_bottom", "work_zone",
+        "spindle_front_bearing",
+        "spindle_rear_bearing",
+        "spindle_motor",
+        "spindle_housing",
+        "headstock_left",
+        "headstock_right",
+        "headstock_front",
+        "headstock_back",
+        "column_top_front",
+        "column_top_back",
+        "column_mid_front",
+        "column_mid_back",
+        "column_bottom_front",
+        "column_bottom_back",
+        "x_motor",
+        "x_support",
+        "y_motor",
+        "y_support",
+        "z_motor",
+        "saddle",
+        "table",
+        "bed_top",
+        "bed_bottom",
+        "work_zone",
     ]
     .map(String::from)
     .to_vec();
@@ -105,7 +125,10 @@ fn reference_network_conserves_energy_under_varying_activity_and_ambient() {
     let balance = net.heat_in_j() - net.heat_out_j();
     assert!(net.heat_in_j() > 1e6, "{}", net.heat_in_j());
     // 1e-9 of the heat input: rounding only (≈ 1e-5 J on a few MJ).
-    assert!((de - balance).abs() < 1e-9 * net.heat_in_j(), "ΔE {de} vs {balance}");
+    assert!(
+        (de - balance).abs() < 1e-9 * net.heat_in_j(),
+        "ΔE {de} vs {balance}"
+    );
 }
 
 #[test]
@@ -129,7 +152,14 @@ fn day_of_extreme_inputs_stays_finite_and_physically_bounded() {
     let min = net.temps_degc().iter().copied().fold(f64::MAX, f64::min);
     assert!(net.temps_degc().iter().all(|t| t.is_finite()));
     // Grease and motor insulation limits: a sensible machine never passes ~150 °C.
-    assert!(max < 150.0 && min >= 20.0 - 1e-9, "min {min} max {max}: {:?}", net.node_names().iter().zip(net.temps_degc()).collect::<Vec<_>>());
+    assert!(
+        max < 150.0 && min >= 20.0 - 1e-9,
+        "min {min} max {max}: {:?}",
+        net.node_names()
+            .iter()
+            .zip(net.temps_degc())
+            .collect::<Vec<_>>()
+    );
 }
 
 #[test]
@@ -148,9 +178,16 @@ fn reference_long_run_matches_the_linear_steady_state() {
         net.step(20_000.0, &a, 21.0).unwrap();
     }
     for (i, (sim, lin)) in net.temps_degc().iter().zip(&ss).enumerate() {
-        assert!((sim - lin).abs() < 1e-6, "{}: {sim} vs {lin}", net.node_names()[i]);
+        assert!(
+            (sim - lin).abs() < 1e-6,
+            "{}: {sim} vs {lin}",
+            net.node_names()[i]
+        );
     }
-    assert!(ss.iter().any(|t| *t > 30.0), "the sources must heat something: {ss:?}");
+    assert!(
+        ss.iter().any(|t| *t > 30.0),
+        "the sources must heat something: {ss:?}"
+    );
 }
 
 #[test]
@@ -182,19 +219,47 @@ fn reference_warm_up_matches_the_study_figures() {
     let spec = reference().thermal;
     let mut net = ThermalNetwork::new(&spec, 20.0).unwrap();
     let show = [
-        "spindle_front_bearing", "spindle_rear_bearing", "spindle_motor", "spindle_nose",
-        "spindle_housing", "headstock_left", "headstock_right", "headstock_front",
-        "headstock_back", "column_top_front", "column_top_back", "column_mid_front",
-        "column_mid_back", "column_bottom_front", "column_bottom_back", "x_motor", "x_support",
-        "x_screw_0", "x_screw_2", "x_screw_4", "y_motor", "y_support", "y_screw_1", "z_motor",
-        "z_support", "z_screw_2", "saddle", "table", "bed_top", "bed_bottom", "work_zone",
+        "spindle_front_bearing",
+        "spindle_rear_bearing",
+        "spindle_motor",
+        "spindle_nose",
+        "spindle_housing",
+        "headstock_left",
+        "headstock_right",
+        "headstock_front",
+        "headstock_back",
+        "column_top_front",
+        "column_top_back",
+        "column_mid_front",
+        "column_mid_back",
+        "column_bottom_front",
+        "column_bottom_back",
+        "x_motor",
+        "x_support",
+        "x_screw_0",
+        "x_screw_2",
+        "x_screw_4",
+        "y_motor",
+        "y_support",
+        "y_screw_1",
+        "z_motor",
+        "z_support",
+        "z_screw_2",
+        "saddle",
+        "table",
+        "bed_top",
+        "bed_bottom",
+        "work_zone",
     ];
     let marks_h = [0.5, 1.0, 2.0, 4.0, 5.0, 6.0, 8.0];
     let mut table = vec![Vec::new(); show.len()];
     let mut at_4h = Vec::new();
+    let started = std::time::Instant::now();
     for &h in &marks_h {
         // 4 h at 9000 rpm with the calibration duty, then everything stopped (cool-down).
-        let warm = (4.0 * 3600.0 - net.time_s()).max(0.0).min(h * 3600.0 - net.time_s());
+        let warm = (4.0 * 3600.0 - net.time_s())
+            .max(0.0)
+            .min(h * 3600.0 - net.time_s());
         run(&mut net, warm, 9000.0);
         let still = h * 3600.0 - net.time_s();
         if still > 0.0 {
@@ -207,7 +272,12 @@ fn reference_warm_up_matches_the_study_figures() {
             at_4h = net.temps_degc().to_vec();
         }
     }
+    let elapsed_ms = started.elapsed().as_secs_f64() * 1e3;
     let mid = duty(0.0, 9000.0);
+    println!(
+        "\n8 h of 1 s steps ({} nodes shown): {elapsed_ms:.1} ms wall (this build)",
+        show.len()
+    );
     println!("\nReference warm-up: 9000 rpm, X/Y/Z 4000/3000/2000 mm/min, 0–4 h; stop 4–8 h");
     print!("{:<22}", "node  (°C) \\ h");
     marks_h.iter().for_each(|h| print!("{h:>7.1}"));
@@ -219,14 +289,28 @@ fn reference_warm_up_matches_the_study_figures() {
     }
     let at = |name: &str| at_4h[net.node_index(name).unwrap()];
     // Study: near the spindle ~30 °C, along the axes ~26 °C, work zone < 23 °C.
-    assert!((28.0..34.0).contains(&at("spindle_housing")), "{}", at("spindle_housing"));
+    assert!(
+        (28.0..34.0).contains(&at("spindle_housing")),
+        "{}",
+        at("spindle_housing")
+    );
     assert!(at("spindle_front_bearing") > at("spindle_housing"));
-    for n in ["x_motor", "y_motor", "z_motor", "x_screw_2", "y_screw_1", "z_screw_2"] {
+    for n in [
+        "x_motor",
+        "y_motor",
+        "z_motor",
+        "x_screw_2",
+        "y_screw_1",
+        "z_screw_2",
+    ] {
         assert!((24.0..28.5).contains(&at(n)), "{n}: {}", at(n));
     }
     assert!(at("work_zone") < 23.0, "{}", at("work_zone"));
     let gradient = at("column_top_front") - at("column_top_back");
-    assert!((1.0..3.0).contains(&gradient), "column front–back {gradient}");
+    assert!(
+        (1.0..3.0).contains(&gradient),
+        "column front–back {gradient}"
+    );
     // Time constants: spindle 30–60 min, column several hours.
     let tau_spindle = time_constant_s(&spec, "spindle_housing", &mid) / 60.0;
     assert!((30.0..60.0).contains(&tau_spindle), "{tau_spindle}");
@@ -235,4 +319,33 @@ fn reference_warm_up_matches_the_study_figures() {
     // Cool-down: 4 h after stopping the spindle is back within 40 % of its rise.
     let i = net.node_index("spindle_housing").unwrap();
     assert!(net.temps_degc()[i] - 20.0 < 0.4 * (at("spindle_housing") - 20.0));
+}
+
+#[test]
+fn reference_sensors_track_their_nodes_through_a_warm_up() {
+    let f = reference();
+    let mut net = ThermalNetwork::new(&f.thermal, 20.0).unwrap();
+    let mut bank = crate::sensors::SensorBank::new(&f.sensors, net.node_names(), 11).unwrap();
+    bank.update(0.0, net.temps_degc(), 20.0).unwrap();
+    for k in 0..3600 {
+        net.advance(1.0, &duty(k as f64 + 0.5, 9000.0)).unwrap();
+        bank.update(1.0, net.temps_degc(), net.ambient_degc())
+            .unwrap();
+    }
+    let r = bank.read();
+    assert_eq!(r.values_degc.len(), 12);
+    for s in &f.sensors {
+        let truth = if s.node == AMBIENT_NODE {
+            20.0
+        } else {
+            t(&net, &s.node)
+        };
+        let v = r.value_degc(&s.name).unwrap();
+        // Noise σ 0.02 °C, half a quantum 0.031 °C, 20 s lag on a ≤ 0.2 °C/min slope: < 0.2 °C.
+        assert!((v - truth).abs() < 0.2, "{}: {v} vs node {truth}", s.name);
+    }
+    assert!(
+        r.value_degc("BYB").unwrap() > 25.0,
+        "spindle sensor must have warmed: {r:?}"
+    );
 }

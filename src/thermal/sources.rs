@@ -219,8 +219,8 @@ impl Source {
 /// Index of the equal-length segment containing `pos_mm`, clamped to the screw's ends.
 pub(crate) fn segment_under_nut(pos_mm: f64, min_mm: f64, max_mm: f64, count: usize) -> usize {
     let frac = (pos_mm - min_mm) / (max_mm - min_mm);
-    if !(frac > 0.0) {
-        return 0; // also NaN
+    if frac.is_nan() || frac <= 0.0 {
+        return 0;
     }
     // Truncation is the intent: segment k covers [k, k+1)·length/count.
     ((frac * count as f64) as usize).min(count - 1)

@@ -242,8 +242,7 @@ impl AmbientProfile {
                 phase_rad,
             } => {
                 mean_degc
-                    + amplitude_degc
-                        * (std::f64::consts::TAU * time_s / period_s + phase_rad).sin()
+                    + amplitude_degc * (std::f64::consts::TAU * time_s / period_s + phase_rad).sin()
             }
             AmbientProfile::Table { points } => table_lookup(points, time_s),
         }
@@ -252,7 +251,9 @@ impl AmbientProfile {
     /// Checks the profile; `field` is its path in the machine file.
     pub fn validate(&self, field: &str) -> Result<(), ThermalError> {
         match self {
-            AmbientProfile::Constant { temp_degc } => finite(&format!("{field}.temp_degc"), *temp_degc),
+            AmbientProfile::Constant { temp_degc } => {
+                finite(&format!("{field}.temp_degc"), *temp_degc)
+            }
             AmbientProfile::Sinusoid {
                 mean_degc,
                 amplitude_degc,
@@ -266,7 +267,11 @@ impl AmbientProfile {
             }
             AmbientProfile::Table { points } => {
                 if points.is_empty() {
-                    return Err(invalid(&format!("{field}.points"), "non-empty", "[]".into()));
+                    return Err(invalid(
+                        &format!("{field}.points"),
+                        "non-empty",
+                        "[]".into(),
+                    ));
                 }
                 for (i, p) in points.iter().enumerate() {
                     finite(&format!("{field}.points[{i}][0]"), p[0])?;
@@ -345,7 +350,11 @@ impl ThermalSpec {
             known(&index, &format!("{f}.a"), &l.a)?;
             known(&index, &format!("{f}.b"), &l.b)?;
             if l.a == l.b {
-                return Err(invalid(&format!("{f}.b"), "a node other than `a`", l.b.clone()));
+                return Err(invalid(
+                    &format!("{f}.b"),
+                    "a node other than `a`",
+                    l.b.clone(),
+                ));
             }
             positive(&format!("{f}.conductance_w_per_k"), l.conductance_w_per_k)?;
         }

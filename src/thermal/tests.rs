@@ -68,10 +68,17 @@ fn two_node_chain_reaches_the_hand_computed_steady_state() {
     );
     let mut net = ThermalNetwork::new(&s, 20.0).unwrap();
     let ss = net.steady_state_degc(&Activity::default(), 20.0).unwrap();
-    assert!((ss[0] - 90.0).abs() < 1e-9 && (ss[1] - 70.0).abs() < 1e-9, "{ss:?}");
+    assert!(
+        (ss[0] - 90.0).abs() < 1e-9 && (ss[1] - 70.0).abs() < 1e-9,
+        "{ss:?}"
+    );
     // τ ≈ (1000+2000)/2 = 1500 s at most; 20 τ of simulation lands on the steady state.
     net.advance(30_000.0, &Activity::default()).unwrap();
-    assert!((net.temps_degc()[0] - 90.0).abs() < 1e-3, "{:?}", net.temps_degc());
+    assert!(
+        (net.temps_degc()[0] - 90.0).abs() < 1e-3,
+        "{:?}",
+        net.temps_degc()
+    );
     assert!((net.temps_degc()[1] - 70.0).abs() < 1e-3);
 }
 
@@ -125,7 +132,10 @@ fn screw_heat_goes_to_the_segment_under_the_nut() {
     // 1.047e-4·300 rpm·300 N·mm = 9.42 W for 600 s into 500 J/K: ≈ +10 K (less some convection).
     assert!(t[2] > 28.0, "{t:?}");
     for i in [0, 1, 3] {
-        assert!((t[i] - 20.0).abs() < 1e-9, "segment {i} has no link and no nut: {t:?}");
+        assert!(
+            (t[i] - 20.0).abs() < 1e-9,
+            "segment {i} has no link and no nut: {t:?}"
+        );
     }
     assert_eq!(net.heat_input_w()[2], net.source_power_w(&a)[2]);
 }
@@ -141,7 +151,11 @@ fn heat_input_and_convection_balance_stored_energy() {
             phase_rad: 0.3,
         },
         ..spec(
-            vec![node("a", 800.0, 0.5), node("b", 3000.0, 2.0), node("c", 500.0, 0.0)],
+            vec![
+                node("a", 800.0, 0.5),
+                node("b", 3000.0, 2.0),
+                node("c", 500.0, 0.0),
+            ],
             vec![link("a", "b", 3.0), link("b", "c", 1.0)],
             vec![HeatSourceSpec::SpindleBearing {
                 node: "a".into(),
@@ -161,8 +175,15 @@ fn heat_input_and_convection_balance_stored_energy() {
     }
     let de = net.stored_energy_j() - e0;
     let balance = net.heat_in_j() - net.heat_out_j();
-    assert!(net.heat_in_j() > 1e5, "sources must have worked: {}", net.heat_in_j());
-    assert!((de - balance).abs() < 1e-9 * net.heat_in_j(), "ΔE {de} vs in−out {balance}");
+    assert!(
+        net.heat_in_j() > 1e5,
+        "sources must have worked: {}",
+        net.heat_in_j()
+    );
+    assert!(
+        (de - balance).abs() < 1e-9 * net.heat_in_j(),
+        "ΔE {de} vs in−out {balance}"
+    );
 }
 
 #[test]
@@ -203,7 +224,12 @@ fn advance_uses_the_ambient_profile_and_a_short_last_step() {
 #[test]
 fn validation_errors_name_the_field() {
     let mut s = spec(
-        vec![node("a", 1.0, 0.0), node("b", 1.0, 0.0), node("c", 1.0, 0.0), node("d", -5.0, 0.0)],
+        vec![
+            node("a", 1.0, 0.0),
+            node("b", 1.0, 0.0),
+            node("c", 1.0, 0.0),
+            node("d", -5.0, 0.0),
+        ],
         vec![link("a", "b", 1.0)],
         vec![],
     );
@@ -228,7 +254,10 @@ fn validation_errors_name_the_field() {
         efficiency: 1.5,
     });
     let msg = s.validate().unwrap_err().to_string();
-    assert_eq!(msg, "thermal.sources[0].efficiency must be in (0, 1], got 1.5");
+    assert_eq!(
+        msg,
+        "thermal.sources[0].efficiency must be in (0, 1], got 1.5"
+    );
 
     s.sources.clear();
     s.ambient = AmbientProfile::Table {
