@@ -253,13 +253,13 @@ mod tests {
     fn number_forms_plus_sign_trailing_dot_and_leading_dot_are_accepted() {
         assert_eq!(
             words("X+1. Y.25 Z-0"),
-            vec![('X', 1.0, 1), ('Y', 0.25, 5), ('Z', 0.0, 10)]
+            vec![('X', 1.0, 1), ('Y', 0.25, 6), ('Z', 0.0, 11)]
         );
     }
 
     #[test]
     fn comments_are_skipped_and_semicolon_ends_the_line() {
-        assert_eq!(words("G0 (move (fast) X1 ; rest X9"), vec![('G', 0.0, 1)]);
+        assert_eq!(words("G0 (move fast) X1 ; rest X9"), vec![('G', 0.0, 1), ('X', 1.0, 16)]);
         assert_eq!(
             words("(msg, hi) G0 X1"),
             vec![('G', 0.0, 11), ('X', 1.0, 14)]

@@ -222,7 +222,7 @@ mod tests {
         let err = results[1].clone().unwrap_err();
         assert_eq!(
             (err.line, err.col, err.kind),
-            (2, 5, GcodeErrorKind::Unsupported)
+            (2, 4, GcodeErrorKind::Unsupported)
         );
     }
 

@@ -29,6 +29,8 @@
 mod arc;
 mod decode;
 mod exec;
+#[cfg(test)]
+mod tests;
 
 pub use crate::gcode::{GcodeError, GcodeErrorKind};
 pub use exec::Interpreter;
