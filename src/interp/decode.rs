@@ -1,0 +1,362 @@
+//! Block decoding: the words of one block → which modal groups it sets and which values it
+//! carries. Checks what can be checked without the modal state: known codes, at most one code
+//! per modal group (RS274/NGC / LinuxCNC modal groups).
+
+use super::{Plane, SpindleDir};
+use crate::gcode::{Block, GcodeError, Word};
+
+/// Group 1: motion mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Motion {
+    /// G0.
+    Rapid,
+    /// G1.
+    Linear,
+    /// G2 (`true`) or G3 (`false`).
+    Arc { clockwise: bool },
+    /// G80: no motion mode.
+    Cancel,
+}
+
+/// Group 0: non-modal codes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum NonModal {
+    /// G4.
+    Dwell,
+    /// G53.
+    MachineCoords,
+    /// G92.
+    SetAxisOffsets,
+    /// G92.1.
+    ResetAxisOffsets,
+}
+
+/// Group 6: length units.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Units {
+    /// G21.
+    Mm,
+    /// G20.
+    Inch,
+}
+
+/// Groups 3 (G90/G91) and G90.1/G91.1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Distance {
+    /// G90 / G90.1.
+    Absolute,
+    /// G91 / G91.1.
+    Incremental,
+}
+
+/// What one G code does.
+enum GAction {
+    Motion(Motion),
+    NonModal(NonModal),
+    Plane(Plane),
+    Units(Units),
+    Distance(Distance),
+    ArcDistance(Distance),
+    CoordSystem(usize),
+    /// G40, G49, G94: cancel a mode we never have on (state already as commanded).
+    Nothing,
+}
+
+/// A decoded block. Each field holds the value and the 1-based column of the word that set it.
+#[derive(Debug, Default)]
+pub(super) struct Decoded {
+    pub motion: Option<(Motion, usize)>,
+    pub non_modal: Option<(NonModal, usize)>,
+    pub plane: Option<Plane>,
+    pub units: Option<Units>,
+    pub distance: Option<Distance>,
+    pub arc_distance: Option<Distance>,
+    pub coord_system: Option<usize>,
+    /// Column of M2/M30.
+    pub stop: Option<usize>,
+    /// Column of M6.
+    pub tool_change: Option<usize>,
+    pub spindle: Option<(SpindleDir, usize)>,
+    /// X, Y, Z.
+    pub axes: [Option<Word>; 3],
+    /// I, J, K.
+    pub ijk: [Option<Word>; 3],
+    pub r: Option<Word>,
+    pub p: Option<Word>,
+    pub f: Option<Word>,
+    pub s: Option<Word>,
+    pub t: Option<Word>,
+}
+
+impl Decoded {
+    /// True if any of X, Y, Z is present.
+    pub fn has_axis_words(&self) -> bool {
+        self.axes.iter().any(Option::is_some)
+    }
+
+    /// The first of I, J, K, R present (for messages).
+    pub fn first_arc_word(&self) -> Option<Word> {
+        self.ijk
+            .iter()
+            .flatten()
+            .chain(self.r.iter())
+            .copied()
+            .next()
+    }
+}
+
+/// Decodes a block; rejects unknown/unsupported codes and two codes of one modal group.
+pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
+    let mut d = Decoded::default();
+    // (group id, first word) for conflict messages.
+    let mut seen: Vec<(u32, Word)> = Vec::new();
+    let mut claim = |group: u32, w: &Word| -> Result<(), GcodeError> {
+        if let Some((_, prev)) = seen.iter().find(|(g, _)| *g == group) {
+            return Err(GcodeError::invalid(
+                block.line,
+                w.col,
+                format!(
+                    "{} and {} are in the same modal group and cannot share a block",
+                    prev.display(),
+                    w.display()
+                ),
+            ));
+        }
+        seen.push((group, *w));
+        Ok(())
+    };
+    for w in &block.words {
+        match w.letter {
+            'G' => {
+                let code = code_of(block, w)?;
+                let (group, action) = g_action(code).map_err(|e| e.at(block.line, w))?;
+                claim(group, w)?;
+                match action {
+                    GAction::Motion(m) => d.motion = Some((m, w.col)),
+                    GAction::NonModal(n) => d.non_modal = Some((n, w.col)),
+                    GAction::Plane(p) => d.plane = Some(p),
+                    GAction::Units(u) => d.units = Some(u),
+                    GAction::Distance(x) => d.distance = Some(x),
+                    GAction::ArcDistance(x) => d.arc_distance = Some(x),
+                    GAction::CoordSystem(i) => d.coord_system = Some(i),
+                    GAction::Nothing => {}
+                }
+            }
+            'M' => {
+                let code = code_of(block, w)?;
+                let group = match code {
+                    20 | 300 => {
+                        d.stop = Some(w.col);
+                        4
+                    }
+                    60 => {
+                        d.tool_change = Some(w.col);
+                        6
+                    }
+                    30 | 40 | 50 => {
+                        let dir = match code {
+                            30 => SpindleDir::Cw,
+                            40 => SpindleDir::Ccw,
+                            _ => SpindleDir::Off,
+                        };
+                        d.spindle = Some((dir, w.col));
+                        7
+                    }
+                    _ => return Err(m_unsupported(code).at(block.line, w)),
+                };
+                claim(100 + group, w)?;
+            }
+            'X' => d.axes[0] = Some(*w),
+            'Y' => d.axes[1] = Some(*w),
+            'Z' => d.axes[2] = Some(*w),
+            'I' => d.ijk[0] = Some(*w),
+            'J' => d.ijk[1] = Some(*w),
+            'K' => d.ijk[2] = Some(*w),
+            'R' => d.r = Some(*w),
+            'P' => d.p = Some(*w),
+            'F' => d.f = Some(*w),
+            'S' => d.s = Some(*w),
+            'T' => d.t = Some(*w),
+            other => {
+                // The lexer only lets supported letters through.
+                return Err(GcodeError::unsupported(
+                    block.line,
+                    w.col,
+                    format!("{other} word is not supported"),
+                ));
+            }
+        }
+    }
+    Ok(d)
+}
+
+fn code_of(block: &Block, w: &Word) -> Result<u32, GcodeError> {
+    w.code_x10().ok_or_else(|| {
+        GcodeError::invalid(
+            block.line,
+            w.col,
+            format!("{}{} is not a valid code number", w.letter, w.value),
+        )
+    })
+}
+
+/// A code that is not accepted, before it is placed at a line and column.
+enum Rejected {
+    Unsupported(&'static str),
+    Unknown,
+}
+
+impl Rejected {
+    fn at(self, line: usize, w: &Word) -> GcodeError {
+        match self {
+            Rejected::Unsupported(what) => GcodeError::unsupported(
+                line,
+                w.col,
+                format!("{} ({what}) is not supported", w.display()),
+            ),
+            Rejected::Unknown => {
+                GcodeError::invalid(line, w.col, format!("unknown code {}", w.display()))
+            }
+        }
+    }
+}
+
+/// Modal group and action of a G code (×10), LinuxCNC's group numbers.
+fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
+    use GAction as A;
+    Ok(match code {
+        0 => (1, A::Motion(Motion::Rapid)),
+        10 => (1, A::Motion(Motion::Linear)),
+        20 => (1, A::Motion(Motion::Arc { clockwise: true })),
+        30 => (1, A::Motion(Motion::Arc { clockwise: false })),
+        800 => (1, A::Motion(Motion::Cancel)),
+        40 => (0, A::NonModal(NonModal::Dwell)),
+        530 => (0, A::NonModal(NonModal::MachineCoords)),
+        920 => (0, A::NonModal(NonModal::SetAxisOffsets)),
+        921 => (0, A::NonModal(NonModal::ResetAxisOffsets)),
+        170 => (2, A::Plane(Plane::Xy)),
+        180 => (2, A::Plane(Plane::Zx)),
+        190 => (2, A::Plane(Plane::Yz)),
+        900 => (3, A::Distance(Distance::Absolute)),
+        910 => (3, A::Distance(Distance::Incremental)),
+        901 => (4, A::ArcDistance(Distance::Absolute)),
+        911 => (4, A::ArcDistance(Distance::Incremental)),
+        940 => (5, A::Nothing),
+        200 => (6, A::Units(Units::Inch)),
+        210 => (6, A::Units(Units::Mm)),
+        400 => (7, A::Nothing),
+        490 => (8, A::Nothing),
+        540..=590 if code % 10 == 0 => (12, A::CoordSystem(((code - 540) / 10) as usize)),
+        _ => return Err(g_unsupported(code)),
+    })
+}
+
+/// Classifies a G code we do not implement: known to LinuxCNC (unsupported) or unknown.
+fn g_unsupported(code: u32) -> Rejected {
+    let what = match code {
+        50..=53 => "spline",
+        70 | 80 => "lathe diameter/radius mode",
+        100 => "set offsets/tool data",
+        171 | 181 | 191 => "UVW plane",
+        280 | 281 | 300 | 301 => "go to predefined position",
+        330 | 331 => "spindle-synchronised motion",
+        382..=385 => "probing",
+        410 | 411 | 420 | 421 => "cutter radius compensation",
+        430..=432 => "tool length offset",
+        520 => "local coordinate offset",
+        591..=593 => "extra coordinate system",
+        610 | 611 | 640 => "path control mode",
+        700 | 710..=712 | 720..=722 => "lathe cycle",
+        730 | 740 | 760 | 810..=890 => "canned cycle",
+        922 | 923 => "G92 offset suspend/restore",
+        930 | 950 => "feed rate mode",
+        960 | 970 => "spindle speed mode",
+        980 | 990 => "canned cycle return level",
+        _ => return Rejected::Unknown,
+    };
+    Rejected::Unsupported(what)
+}
+
+/// Classifies an M code we do not implement.
+fn m_unsupported(code: u32) -> Rejected {
+    if code % 10 != 0 {
+        return Rejected::Unknown;
+    }
+    let what = match code / 10 {
+        0 | 1 => "program pause",
+        7..=9 => "coolant",
+        19 => "spindle orientation",
+        48..=53 => "override control",
+        60 => "pallet change",
+        61 => "set current tool",
+        62..=68 => "digital/analog I/O",
+        70..=73 => "modal state save/restore",
+        98 | 99 => "subroutine call/return",
+        100..=199 => "user-defined M code",
+        _ => return Rejected::Unknown,
+    };
+    Rejected::Unsupported(what)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::{parse_line, GcodeErrorKind};
+
+    fn dec(text: &str) -> Result<Decoded, GcodeError> {
+        let block = parse_line(4, text).expect("lexes").expect("has words");
+        decode(&block)
+    }
+
+    #[test]
+    fn modal_codes_of_different_groups_share_a_block() {
+        let d = dec("G17 G21 G90 G91.1 G54 G40 G49 G94 G1 X1 F100 S2 T3 M6 M3 M2").unwrap();
+        assert_eq!(d.plane, Some(Plane::Xy));
+        assert_eq!(d.units, Some(Units::Mm));
+        assert_eq!(d.distance, Some(Distance::Absolute));
+        assert_eq!(d.arc_distance, Some(Distance::Incremental));
+        assert_eq!(d.coord_system, Some(0));
+        assert_eq!(d.motion.map(|m| m.0), Some(Motion::Linear));
+        assert_eq!(d.spindle.map(|s| s.0), Some(SpindleDir::Cw));
+        assert!(d.tool_change.is_some() && d.stop.is_some());
+    }
+
+    #[test]
+    fn two_motion_codes_in_one_block_are_invalid_at_the_second() {
+        let e = dec("G0 G2 X1 R1").unwrap_err();
+        assert_eq!((e.line, e.col, e.kind), (4, 4, GcodeErrorKind::Invalid));
+        assert!(e.msg.contains("G0") && e.msg.contains("G2"), "{e}");
+    }
+
+    #[test]
+    fn two_spindle_m_codes_are_invalid() {
+        assert_eq!(dec("M3 M5").unwrap_err().kind, GcodeErrorKind::Invalid);
+    }
+
+    #[test]
+    fn g59_selects_the_sixth_work_offset() {
+        assert_eq!(dec("G59").unwrap().coord_system, Some(5));
+    }
+
+    #[test]
+    fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
+        for text in [
+            "G43", "G41.1", "G81 Z1", "G28", "G10", "G64", "G59.1", "G33", "M0", "M8", "M98",
+            "M19", "G38.2",
+        ] {
+            let e = dec(text).unwrap_err();
+            assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
+            assert!(
+                e.msg.starts_with(text.split(' ').next().unwrap()),
+                "{text}: {e}"
+            );
+        }
+        for text in ["G6", "G999", "M2.5", "G1.25", "M1000"] {
+            assert_eq!(
+                dec(text).unwrap_err().kind,
+                GcodeErrorKind::Invalid,
+                "{text}"
+            );
+        }
+    }
+}

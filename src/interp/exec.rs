@@ -1,0 +1,529 @@
+//! The modal state machine: executes decoded blocks in RS274/NGC order (see the parent module).
+
+use super::arc::{arc_center, ArcError, ArcForm, MM_PER_INCH};
+use super::decode::{decode, Decoded, Distance, Motion, NonModal, Units};
+use super::{CanonKind, CanonMove, InterpConfig, Plane, SpindleDir, MAX_ARC_TURNS};
+use crate::gcode::{Block, GcodeError, Word};
+
+/// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
+#[derive(Debug, Clone)]
+pub struct Interpreter {
+    cfg: InterpConfig,
+    /// Current tool position, machine coordinates, mm.
+    pos_mm: [f64; 3],
+    plane: Plane,
+    units: Units,
+    distance: Distance,
+    arc_distance: Distance,
+    /// Active work offset G54…G59 as 0…5.
+    coord_index: usize,
+    /// G92 offset, mm.
+    axis_offset_mm: [f64; 3],
+    /// `None` after G80 and at start.
+    motion: Option<Motion>,
+    feed_mm_per_min: f64,
+    spindle: (SpindleDir, f64),
+    spindle_reported: (SpindleDir, f64),
+    selected_tool: u32,
+    ended: bool,
+}
+
+/// What the motion step of a block will do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum MotionStep {
+    None,
+    Move(Motion),
+}
+
+impl Interpreter {
+    /// A fresh interpreter in LinuxCNC's start-up state (see the parent module).
+    pub fn new(cfg: InterpConfig) -> Self {
+        Self {
+            pos_mm: cfg.start_mm,
+            cfg,
+            plane: Plane::Xy,
+            units: Units::Mm,
+            distance: Distance::Absolute,
+            arc_distance: Distance::Incremental,
+            coord_index: 0,
+            axis_offset_mm: [0.0; 3],
+            motion: None,
+            feed_mm_per_min: 0.0,
+            spindle: (SpindleDir::Off, 0.0),
+            spindle_reported: (SpindleDir::Off, 0.0),
+            selected_tool: 0,
+            ended: false,
+        }
+    }
+
+    /// Current tool position in machine coordinates, mm.
+    pub fn position_mm(&self) -> [f64; 3] {
+        self.pos_mm
+    }
+
+    /// True once M2/M30 has run; later blocks are ignored.
+    pub fn is_ended(&self) -> bool {
+        self.ended
+    }
+
+    /// Executes one block, appending its canonical actions to `out`. On error nothing of the
+    /// block has been executed (the state is unchanged and nothing is appended).
+    pub fn execute_block(
+        &mut self,
+        block: &Block,
+        out: &mut Vec<CanonMove>,
+    ) -> Result<(), GcodeError> {
+        if self.ended {
+            return Ok(());
+        }
+        let mut next = self.clone();
+        let mut kinds = Vec::new();
+        next.run_block(block, &mut kinds)?;
+        *self = next;
+        out.extend(kinds.into_iter().map(|kind| CanonMove {
+            line: block.line,
+            kind,
+        }));
+        Ok(())
+    }
+
+    /// Executes a block on `self`; may leave `self` half-updated on error (the caller works on
+    /// a copy).
+    fn run_block(&mut self, block: &Block, out: &mut Vec<CanonKind>) -> Result<(), GcodeError> {
+        let d = decode(block)?;
+        let step = self.check(block, &d)?;
+        let mut emit = |kind| out.push(kind);
+
+        if let Some(f) = d.f {
+            self.feed_mm_per_min = f.value * self.scale();
+        }
+        if let Some(s) = d.s {
+            self.spindle.1 = s.value;
+        }
+        if let Some(t) = d.t {
+            // Range and integrality checked in `check`.
+            self.selected_tool = t.value as u32;
+        }
+        if d.tool_change.is_some() {
+            self.spindle.0 = SpindleDir::Off;
+            self.report_spindle(&mut emit);
+            emit(CanonKind::ToolChange {
+                tool: self.selected_tool,
+            });
+        }
+        if let Some((dir, _)) = d.spindle {
+            self.spindle.0 = dir;
+        }
+        self.report_spindle(&mut emit);
+        if let (Some((NonModal::Dwell, _)), Some(p)) = (d.non_modal, d.p) {
+            emit(CanonKind::Dwell {
+                duration_s: p.value,
+            });
+        }
+        self.plane = d.plane.unwrap_or(self.plane);
+        self.units = d.units.unwrap_or(self.units);
+        self.coord_index = d.coord_system.unwrap_or(self.coord_index);
+        self.distance = d.distance.unwrap_or(self.distance);
+        self.arc_distance = d.arc_distance.unwrap_or(self.arc_distance);
+        match d.non_modal {
+            Some((NonModal::SetAxisOffsets, _)) => self.set_axis_offsets(&d),
+            Some((NonModal::ResetAxisOffsets, _)) => self.axis_offset_mm = [0.0; 3],
+            _ => {}
+        }
+        if let Some((m, _)) = d.motion {
+            self.motion = Some(m).filter(|m| *m != Motion::Cancel);
+        }
+        if let MotionStep::Move(m) = step {
+            let machine = matches!(d.non_modal, Some((NonModal::MachineCoords, _)));
+            let end_mm = self.target_mm(&d, machine);
+            let kind = match m {
+                Motion::Rapid => Some(CanonKind::Traverse { end_mm }),
+                Motion::Linear => Some(CanonKind::Feed {
+                    end_mm,
+                    feed_mm_per_min: self.feed_mm_per_min,
+                }),
+                Motion::Arc { clockwise } => Some(self.arc(block, &d, end_mm, clockwise)?),
+                // `check` never schedules G80 as a move.
+                Motion::Cancel => None,
+            };
+            if let Some(kind) = kind {
+                self.pos_mm = end_mm;
+                emit(kind);
+            }
+        }
+        if d.stop.is_some() {
+            emit(CanonKind::ProgramEnd);
+            self.ended = true;
+        }
+        Ok(())
+    }
+
+    /// mm per program unit.
+    fn scale(&self) -> f64 {
+        match self.units {
+            Units::Mm => 1.0,
+            Units::Inch => MM_PER_INCH,
+        }
+    }
+
+    /// Program-to-machine offset (G5x + G92) along `axis`, mm.
+    fn offset_mm(&self, axis: usize) -> f64 {
+        self.cfg.work_offsets_mm[self.coord_index][axis] + self.axis_offset_mm[axis]
+    }
+
+    fn report_spindle(&mut self, emit: &mut impl FnMut(CanonKind)) {
+        if self.spindle != self.spindle_reported {
+            self.spindle_reported = self.spindle;
+            emit(CanonKind::Spindle {
+                dir: self.spindle.0,
+                rpm: self.spindle.1,
+            });
+        }
+    }
+
+    /// G92: offsets such that the current point gets the programmed coordinates.
+    fn set_axis_offsets(&mut self, d: &Decoded) {
+        for (axis, word) in d.axes.iter().enumerate() {
+            if let Some(w) = word {
+                let g5x = self.cfg.work_offsets_mm[self.coord_index][axis];
+                self.axis_offset_mm[axis] = self.pos_mm[axis] - g5x - w.value * self.scale();
+            }
+        }
+    }
+
+    /// End point of a move, machine coordinates, mm. Uses the block's units/distance modes,
+    /// which are already applied when this runs.
+    fn target_mm(&self, d: &Decoded, machine: bool) -> [f64; 3] {
+        let mut end = self.pos_mm;
+        for (axis, word) in d.axes.iter().enumerate() {
+            if let Some(w) = word {
+                let v_mm = w.value * self.scale();
+                end[axis] = if machine {
+                    v_mm
+                } else if self.distance == Distance::Incremental {
+                    self.pos_mm[axis] + v_mm
+                } else {
+                    v_mm + self.offset_mm(axis)
+                };
+            }
+        }
+        end
+    }
+
+    /// The arc of a G2/G3 block. Word-level checks have been done in `check`.
+    fn arc(
+        &self,
+        block: &Block,
+        d: &Decoded,
+        end_mm: [f64; 3],
+        clockwise: bool,
+    ) -> Result<CanonKind, GcodeError> {
+        let (a1, a2, _) = plane_axes(self.plane);
+        let col = d
+            .motion
+            .map(|m| m.1)
+            .or_else(|| d.first_arc_word().map(|w| w.col))
+            .unwrap_or(block.first_col);
+        let start = [self.pos_mm[a1], self.pos_mm[a2]];
+        let end = [end_mm[a1], end_mm[a2]];
+        let k = self.scale();
+        let form = match d.r {
+            Some(r) => ArcForm::Radius(r.value * k),
+            None => {
+                let center = [a1, a2].map(|axis| match (self.arc_distance, d.ijk[axis]) {
+                    (Distance::Absolute, Some(w)) => w.value * k + self.offset_mm(axis),
+                    (_, w) => self.pos_mm[axis] + w.map_or(0.0, |w| w.value * k),
+                });
+                ArcForm::Center(center)
+            }
+        };
+        let c = arc_center(start, end, form, clockwise, self.units == Units::Inch)
+            .map_err(|e| GcodeError::invalid(block.line, col, arc_error_msg(&e, k)))?;
+        let mut center_mm = self.pos_mm;
+        center_mm[a1] = c[0];
+        center_mm[a2] = c[1];
+        let turns = d.p.map_or(1, |p| p.value.round() as u32);
+        Ok(CanonKind::Arc {
+            end_mm,
+            center_mm,
+            plane: self.plane,
+            clockwise,
+            extra_turns: turns - 1,
+            feed_mm_per_min: self.feed_mm_per_min,
+        })
+    }
+
+    /// All checks of a block against the modal state it will see; decides the motion step.
+    fn check(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
+        let line = block.line;
+        let inv = |w: &Word, msg: String| GcodeError::invalid(line, w.col, msg);
+        for w in [d.f, d.s].into_iter().flatten() {
+            if w.value < 0.0 {
+                return Err(inv(&w, format!("{} word must not be negative", w.letter)));
+            }
+        }
+        if let Some(t) = d.t {
+            if t.value < 0.0 || t.value.fract() != 0.0 || t.value > f64::from(u32::MAX) {
+                return Err(inv(&t, "T word must be a non-negative integer".into()));
+            }
+        }
+        let non_modal = d.non_modal.map(|n| n.0);
+        let explicit = d.motion.map(|m| m.0);
+        let uses_axes_g92 = non_modal == Some(NonModal::SetAxisOffsets);
+        let step = if uses_axes_g92 {
+            let (_, col) = d
+                .non_modal
+                .unwrap_or((NonModal::SetAxisOffsets, block.first_col));
+            if !d.has_axis_words() {
+                return Err(GcodeError::invalid(
+                    line,
+                    col,
+                    "G92 needs at least one of X, Y, Z",
+                ));
+            }
+            if let Some((m, mcol)) = d.motion.filter(|m| m.0 != Motion::Cancel) {
+                let name = motion_name(m);
+                return Err(GcodeError::invalid(
+                    line,
+                    mcol,
+                    format!("G92 and {name} both use the axis words"),
+                ));
+            }
+            MotionStep::None
+        } else if d.has_axis_words() {
+            match explicit.or(self.motion) {
+                Some(Motion::Cancel) | None => {
+                    let w = d
+                        .axes
+                        .iter()
+                        .flatten()
+                        .next()
+                        .copied()
+                        .unwrap_or(block.words[0]);
+                    let why = if explicit == Some(Motion::Cancel) {
+                        "G80 cancels the motion mode"
+                    } else {
+                        "no motion mode is active"
+                    };
+                    return Err(inv(
+                        &w,
+                        format!("{} word without G0/G1/G2/G3 to use it ({why})", w.letter),
+                    ));
+                }
+                Some(m) => MotionStep::Move(m),
+            }
+        } else if let Some(m @ Motion::Arc { .. }) = explicit {
+            MotionStep::Move(m)
+        } else {
+            MotionStep::None
+        };
+        let arc_move = matches!(step, MotionStep::Move(Motion::Arc { .. }));
+        if !arc_move {
+            if let Some(w) = d.first_arc_word() {
+                return Err(inv(
+                    &w,
+                    format!("{} word without G2/G3 to use it", w.letter),
+                ));
+            }
+        }
+        let dwell = non_modal == Some(NonModal::Dwell);
+        match (d.p, dwell, arc_move) {
+            (Some(p), true, true) => {
+                return Err(inv(&p, "P word claimed by both G4 and G2/G3".into()))
+            }
+            (Some(p), false, false) => {
+                return Err(inv(&p, "P word without G4, G2 or G3 to use it".into()))
+            }
+            (Some(p), true, false) if p.value < 0.0 => {
+                return Err(inv(&p, "G4 dwell time P must not be negative".into()))
+            }
+            (None, true, _) => {
+                let col = d.non_modal.map_or(block.first_col, |n| n.1);
+                return Err(GcodeError::invalid(
+                    line,
+                    col,
+                    "G4 needs a P word (dwell time in seconds)",
+                ));
+            }
+            _ => {}
+        }
+        if let Some((NonModal::MachineCoords, col)) = d.non_modal {
+            if !matches!(
+                explicit.or(self.motion),
+                Some(Motion::Rapid | Motion::Linear)
+            ) {
+                return Err(GcodeError::invalid(line, col, "G53 needs G0 or G1"));
+            }
+            if d.distance.unwrap_or(self.distance) == Distance::Incremental {
+                return Err(GcodeError::invalid(
+                    line,
+                    col,
+                    "G53 cannot be used in G91 incremental mode",
+                ));
+            }
+        }
+        if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. })) = step {
+            let feed_after_f = match d.f {
+                Some(f) => f.value,
+                None => self.feed_mm_per_min,
+            };
+            let col = d
+                .motion
+                .map(|m| m.1)
+                .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+                .unwrap_or(block.first_col);
+            if let Motion::Arc { clockwise } = m {
+                self.check_arc_words(block, d, col, clockwise)?;
+            }
+            if feed_after_f <= 0.0 {
+                let name = motion_name(m);
+                return Err(GcodeError::invalid(
+                    line,
+                    col,
+                    format!("{name} with zero feed rate (no F word > 0 given yet)"),
+                ));
+            }
+        }
+        Ok(step)
+    }
+
+    /// Word checks of an arc block (LinuxCNC's `convert_arc` rules).
+    fn check_arc_words(
+        &self,
+        block: &Block,
+        d: &Decoded,
+        col: usize,
+        clockwise: bool,
+    ) -> Result<(), GcodeError> {
+        let line = block.line;
+        let g = if clockwise { "G2" } else { "G3" };
+        let plane = d.plane.unwrap_or(self.plane);
+        let (a1, a2, axis) = plane_axes(plane);
+        let (pn, letters) = plane_names(plane);
+        let has_ijk = d.ijk.iter().any(Option::is_some);
+        match (d.r, has_ijk) {
+            (None, false) => {
+                return Err(GcodeError::invalid(
+                    line,
+                    col,
+                    format!("{g} needs I/J/K or R"),
+                ))
+            }
+            (Some(r), true) => {
+                return Err(GcodeError::invalid(
+                    line,
+                    r.col,
+                    format!("{g} cannot mix R with I/J/K"),
+                ))
+            }
+            (Some(_), false) => {
+                if d.axes[a1].is_none() && d.axes[a2].is_none() {
+                    let msg = format!(
+                        "{g} with R needs {} or {} (end point in the {pn} plane)",
+                        AXES[a1], AXES[a2]
+                    );
+                    return Err(GcodeError::invalid(line, col, msg));
+                }
+            }
+            (None, true) => {
+                if let Some(w) = d.ijk[axis] {
+                    return Err(GcodeError::invalid(
+                        line,
+                        w.col,
+                        format!(
+                            "{} word given for an arc in the {pn} plane (uses {letters})",
+                            w.letter
+                        ),
+                    ));
+                }
+                if d.arc_distance.unwrap_or(self.arc_distance) == Distance::Absolute {
+                    for a in [a1, a2] {
+                        if d.ijk[a].is_none() {
+                            let msg = format!(
+                                "{} word missing for an absolute-centre (G90.1) arc",
+                                IJK[a]
+                            );
+                            return Err(GcodeError::invalid(line, col, msg));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(p) = d.p {
+            if p.value < 1.0 || (p.value - p.value.round()).abs() > 1e-9 {
+                return Err(GcodeError::invalid(
+                    line,
+                    p.col,
+                    format!("{g} turn count P must be a whole number >= 1"),
+                ));
+            }
+            if p.value > f64::from(MAX_ARC_TURNS) {
+                let msg = format!(
+                    "{g} turn count P{} above the supported maximum {MAX_ARC_TURNS}",
+                    p.value
+                );
+                return Err(GcodeError::unsupported(line, p.col, msg));
+            }
+        }
+        Ok(())
+    }
+}
+
+const AXES: [char; 3] = ['X', 'Y', 'Z'];
+const IJK: [char; 3] = ['I', 'J', 'K'];
+
+/// (first, second, normal) axis indices of a plane, LinuxCNC's ARC_FEED order.
+pub(super) fn plane_axes(plane: Plane) -> (usize, usize, usize) {
+    match plane {
+        Plane::Xy => (0, 1, 2),
+        Plane::Zx => (2, 0, 1),
+        Plane::Yz => (1, 2, 0),
+    }
+}
+
+fn plane_names(plane: Plane) -> (&'static str, &'static str) {
+    match plane {
+        Plane::Xy => ("XY", "I/J"),
+        Plane::Zx => ("ZX", "I/K"),
+        Plane::Yz => ("YZ", "J/K"),
+    }
+}
+
+fn motion_name(m: Motion) -> &'static str {
+    match m {
+        Motion::Rapid => "G0",
+        Motion::Linear => "G1",
+        Motion::Arc { clockwise: true } => "G2",
+        Motion::Arc { clockwise: false } => "G3",
+        Motion::Cancel => "G80",
+    }
+}
+
+/// Message for an arc error; lengths shown in program units (`k` mm per unit).
+fn arc_error_msg(e: &ArcError, k: f64) -> String {
+    match *e {
+        ArcError::ZeroRadius { r1_mm, r2_mm } => {
+            format!(
+                "zero-radius arc (radius to start {:.4}, to end {:.4})",
+                r1_mm / k,
+                r2_mm / k
+            )
+        }
+        ArcError::RadiusMismatch { r1_mm, r2_mm } => format!(
+            "radius to end of arc differs from radius to start (r1 = {:.4}, r2 = {:.4})",
+            r1_mm / k,
+            r2_mm / k
+        ),
+        ArcError::RadiusFormFullCircle => {
+            "R-form arc ends where it starts (use I/J/K for a full circle)".to_string()
+        }
+        ArcError::RadiusTooSmall {
+            r_mm,
+            half_chord_mm,
+        } => format!(
+            "arc radius R{:.4} too small to reach the end point (half chord {:.4})",
+            r_mm / k,
+            half_chord_mm / k
+        ),
+    }
+}

@@ -1,0 +1,136 @@
+//! Modal RS274/NGC interpreter: parsed blocks ([`crate::gcode`]) → canonical machine actions
+//! ([`CanonMove`]), the contract with the motion planner.
+//!
+//! Model: LinuxCNC's interpreter restricted to a 3-axis mill. The modal state (plane, units,
+//! distance modes, work offset, G92 offset, motion mode, feed, spindle, selected tool) starts as
+//! LinuxCNC starts a metric machine: G17 G21 G90 G91.1 (incremental I/J/K) G54 G80 (no motion
+//! mode), feed 0, spindle stopped at S0, tool 0, at [`InterpConfig::start_mm`].
+//!
+//! Units: every output length is a machine coordinate in mm, every feed in mm/min:
+//! `p_machine_mm = k·p_program + g5x_offset_mm + g92_offset_mm` with k = 25.4 under G20,
+//! 1 under G21 (G53 moves use `p_machine_mm = k·p_program`; G91 adds `k·Δ` to the current
+//! machine position). An F word is read in the units active when it is executed (RS274/NGC
+//! order: before this block's G20/G21) and stored in mm/min.
+//!
+//! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, G4, G17–G19,
+//! G20/G21, G54–G59, G90/G91, G90.1/G91.1, G92/G92.1, motion (G0–G3, G53), M2/M30.
+//! All checks of a block run before any of it executes, so a rejected block has no effect.
+//!
+//! Spindle: one [`CanonKind::Spindle`] is emitted per block when the (direction, speed) pair
+//! differs from the one last emitted (an S word alone while stopped is reported with `Off`).
+//! M6 stops a running spindle first (a `Spindle { dir: Off, .. }` before the `ToolChange`); the
+//! program must restart it with M3/M4.
+//!
+//! Extensions beyond the brief that only confirm the state we are always in: G40 (cutter
+//! compensation off), G49 (tool length offset off), G80 (cancel motion mode), G94 (feed per
+//! minute). Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
+//! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
+
+mod arc;
+mod decode;
+mod exec;
+#[cfg(test)]
+mod tests;
+
+pub use crate::gcode::{GcodeError, GcodeErrorKind};
+pub use exec::Interpreter;
+
+/// Largest P (turn count) accepted on G2/G3: guards against programs that would expand to
+/// absurd paths (and hangs downstream).
+pub const MAX_ARC_TURNS: u32 = 1000;
+
+/// Start-up settings of the interpreter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InterpConfig {
+    /// Machine position of the tool when the program starts, mm (default: origin, as LinuxCNC's
+    /// reference runs assume).
+    pub start_mm: [f64; 3],
+    /// Work offsets G54…G59 (index 0…5) in machine coordinates, mm (default: all zero).
+    pub work_offsets_mm: [[f64; 3]; 6],
+}
+
+impl Default for InterpConfig {
+    fn default() -> Self {
+        Self {
+            start_mm: [0.0; 3],
+            work_offsets_mm: [[0.0; 3]; 6],
+        }
+    }
+}
+
+/// Interprets a whole program: parse, run every block until M2/M30 or the end of the text.
+/// Stops at the first error.
+pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
+    let mut interp = Interpreter::new(cfg.clone());
+    let mut out = Vec::new();
+    for block in crate::gcode::parse_program(src) {
+        interp.execute_block(&block?, &mut out)?;
+        if interp.is_ended() {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// Active plane for arcs (G17 / G18 / G19).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    /// G17: arcs in XY, axis Z.
+    Xy,
+    /// G18: arcs in ZX, axis Y.
+    Zx,
+    /// G19: arcs in YZ, axis X.
+    Yz,
+}
+
+/// Spindle state commanded by M3 / M4 / M5.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpindleDir {
+    /// M3: clockwise.
+    Cw,
+    /// M4: counter-clockwise.
+    Ccw,
+    /// M5: stopped.
+    Off,
+}
+
+/// One canonical action, in machine coordinates (mm, after unit conversion, G5x and G92 offsets).
+#[derive(Debug, Clone, PartialEq)]
+pub enum CanonKind {
+    /// G0 rapid move to `end_mm` at the machine's rapid rate.
+    Traverse { end_mm: [f64; 3] },
+    /// G1 straight feed move to `end_mm`.
+    Feed {
+        end_mm: [f64; 3],
+        feed_mm_per_min: f64,
+    },
+    /// G2/G3 arc (helix if the axis coordinate changes) from the current point to `end_mm`.
+    Arc {
+        end_mm: [f64; 3],
+        /// Centre in machine coordinates; its coordinate along the plane's axis is the start's.
+        center_mm: [f64; 3],
+        plane: Plane,
+        /// True for G2 (clockwise seen from the positive plane axis).
+        clockwise: bool,
+        /// Additional full turns (P word − 1); 0 for a plain arc.
+        extra_turns: u32,
+        feed_mm_per_min: f64,
+    },
+    /// G4 dwell.
+    Dwell { duration_s: f64 },
+    /// Spindle speed or direction change (S with M3/M4/M5 state). `rpm` is the programmed S.
+    Spindle { dir: SpindleDir, rpm: f64 },
+    /// M6 tool change to tool `tool`.
+    ToolChange { tool: u32 },
+    /// M2 / M30.
+    ProgramEnd,
+}
+
+/// A canonical action with the source line (1-based) it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CanonMove {
+    /// 1-based line number in the source file.
+    pub line: usize,
+    /// What the machine must do.
+    pub kind: CanonKind,
+}

@@ -1,0 +1,448 @@
+//! Runs LinuxCNC's interpreter test corpus (`../shared/gcode-corpus/linuxcnc`, see its
+//! SOURCE.md) through our interpreter.
+//!
+//! - `interp/<case>/`: if we accept the program, our Traverse/Feed/Arc sequence must equal the
+//!   reference's STRAIGHT_TRAVERSE/STRAIGHT_FEED/ARC_FEED lines (end points, arc centres, plane,
+//!   rotation = ±(1 + extra turns), + for G3) within 1e-4 of the program's unit (the reference
+//!   prints 4 decimals); if we reject it, the error must be of the "unsupported" kind.
+//! - `interp/bad/*.ngc`: every program must be rejected (either kind).
+//! - `interp/good/*.ngc`: must not be rejected as invalid.
+//! - `nc_files/**.ngc`: every program is interpreted without a panic (errors are fine).
+//! - `crazy-paths` and `inside-corners` (whose subroutine calls we reject) are also checked in a
+//!   derived form: the first call of each subroutine inlined — it has cutter-compensation radius
+//!   0, so LinuxCNC emits the programmed path — and G64 / M0 / `G41.1 D…` lines dropped (planner
+//!   setting, pause, zero-radius compensation: none changes the canonical path). Each inlined
+//!   call's moves must appear, in order, as a contiguous run of the reference output. This is
+//!   where our arcs (G17 and G18, G2 and G3, mm and inch) meet LinuxCNC's numbers.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use vmc_twin::interp::{run_program, CanonKind, CanonMove, GcodeError, InterpConfig, Plane};
+
+fn corpus_dir() -> PathBuf {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/gcode-corpus/linuxcnc");
+    assert!(
+        dir.is_dir(),
+        "LinuxCNC corpus not found at {}",
+        dir.display()
+    );
+    dir
+}
+
+fn read_lossy(path: &Path) -> String {
+    let bytes = fs::read(path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+fn files_with_ext(dir: &Path, ext: &str, recursive: bool, out: &mut Vec<PathBuf>) {
+    let mut entries: Vec<PathBuf> = fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()))
+        .map(|e| e.expect("directory entry").path())
+        .collect();
+    entries.sort();
+    for path in entries {
+        if path.is_dir() {
+            if recursive {
+                files_with_ext(&path, ext, true, out);
+            }
+        } else if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+        {
+            out.push(path);
+        }
+    }
+}
+
+/// One motion of the reference output, lengths converted to mm.
+#[derive(Debug, Clone, PartialEq)]
+enum RefMove {
+    Traverse([f64; 3]),
+    Feed([f64; 3]),
+    /// first_end, second_end, first_centre, second_centre, axis_end (mm), rotation, plane.
+    Arc([f64; 5], i64, Plane),
+}
+
+/// A reference move with its comparison tolerance (1e-4 program unit, in mm).
+type Tolerant = (RefMove, f64);
+
+fn args(line: &str) -> Vec<f64> {
+    let open = line.find('(').expect("canonical call has '('");
+    let close = line.rfind(')').expect("canonical call has ')'");
+    line[open + 1..close]
+        .split(',')
+        .map(|a| {
+            a.trim()
+                .parse::<f64>()
+                .unwrap_or_else(|_| panic!("bad number in {line:?}"))
+        })
+        .collect()
+}
+
+fn parse_expected(text: &str) -> Vec<Tolerant> {
+    let (mut mm_per_unit, mut plane) = (1.0, Plane::Xy);
+    let mut moves = Vec::new();
+    for line in text.lines() {
+        let tol = 1e-4 * mm_per_unit;
+        if line.contains("USE_LENGTH_UNITS(CANON_UNITS_INCHES)") {
+            mm_per_unit = 25.4;
+        } else if line.contains("USE_LENGTH_UNITS(CANON_UNITS_MM)") {
+            mm_per_unit = 1.0;
+        } else if line.contains("USE_LENGTH_UNITS(") {
+            panic!("unexpected length units: {line}");
+        } else if line.contains("SELECT_PLANE(CANON_PLANE_XY)") {
+            plane = Plane::Xy;
+        } else if line.contains("SELECT_PLANE(CANON_PLANE_XZ)") {
+            plane = Plane::Zx;
+        } else if line.contains("SELECT_PLANE(CANON_PLANE_YZ)") {
+            plane = Plane::Yz;
+        } else if line.contains("STRAIGHT_TRAVERSE(") || line.contains("STRAIGHT_FEED(") {
+            let a = args(line);
+            let p = [a[0], a[1], a[2]].map(|v| v * mm_per_unit);
+            let m = if line.contains("STRAIGHT_TRAVERSE(") {
+                RefMove::Traverse(p)
+            } else {
+                RefMove::Feed(p)
+            };
+            moves.push((m, tol));
+        } else if line.contains("ARC_FEED(") {
+            let a = args(line);
+            let lengths = [a[0], a[1], a[2], a[3], a[5]].map(|v| v * mm_per_unit);
+            moves.push((RefMove::Arc(lengths, a[4] as i64, plane), tol));
+        }
+    }
+    moves
+}
+
+/// Our motions in the reference's form.
+fn ours(moves: &[CanonMove]) -> Vec<RefMove> {
+    moves
+        .iter()
+        .filter_map(|m| match m.kind {
+            CanonKind::Traverse { end_mm } => Some(RefMove::Traverse(end_mm)),
+            CanonKind::Feed { end_mm, .. } => Some(RefMove::Feed(end_mm)),
+            CanonKind::Arc {
+                end_mm,
+                center_mm,
+                plane,
+                clockwise,
+                extra_turns,
+                ..
+            } => {
+                let (a1, a2, ax) = match plane {
+                    Plane::Xy => (0, 1, 2),
+                    Plane::Zx => (2, 0, 1),
+                    Plane::Yz => (1, 2, 0),
+                };
+                let turns = 1 + i64::from(extra_turns);
+                let rotation = if clockwise { -turns } else { turns };
+                let lengths = [
+                    end_mm[a1],
+                    end_mm[a2],
+                    center_mm[a1],
+                    center_mm[a2],
+                    end_mm[ax],
+                ];
+                Some(RefMove::Arc(lengths, rotation, plane))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+fn same(ours: &RefMove, reference: &Tolerant) -> bool {
+    let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= reference.1);
+    match (ours, &reference.0) {
+        (RefMove::Traverse(a), RefMove::Traverse(b)) | (RefMove::Feed(a), RefMove::Feed(b)) => {
+            close(a, b)
+        }
+        (RefMove::Arc(a, ra, pa), RefMove::Arc(b, rb, pb)) => ra == rb && pa == pb && close(a, b),
+        _ => false,
+    }
+}
+
+/// `None` if the sequences agree, else a description of the first difference.
+fn compare(ours: &[RefMove], reference: &[Tolerant]) -> Option<String> {
+    for (i, (o, r)) in ours.iter().zip(reference).enumerate() {
+        if !same(o, r) {
+            return Some(format!("move {i}: ours {o:?}, reference {:?}", r.0));
+        }
+    }
+    (ours.len() != reference.len()).then(|| {
+        format!(
+            "ours has {} moves, reference {}",
+            ours.len(),
+            reference.len()
+        )
+    })
+}
+
+/// The program(s) of a case directory: `test.ngc` if present, else all `.ngc` files.
+fn case_programs(dir: &Path) -> Vec<PathBuf> {
+    let test = dir.join("test.ngc");
+    if test.is_file() {
+        return vec![test];
+    }
+    let mut programs = Vec::new();
+    files_with_ext(dir, "ngc", false, &mut programs);
+    programs
+}
+
+fn case_dirs(dir: &Path, out: &mut Vec<PathBuf>) {
+    let mut entries: Vec<PathBuf> = fs::read_dir(dir)
+        .expect("list case dir")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    entries.sort();
+    for path in entries.into_iter().filter(|p| p.is_dir()) {
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if dir.ends_with("interp") && (name == "bad" || name == "good") {
+            continue;
+        }
+        if path.join("expected").is_file() {
+            out.push(path.clone());
+        }
+        case_dirs(&path, out);
+    }
+}
+
+fn run(path: &Path) -> Result<Vec<CanonMove>, GcodeError> {
+    run_program(&read_lossy(path), &InterpConfig::default())
+}
+
+#[test]
+fn linuxcnc_reference_cases_match_or_are_rejected_as_unsupported() {
+    let interp = corpus_dir().join("interp");
+    let mut dirs = Vec::new();
+    case_dirs(&interp, &mut dirs);
+    assert!(
+        dirs.len() > 40,
+        "expected the full corpus, found {} cases",
+        dirs.len()
+    );
+    let (mut matched, mut unsupported, mut skipped) = (0, 0, 0);
+    let mut failures = Vec::new();
+    for dir in &dirs {
+        let programs = case_programs(dir);
+        let reference = parse_expected(&read_lossy(&dir.join("expected")));
+        let name = dir
+            .strip_prefix(&interp)
+            .unwrap_or(dir)
+            .display()
+            .to_string();
+        for program in &programs {
+            match run(program) {
+                Err(e) if e.is_unsupported() => unsupported += 1,
+                Err(e) => failures.push(format!("{name}: rejected as invalid: {e}")),
+                // Several programs share one `expected`: we cannot tell which produced it.
+                Ok(_) if programs.len() > 1 => skipped += 1,
+                Ok(moves) => match compare(&ours(&moves), &reference) {
+                    None => matched += 1,
+                    Some(diff) => failures.push(format!("{name}: mismatch: {diff}")),
+                },
+            }
+        }
+    }
+    println!(
+        "matched {matched}, rejected-unsupported {unsupported}, mismatched-or-invalid {}, \
+         accepted-but-ambiguous {skipped}",
+        failures.len()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn linuxcnc_bad_programs_are_all_rejected() {
+    let mut programs = Vec::new();
+    files_with_ext(
+        &corpus_dir().join("interp/bad"),
+        "ngc",
+        false,
+        &mut programs,
+    );
+    assert!(
+        programs.len() >= 20,
+        "found only {} bad programs",
+        programs.len()
+    );
+    let accepted: Vec<String> = programs
+        .iter()
+        .filter(|p| run(p).is_ok())
+        .map(|p| p.display().to_string())
+        .collect();
+    println!(
+        "bad programs rejected: {} of {}",
+        programs.len() - accepted.len(),
+        programs.len()
+    );
+    assert!(
+        accepted.is_empty(),
+        "accepted bad programs:\n{}",
+        accepted.join("\n")
+    );
+}
+
+#[test]
+fn linuxcnc_good_programs_are_never_rejected_as_invalid() {
+    let mut programs = Vec::new();
+    files_with_ext(
+        &corpus_dir().join("interp/good"),
+        "ngc",
+        false,
+        &mut programs,
+    );
+    assert!(!programs.is_empty());
+    for p in &programs {
+        if let Err(e) = run(p) {
+            assert!(e.is_unsupported(), "{}: {e}", p.display());
+        }
+    }
+}
+
+#[test]
+fn linuxcnc_example_programs_never_panic() {
+    let mut programs = Vec::new();
+    files_with_ext(&corpus_dir().join("nc_files"), "ngc", true, &mut programs);
+    assert!(
+        programs.len() > 100,
+        "found only {} example programs",
+        programs.len()
+    );
+    let (mut ok, mut unsupported, mut invalid) = (0, 0, Vec::new());
+    for p in &programs {
+        match run(p) {
+            Ok(moves) => {
+                ok += 1;
+                assert!(moves.iter().all(|m| m.line >= 1));
+            }
+            Err(e) if e.is_unsupported() => unsupported += 1,
+            Err(e) => invalid.push(format!("{}: {e}", p.display())),
+        }
+    }
+    println!(
+        "nc_files: accepted {ok}, unsupported {unsupported}, invalid {}",
+        invalid.len()
+    );
+    for line in &invalid {
+        println!("  invalid: {line}");
+    }
+}
+
+/// Derives a program without O-words from a LinuxCNC program of the simple form
+/// `oN sub … oN endsub` + main lines + `oN call`: the first call of each subroutine is inlined
+/// with its `oM if … oM endif` blocks dropped (they only switch compensation on for non-zero
+/// radius), later calls end the derived program. Returns the text and, per inlined call, the
+/// range of derived lines (1-based, inclusive start, exclusive end) it spans.
+fn inline_first_calls(src: &str) -> (String, Vec<(usize, usize)>) {
+    let lower = |l: &str| l.trim().to_ascii_lowercase();
+    let mut subs: Vec<(String, Vec<String>)> = Vec::new();
+    let mut main: Vec<String> = Vec::new();
+    let mut current: Option<(String, Vec<String>)> = None;
+    let mut skipping_if = false;
+    for line in src.lines() {
+        let l = lower(line);
+        let first = l.split_whitespace().next().unwrap_or("").to_string();
+        let second = l.split_whitespace().nth(1).unwrap_or("");
+        let dropped = matches!(l.as_str(), "g64" | "m00" | "m0")
+            || l.starts_with("g41.1 d")
+            || l.starts_with('#');
+        if first.starts_with('o') && second == "sub" {
+            current = Some((first, Vec::new()));
+        } else if first.starts_with('o') && second == "endsub" {
+            subs.extend(current.take());
+        } else if first.starts_with('o') && second == "if" {
+            skipping_if = true;
+        } else if first.starts_with('o') && second == "endif" {
+            skipping_if = false;
+        } else if let Some((_, body)) = current.as_mut() {
+            if !skipping_if && !dropped {
+                body.push(line.to_string());
+            }
+        } else if !dropped {
+            main.push(line.to_string());
+        }
+    }
+    let (mut text, mut spans, mut called) =
+        (Vec::<String>::new(), Vec::new(), Vec::<String>::new());
+    let mut span_start = 1;
+    for line in main {
+        let l = lower(&line);
+        let mut words = l.split_whitespace();
+        let (first, second) = (words.next().unwrap_or(""), words.next().unwrap_or(""));
+        if first.starts_with('o') && second == "call" {
+            if called.iter().any(|c| c == first) {
+                continue;
+            }
+            called.push(first.to_string());
+            let body = subs
+                .iter()
+                .find(|(name, _)| name == first)
+                .map(|s| s.1.clone())
+                .unwrap_or_default();
+            text.extend(body);
+            spans.push((span_start, text.len() + 1));
+            span_start = text.len() + 1;
+        } else if first.starts_with('o') {
+            panic!("unexpected O word line {line:?}");
+        } else {
+            text.push(line);
+        }
+    }
+    (text.join("\n"), spans)
+}
+
+/// Length of the longest prefix of `chunk` matching `reference` from `at`.
+fn matching_prefix(chunk: &[RefMove], reference: &[Tolerant], at: usize) -> usize {
+    chunk
+        .iter()
+        .zip(&reference[at.min(reference.len())..])
+        .take_while(|(o, r)| same(o, r))
+        .count()
+}
+
+#[test]
+fn first_subroutine_calls_of_crazy_paths_and_inside_corners_match_linuxcnc() {
+    let interp = corpus_dir().join("interp");
+    let mut checked_moves = 0;
+    for case in ["crazy-paths", "inside-corners"] {
+        let (derived, spans) = inline_first_calls(&read_lossy(&interp.join(case).join("test.ngc")));
+        let moves = run_program(&derived, &InterpConfig::default())
+            .unwrap_or_else(|e| panic!("{case}: derived program rejected: {e}"));
+        let reference = parse_expected(&read_lossy(&interp.join(case).join("expected")));
+        assert!(
+            spans.len() >= 2,
+            "{case}: only {} subroutine calls inlined",
+            spans.len()
+        );
+        let mut cursor = 0;
+        for (k, &(from, to)) in spans.iter().enumerate() {
+            let chunk_moves: Vec<CanonMove> = moves
+                .iter()
+                .filter(|m| (from..to).contains(&m.line))
+                .cloned()
+                .collect();
+            let chunk = ours(&chunk_moves);
+            assert!(!chunk.is_empty(), "{case}: call {k} produced no moves");
+            let found = (cursor..reference.len())
+                .find(|&at| matching_prefix(&chunk, &reference, at) == chunk.len());
+            let Some(at) = found else {
+                let best = (cursor..reference.len())
+                    .max_by_key(|&at| matching_prefix(&chunk, &reference, at))
+                    .unwrap_or(cursor);
+                let n = matching_prefix(&chunk, &reference, best);
+                panic!(
+                    "{case}: call {k} ({} moves) not found in the reference; best run of {n} at {best}; \
+                     next ours {:?}, reference {:?}",
+                    chunk.len(),
+                    chunk.get(n),
+                    reference.get(best + n).map(|r| &r.0)
+                );
+            };
+            cursor = at + chunk.len();
+            checked_moves += chunk.len();
+        }
+    }
+    println!("moves checked against LinuxCNC in inlined subroutine calls: {checked_moves}");
+    assert!(checked_moves > 150);
+}
