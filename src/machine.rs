@@ -234,17 +234,16 @@ impl MachineSpec {
         self.thermal
             .validate()
             .map_err(|e| invalid(path, "thermal", e.to_string()))?;
-        let node_names = self.thermal.node_names();
+        let node_names: Vec<String> = self.thermal.nodes.iter().map(|n| n.name.clone()).collect();
         if self.sensors.is_empty() {
             return Err(invalid(path, "sensors", "at least one sensor is needed"));
         }
         for (k, s) in self.sensors.iter().enumerate() {
-            s.validate(&node_names)
+            s.validate(k)
                 .map_err(|e| invalid(path, format!("sensors[{k}]"), e.to_string()))?;
-            if self.sensors[..k].iter().any(|o| o.name == s.name) {
-                return Err(invalid(path, format!("sensors[{k}].name"), format!("duplicate sensor name \"{}\"", s.name)));
-            }
         }
+        crate::sensors::validate_sensors(&self.sensors, &node_names)
+            .map_err(|e| invalid(path, "sensors", e.to_string()))?;
         self.validate_instruments(path)?;
         self.errors
             .validate(&|n| node_names.iter().any(|m| m == n))

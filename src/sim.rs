@@ -221,6 +221,7 @@ pub fn activity_over(plan: &Plan, t0_s: f64, t1_s: f64) -> Activity {
         spindle_rpm: plan.spindle_rpm_at(0.5 * (t0_s + t1_s)),
         axis_pos_mm: a.mean_pos_mm,
         axis_speed_mm_per_min: a.mean_abs_vel_mm_per_min,
+        coolant: false,
     }
 }
 

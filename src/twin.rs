@@ -77,7 +77,8 @@ impl Twin {
             spec: spec.clone(),
         };
         twin.sensors
-            .update(0.0, twin.thermal.temps_degc(), twin.thermal.ambient_degc());
+            .update(0.0, twin.thermal.temps_degc(), twin.thermal.ambient_degc())
+            .map_err(|e| TwinError::Sensors(e.to_string()))?;
         Ok(twin)
     }
 
@@ -106,13 +107,14 @@ impl Twin {
     pub fn advance(&mut self, dt_s: f64, activity: &Activity) -> Result<(), TwinError> {
         self.thermal.advance(dt_s, activity)?;
         self.sensors
-            .update(dt_s, self.thermal.temps_degc(), self.thermal.ambient_degc());
+            .update(dt_s, self.thermal.temps_degc(), self.thermal.ambient_degc())
+            .map_err(|e| TwinError::Sensors(e.to_string()))?;
         Ok(())
     }
 
     /// The latest sensor readings: the only run-time information a predictor gets.
     pub fn sensor_readings(&self) -> SensorReadings {
-        self.sensors.read(self.time_s())
+        self.sensors.read()
     }
 
     /// Records the direction in which each axis last moved (for the reversal error).
