@@ -30,10 +30,7 @@ pub enum CanonKind {
     /// G0 rapid move to `end_mm` at the machine's rapid rate.
     Traverse { end_mm: [f64; 3] },
     /// G1 straight feed move to `end_mm`.
-    Feed {
-        end_mm: [f64; 3],
-        feed_mm_per_min: f64,
-    },
+    Feed { end_mm: [f64; 3], feed_mm_per_min: f64 },
     /// G2/G3 arc (helix if the axis coordinate changes) from the current point to `end_mm`.
     Arc {
         end_mm: [f64; 3],
