@@ -275,8 +275,8 @@ fn reference_warm_up_matches_the_study_figures() {
     let elapsed_ms = started.elapsed().as_secs_f64() * 1e3;
     let mid = duty(0.0, 9000.0);
     println!(
-        "\n8 h of 1 s steps ({} nodes shown): {elapsed_ms:.1} ms wall (this build)",
-        show.len()
+        "\n8 h of 1 s steps ({} nodes): {elapsed_ms:.1} ms wall (this build)",
+        net.node_names().len()
     );
     println!("\nReference warm-up: 9000 rpm, X/Y/Z 4000/3000/2000 mm/min, 0–4 h; stop 4–8 h");
     print!("{:<22}", "node  (°C) \\ h");
