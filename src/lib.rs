@@ -4,5 +4,5 @@ pub use vmc_predict as predict;
 pub mod gcode;
 pub mod interp;
 pub mod kinematics;
-pub mod sensors;
 pub mod thermal;
+pub mod sensors;
