@@ -259,7 +259,10 @@ mod tests {
 
     #[test]
     fn comments_are_skipped_and_semicolon_ends_the_line() {
-        assert_eq!(words("G0 (move fast) X1 ; rest X9"), vec![('G', 0.0, 1), ('X', 1.0, 16)]);
+        assert_eq!(
+            words("G0 (move fast) X1 ; rest X9"),
+            vec![('G', 0.0, 1), ('X', 1.0, 16)]
+        );
         assert_eq!(
             words("(msg, hi) G0 X1"),
             vec![('G', 0.0, 11), ('X', 1.0, 14)]

@@ -246,7 +246,7 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         210 => (6, A::Units(Units::Mm)),
         400 => (7, A::Nothing),
         490 => (8, A::Nothing),
-        540..=590 if code % 10 == 0 => (12, A::CoordSystem(((code - 540) / 10) as usize)),
+        540..=590 if code.is_multiple_of(10) => (12, A::CoordSystem(((code - 540) / 10) as usize)),
         _ => return Err(g_unsupported(code)),
     })
 }
@@ -279,7 +279,7 @@ fn g_unsupported(code: u32) -> Rejected {
 
 /// Classifies an M code we do not implement.
 fn m_unsupported(code: u32) -> Rejected {
-    if code % 10 != 0 {
+    if !code.is_multiple_of(10) {
         return Rejected::Unknown;
     }
     let what = match code / 10 {

@@ -255,103 +255,102 @@ impl Interpreter {
 
     /// All checks of a block against the modal state it will see; decides the motion step.
     fn check(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
-        let line = block.line;
-        let inv = |w: &Word, msg: String| GcodeError::invalid(line, w.col, msg);
-        for w in [d.f, d.s].into_iter().flatten() {
-            if w.value < 0.0 {
-                return Err(inv(&w, format!("{} word must not be negative", w.letter)));
+        check_values(block, d)?;
+        let step = self.motion_step(block, d)?;
+        self.check_word_users(block, d, step)?;
+        if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. })) = step {
+            let col = d
+                .motion
+                .map(|m| m.1)
+                .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+                .unwrap_or(block.first_col);
+            if let Motion::Arc { clockwise } = m {
+                self.check_arc_words(block, d, col, clockwise)?;
+            }
+            let feed = d.f.map_or(self.feed_mm_per_min, |f| f.value);
+            if feed <= 0.0 {
+                let name = motion_name(m);
+                let msg = format!("{name} with zero feed rate (no F word > 0 given yet)");
+                return Err(GcodeError::invalid(block.line, col, msg));
             }
         }
-        if let Some(t) = d.t {
-            if t.value < 0.0 || t.value.fract() != 0.0 || t.value > f64::from(u32::MAX) {
-                return Err(inv(&t, "T word must be a non-negative integer".into()));
-            }
-        }
-        let non_modal = d.non_modal.map(|n| n.0);
+        Ok(step)
+    }
+
+    /// Which motion the block makes: axis words move with the block's or the modal motion
+    /// mode, unless G92 claims them; an explicit G2/G3 moves even without axis words (full
+    /// circle).
+    fn motion_step(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
         let explicit = d.motion.map(|m| m.0);
-        let uses_axes_g92 = non_modal == Some(NonModal::SetAxisOffsets);
-        let step = if uses_axes_g92 {
-            let (_, col) = d
-                .non_modal
-                .unwrap_or((NonModal::SetAxisOffsets, block.first_col));
+        if let Some((NonModal::SetAxisOffsets, col)) = d.non_modal {
             if !d.has_axis_words() {
                 return Err(GcodeError::invalid(
-                    line,
+                    block.line,
                     col,
                     "G92 needs at least one of X, Y, Z",
                 ));
             }
             if let Some((m, mcol)) = d.motion.filter(|m| m.0 != Motion::Cancel) {
-                let name = motion_name(m);
-                return Err(GcodeError::invalid(
-                    line,
-                    mcol,
-                    format!("G92 and {name} both use the axis words"),
-                ));
+                let msg = format!("G92 and {} both use the axis words", motion_name(m));
+                return Err(GcodeError::invalid(block.line, mcol, msg));
             }
-            MotionStep::None
-        } else if d.has_axis_words() {
-            match explicit.or(self.motion) {
+            return Ok(MotionStep::None);
+        }
+        if let Some(w) = d.axes.iter().flatten().next() {
+            return match explicit.or(self.motion) {
                 Some(Motion::Cancel) | None => {
-                    let w = d
-                        .axes
-                        .iter()
-                        .flatten()
-                        .next()
-                        .copied()
-                        .unwrap_or(block.words[0]);
                     let why = if explicit == Some(Motion::Cancel) {
                         "G80 cancels the motion mode"
                     } else {
                         "no motion mode is active"
                     };
-                    return Err(inv(
-                        &w,
-                        format!("{} word without G0/G1/G2/G3 to use it ({why})", w.letter),
-                    ));
+                    let msg = format!("{} word without G0/G1/G2/G3 to use it ({why})", w.letter);
+                    Err(GcodeError::invalid(block.line, w.col, msg))
                 }
-                Some(m) => MotionStep::Move(m),
-            }
-        } else if let Some(m @ Motion::Arc { .. }) = explicit {
-            MotionStep::Move(m)
-        } else {
-            MotionStep::None
-        };
-        let arc_move = matches!(step, MotionStep::Move(Motion::Arc { .. }));
-        if !arc_move {
-            if let Some(w) = d.first_arc_word() {
-                return Err(inv(
-                    &w,
-                    format!("{} word without G2/G3 to use it", w.letter),
-                ));
-            }
+                Some(m) => Ok(MotionStep::Move(m)),
+            };
         }
-        let dwell = non_modal == Some(NonModal::Dwell);
+        Ok(match explicit {
+            Some(m @ Motion::Arc { .. }) => MotionStep::Move(m),
+            _ => MotionStep::None,
+        })
+    }
+
+    /// I/J/K/R need an arc, P needs G4 or an arc (not both), G53 needs G0/G1 in G90.
+    fn check_word_users(
+        &self,
+        block: &Block,
+        d: &Decoded,
+        step: MotionStep,
+    ) -> Result<(), GcodeError> {
+        let line = block.line;
+        let inv = |w: &Word, msg: &str| GcodeError::invalid(line, w.col, msg);
+        let arc_move = matches!(step, MotionStep::Move(Motion::Arc { .. }));
+        if let Some(w) = d.first_arc_word().filter(|_| !arc_move) {
+            return Err(inv(
+                &w,
+                &format!("{} word without G2/G3 to use it", w.letter),
+            ));
+        }
+        let dwell = d.non_modal.filter(|n| n.0 == NonModal::Dwell);
         match (d.p, dwell, arc_move) {
-            (Some(p), true, true) => {
-                return Err(inv(&p, "P word claimed by both G4 and G2/G3".into()))
+            (Some(p), Some(_), true) => return Err(inv(&p, "P word claimed by both G4 and G2/G3")),
+            (Some(p), None, false) => return Err(inv(&p, "P word without G4, G2 or G3 to use it")),
+            (Some(p), Some(_), false) if p.value < 0.0 => {
+                return Err(inv(&p, "G4 dwell time P must not be negative"))
             }
-            (Some(p), false, false) => {
-                return Err(inv(&p, "P word without G4, G2 or G3 to use it".into()))
-            }
-            (Some(p), true, false) if p.value < 0.0 => {
-                return Err(inv(&p, "G4 dwell time P must not be negative".into()))
-            }
-            (None, true, _) => {
-                let col = d.non_modal.map_or(block.first_col, |n| n.1);
+            (None, Some((_, col)), _) => {
                 return Err(GcodeError::invalid(
                     line,
                     col,
                     "G4 needs a P word (dwell time in seconds)",
-                ));
+                ))
             }
             _ => {}
         }
         if let Some((NonModal::MachineCoords, col)) = d.non_modal {
-            if !matches!(
-                explicit.or(self.motion),
-                Some(Motion::Rapid | Motion::Linear)
-            ) {
+            let mode = d.motion.map(|m| m.0).or(self.motion);
+            if !matches!(mode, Some(Motion::Rapid | Motion::Linear)) {
                 return Err(GcodeError::invalid(line, col, "G53 needs G0 or G1"));
             }
             if d.distance.unwrap_or(self.distance) == Distance::Incremental {
@@ -362,29 +361,7 @@ impl Interpreter {
                 ));
             }
         }
-        if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. })) = step {
-            let feed_after_f = match d.f {
-                Some(f) => f.value,
-                None => self.feed_mm_per_min,
-            };
-            let col = d
-                .motion
-                .map(|m| m.1)
-                .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
-                .unwrap_or(block.first_col);
-            if let Motion::Arc { clockwise } = m {
-                self.check_arc_words(block, d, col, clockwise)?;
-            }
-            if feed_after_f <= 0.0 {
-                let name = motion_name(m);
-                return Err(GcodeError::invalid(
-                    line,
-                    col,
-                    format!("{name} with zero feed rate (no F word > 0 given yet)"),
-                ));
-            }
-        }
-        Ok(step)
+        Ok(())
     }
 
     /// Word checks of an arc block (LinuxCNC's `convert_arc` rules).
@@ -467,6 +444,31 @@ impl Interpreter {
         }
         Ok(())
     }
+}
+
+/// Largest magnitude accepted for any number (1e9 mm = 1000 km): keeps every later
+/// computation finite.
+const MAX_ABS_VALUE: f64 = 1e9;
+
+/// Sign, integrality and range of the values themselves.
+fn check_values(block: &Block, d: &Decoded) -> Result<(), GcodeError> {
+    let inv = |w: &Word, msg: String| GcodeError::invalid(block.line, w.col, msg);
+    if let Some(w) = block.words.iter().find(|w| w.value.abs() > MAX_ABS_VALUE) {
+        return Err(inv(
+            w,
+            format!(
+                "{} word value out of range (|value| > {MAX_ABS_VALUE:e})",
+                w.letter
+            ),
+        ));
+    }
+    if let Some(w) = [d.f, d.s].into_iter().flatten().find(|w| w.value < 0.0) {
+        return Err(inv(&w, format!("{} word must not be negative", w.letter)));
+    }
+    if let Some(t) = d.t.filter(|t| t.value < 0.0 || t.value.fract() != 0.0) {
+        return Err(inv(&t, "T word must be a non-negative integer".to_string()));
+    }
+    Ok(())
 }
 
 const AXES: [char; 3] = ['X', 'Y', 'Z'];

@@ -14,14 +14,16 @@
 //!
 //! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, G4, G17–G19,
 //! G20/G21, G54–G59, G90/G91, G90.1/G91.1, G92/G92.1, motion (G0–G3, G53), M2/M30.
-//! All checks of a block run before any of it executes, so a rejected block has no effect.
+//! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
+//! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
+//! |value| ≤ 1e9 so that all results stay finite.
 //!
 //! Spindle: one [`CanonKind::Spindle`] is emitted per block when the (direction, speed) pair
 //! differs from the one last emitted (an S word alone while stopped is reported with `Off`).
 //! M6 stops a running spindle first (a `Spindle { dir: Off, .. }` before the `ToolChange`); the
 //! program must restart it with M3/M4.
 //!
-//! Extensions beyond the brief that only confirm the state we are always in: G40 (cutter
+//! Also accepted, because they only confirm the state we are always in: G40 (cutter
 //! compensation off), G49 (tool length offset off), G80 (cancel motion mode), G94 (feed per
 //! minute). Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
@@ -60,6 +62,18 @@ impl Default for InterpConfig {
 
 /// Interprets a whole program: parse, run every block until M2/M30 or the end of the text.
 /// Stops at the first error.
+///
+/// ```
+/// use vmc_twin::interp::{run_program, CanonKind, InterpConfig};
+/// let moves = run_program("G21 G90\nG1 X10 F600\nM2", &InterpConfig::default())?;
+/// assert_eq!(moves[0].line, 2);
+/// assert_eq!(moves[0].kind, CanonKind::Feed { end_mm: [10.0, 0.0, 0.0], feed_mm_per_min: 600.0 });
+/// assert_eq!(moves[1].kind, CanonKind::ProgramEnd);
+/// let err = run_program("G1 X1 F100\nG43 Z5", &InterpConfig::default()).unwrap_err();
+/// assert!(err.is_unsupported());
+/// assert_eq!(err.to_string(), "line 2, column 1: G43 (tool length offset) is not supported");
+/// # Ok::<(), vmc_twin::interp::GcodeError>(())
+/// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
     let mut interp = Interpreter::new(cfg.clone());
     let mut out = Vec::new();

@@ -475,6 +475,14 @@ const ERROR_CASES: &[(&str, usize, usize, GcodeErrorKind, &str)] = &[
     ("G1 G0 X1", 1, 4, GcodeErrorKind::Invalid, "G1 and G0"),
     ("M8", 1, 1, GcodeErrorKind::Unsupported, "M8 (coolant)"),
     ("G64 P0.01", 1, 1, GcodeErrorKind::Unsupported, "G64"),
+    ("G0 X1e3", 1, 6, GcodeErrorKind::Unsupported, "E word"),
+    (
+        "G0 Y12345678901",
+        1,
+        4,
+        GcodeErrorKind::Invalid,
+        "out of range",
+    ),
 ];
 
 #[test]
