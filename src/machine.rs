@@ -24,12 +24,12 @@ pub const REFERENCE_TOML: &str = include_str!("../machines/vmc-reference.toml");
 #[derive(Debug, Error)]
 pub enum MachineError {
     /// The file could not be read.
-    #[error("{path}: cannot read machine file: {source}")]
+    #[error("{path}: cannot read machine file: {err}")]
     Io {
         /// The file.
         path: String,
         /// Why.
-        source: std::io::Error,
+        err: std::io::Error,
     },
     /// The file is not valid TOML or does not match the schema.
     #[error("{path}: {msg}")]
@@ -169,9 +169,9 @@ impl MachineSpec {
 
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, MachineError> {
-        let text = std::fs::read_to_string(path).map_err(|source| MachineError::Io {
+        let text = std::fs::read_to_string(path).map_err(|err| MachineError::Io {
             path: path.display().to_string(),
-            source,
+            err,
         })?;
         Self::from_toml_str(&text, &path.display().to_string())
     }

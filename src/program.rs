@@ -14,35 +14,35 @@ use crate::motion::{self, Plan};
 #[derive(Debug, Error)]
 pub enum ProgramError {
     /// The file could not be read.
-    #[error("{file}: cannot read program: {source}")]
+    #[error("{file}: cannot read program: {err}")]
     Io {
         /// The file.
         file: String,
         /// Why.
-        source: std::io::Error,
+        err: std::io::Error,
     },
     /// Syntax or semantics (line and column in the message).
-    #[error("{file}: {source}")]
+    #[error("{file}: {err}")]
     Gcode {
         /// The file.
         file: String,
         /// The interpreter's error.
-        source: interp::GcodeError,
+        err: interp::GcodeError,
     },
     /// Planning or travel problem (line in the message).
-    #[error("{file}: {source}")]
+    #[error("{file}: {err}")]
     Motion {
         /// The file.
         file: String,
         /// The planner's error.
-        source: motion::MotionError,
+        err: motion::MotionError,
     },
 }
 
 /// Reads, interprets, plans and travel-checks a program file, starting at `start_mm`.
 pub fn load_plan(path: &Path, machine: &MachineSpec, start_mm: [f64; 3]) -> Result<Plan, ProgramError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| ProgramError::Io { file: file.clone(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|err| ProgramError::Io { file: file.clone(), err })?;
     plan_source(&text, &file, machine, start_mm)
 }
 
@@ -53,8 +53,8 @@ pub fn plan_source(text: &str, file: &str, machine: &MachineSpec, start_mm: [f64
         work_offsets_mm: machine.axes.work_offsets_mm,
         ..InterpConfig::default()
     };
-    let moves = interp::run_program(text, &cfg).map_err(|source| ProgramError::Gcode { file: file.to_string(), source })?;
-    let motion_err = |source| ProgramError::Motion { file: file.to_string(), source };
+    let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode { file: file.to_string(), err })?;
+    let motion_err = |err| ProgramError::Motion { file: file.to_string(), err };
     let plan = motion::plan(&moves, start_mm, &machine.motion).map_err(motion_err)?;
     motion::check_travel(&plan, machine.axes.travel_min_mm, machine.axes.travel_max_mm).map_err(motion_err)?;
     Ok(plan)

@@ -241,12 +241,12 @@ pub enum OutputError {
     #[error("{0}: already exists (pass --force to overwrite)")]
     Exists(PathBuf),
     /// An I/O failure.
-    #[error("{path}: {source}")]
+    #[error("{path}: {err}")]
     Io {
         /// The file.
         path: PathBuf,
         /// Why.
-        source: std::io::Error,
+        err: std::io::Error,
     },
 }
 
@@ -263,9 +263,9 @@ pub fn check_writable(path: &Path, force: bool) -> Result<(), OutputError> {
 /// existing file unless `force`.
 pub fn write_atomic(path: &Path, contents: &[u8], force: bool) -> Result<(), OutputError> {
     check_writable(path, force)?;
-    let io = |source| OutputError::Io {
+    let io = |err| OutputError::Io {
         path: path.to_path_buf(),
-        source,
+        err,
     };
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();

@@ -37,15 +37,15 @@ def diagonal(name, title, what, start, step, n_steps):
 
 
 def face_diagonals():
-    diagonal("diag_xy.ngc", "XY face diagonal test (reference study)",
+    diagonal("diag_xy.ngc", "XY face diagonal test - reference study",
              ["Measured every 67.10 mm along the diagonal: X steps 60 mm, Y steps 30 mm, Z fixed at -225.",
               f"10 points, dwell {DWELL_S} s at each point as a laser reading would."],
              [10.0, 60.0, -225.0], [60.0, 30.0, 0.0], 9)
-    diagonal("diag_yz.ngc", "YZ face diagonal test (reference study)",
+    diagonal("diag_yz.ngc", "YZ face diagonal test - reference study",
              ["Measured every 54.10 mm along the diagonal: Y steps 30 mm, Z steps 45 mm, X fixed at 280.",
               f"10 points, dwell {DWELL_S} s at each point as a laser reading would."],
              [280.0, 65.0, -430.0], [0.0, 30.0, 45.0], 9)
-    diagonal("diag_xz.ngc", "XZ face diagonal test (reference study)",
+    diagonal("diag_xz.ngc", "XZ face diagonal test - reference study",
              ["Measured every 75.00 mm along the diagonal: X steps 60 mm, Z steps 45 mm, Y fixed at 200.",
               f"10 points, dwell {DWELL_S} s at each point as a laser reading would."],
              [10.0, 200.0, -430.0], [60.0, 0.0, 45.0], 9)
@@ -60,7 +60,7 @@ def body_diagonals():
         end = [hi[i] if code[i] == "P" else lo[i] for i in range(3)]
         step = [(end[i] - start[i]) / n for i in range(3)]
         length = sum((end[i] - start[i]) ** 2 for i in range(3)) ** 0.5
-        diagonal(f"diag_{code.lower()}.ngc", f"Body diagonal {code} (ISO 230-6)",
+        diagonal(f"diag_{code.lower()}.ngc", f"Body diagonal {code} - ISO 230-6",
                  [f"From X{start[0]:.0f} Y{start[1]:.0f} Z{start[2]:.0f} to X{end[0]:.0f} Y{end[1]:.0f} Z{end[2]:.0f}:"
                   f" {length:.1f} mm, measured every {length / n:.2f} mm.",
                   "Direction code: P = the axis increases along the diagonal, N = it decreases.",
