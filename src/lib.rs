@@ -7,8 +7,10 @@
 //! as [`predict`]; it does not depend on this crate (the information boundary of DESIGN §3).
 pub use vmc_predict as predict;
 
+pub mod campaign;
 pub mod errors;
 pub mod gcode;
+pub mod instruments;
 pub mod interp;
 pub mod kinematics;
 pub mod machine;

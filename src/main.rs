@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
+use vmc_twin::campaign;
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::program;
 use vmc_twin::report::{self, RunLog};
@@ -25,6 +26,28 @@ struct Cli {
 enum Command {
     /// Run a G-code program on the twin and report the tool-tip error at each measurement point.
     Run(RunArgs),
+    /// Run the virtual calibration campaign (laser sweeps, spindle test, squareness, volumetric
+    /// grid, temperatures over typical thermal cycles) and write the dataset as CSV.
+    Calibrate(CalibrateArgs),
+}
+
+#[derive(clap::Args)]
+struct CalibrateArgs {
+    /// Machine description (TOML); default: the embedded reference machine.
+    #[arg(long)]
+    machine: Option<PathBuf>,
+    /// Machine realisation (seed of its random error parts).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output dataset file.
+    #[arg(short = 'o', long, default_value = "calibration.csv")]
+    out: PathBuf,
+    /// Overwrite an existing output file.
+    #[arg(long)]
+    force: bool,
+    /// Minutes between measurement blocks.
+    #[arg(long, default_value_t = 30.0)]
+    measure_every_min: f64,
 }
 
 #[derive(clap::Args)]
@@ -61,6 +84,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run(args),
+        Command::Calibrate(args) => calibrate(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -147,5 +171,29 @@ fn run(args: RunArgs) -> Result<()> {
         report::write_atomic(&json, text.as_bytes(), args.force)?;
         writeln!(out, "wrote {} and {}", csv.display(), json.display())?;
     }
+    Ok(())
+}
+
+fn calibrate(args: CalibrateArgs) -> Result<()> {
+    let machine = load_machine(args.machine.as_deref())?;
+    if !(args.measure_every_min > 0.0 && args.measure_every_min.is_finite()) {
+        anyhow::bail!("--measure-every-min must be > 0, got {}", args.measure_every_min);
+    }
+    report::check_writable(&args.out, args.force)?;
+    let cycles = campaign::ThermalCycle::calibration_set();
+    let mut cfg = campaign::CampaignConfig::new(args.seed);
+    cfg.measure_every_s = args.measure_every_min * 60.0;
+    let data = campaign::calibrate(&machine, &cycles, &cfg)?;
+    report::write_atomic(&args.out, data.to_csv().as_bytes(), args.force)?;
+    let names: Vec<&str> = cycles.iter().map(|c| c.name.as_str()).collect();
+    println!(
+        "calibration campaign on {} (seed {}): cycles {}; {} records, {} sensors → {}",
+        machine.machine.name,
+        args.seed,
+        names.join(", "),
+        data.records.len(),
+        data.sensor_names.len(),
+        args.out.display()
+    );
     Ok(())
 }

@@ -58,6 +58,14 @@ impl Twin {
     /// Builds the machine of `spec`, random parts drawn from `seed`, at a uniform start
     /// temperature equal to the ambient's at t = 0 (a cold machine).
     pub fn new(spec: &MachineSpec, seed: u64) -> Result<Self, TwinError> {
+        Self::with_noise_seed(spec, seed, seed)
+    }
+
+    /// Builds the machine realisation `machine_seed` (its error field) with the random noise of
+    /// sensors, non-repeatability and reversal drawn from `noise_seed`: the same machine on
+    /// another day. Calibration and evaluation use one machine and different noise.
+    pub fn with_noise_seed(spec: &MachineSpec, machine_seed: u64, noise_seed: u64) -> Result<Self, TwinError> {
+        let seed = machine_seed;
         let thermal = ThermalNetwork::new(&spec.thermal, spec.thermal.ambient.temp_degc(0.0))?;
         let field = ErrorField::new(
             &spec.errors,
@@ -66,12 +74,12 @@ impl Twin {
             &|n| thermal.node_index(n),
             sub_seed(seed, 0),
         )?;
-        let sensors = SensorBank::new(&spec.sensors, thermal.node_names(), sub_seed(seed, 2))
+        let sensors = SensorBank::new(&spec.sensors, thermal.node_names(), sub_seed(noise_seed, 2))
             .map_err(|e| TwinError::Sensors(e.to_string()))?;
         let mut twin = Twin {
             geometry: spec.geometry(),
             field,
-            approach: ApproachErrors::new(&spec.errors, sub_seed(seed, 1)),
+            approach: ApproachErrors::new(&spec.errors, sub_seed(noise_seed, 1)),
             thermal,
             sensors,
             spec: spec.clone(),

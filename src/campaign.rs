@@ -1,0 +1,317 @@
+//! Thermal cycles, the calibration campaign and the held-out evaluation (DESIGN §6, §9).
+//!
+//! A [`ThermalCycle`] is a sequence of duty phases (spindle speed, axis speeds) under an ambient
+//! profile. During a phase the axes shuttle over 10–90 % of their travel at the phase's speeds
+//! (so the ballscrew nuts heat the screws where they run). Calibration cycles are *typical*
+//! (constant speed heating then cooling); evaluation cycles are *atypical* (random speed steps,
+//! ambient swing, restart after a stop) and never enter the calibration data.
+//!
+//! The calibration campaign runs each calibration cycle on a fresh, cold twin of the machine
+//! (same machine seed, fresh noise) and every `measure_every_s` takes a measurement block: laser
+//! sweeps of X, Y, Z, the spindle test, squareness and a volumetric grid — all with the spindle
+//! stopped, taking machine time, temperatures logged with each reading.
+
+use crate::instruments::Instruments;
+use crate::predict::dataset::{Dataset, Record};
+use crate::thermal::{Activity, AmbientProfile};
+use crate::twin::{sub_seed, Twin, TwinError};
+use crate::machine::MachineSpec;
+
+/// One duty phase of a thermal cycle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Phase {
+    /// Duration, s.
+    pub duration_s: f64,
+    /// Spindle speed, rpm (0 = stopped).
+    pub spindle_rpm: f64,
+    /// Axis feed speeds while shuttling, mm/min (0 = parked).
+    pub axis_speed_mm_per_min: [f64; 3],
+}
+
+/// A thermal cycle: phases under an ambient profile (time from the cycle's start).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThermalCycle {
+    /// Short name (used as the dataset's `cycle` column and in reports).
+    pub name: String,
+    /// Ambient temperature over the cycle.
+    pub ambient: AmbientProfile,
+    /// Duty phases in order.
+    pub phases: Vec<Phase>,
+}
+
+fn phase(hours: f64, rpm: f64, speeds: [f64; 3]) -> Phase {
+    Phase {
+        duration_s: hours * 3600.0,
+        spindle_rpm: rpm,
+        axis_speed_mm_per_min: speeds,
+    }
+}
+
+const AMBIENT_20: AmbientProfile = AmbientProfile::Constant { temp_degc: 20.0 };
+
+impl ThermalCycle {
+    /// Total duration, s.
+    pub fn duration_s(&self) -> f64 {
+        self.phases.iter().map(|p| p.duration_s).sum()
+    }
+
+    /// The phase in effect at cycle time `t_s` (the last one after the end).
+    pub fn phase_at(&self, t_s: f64) -> &Phase {
+        let mut acc = 0.0;
+        for p in &self.phases {
+            acc += p.duration_s;
+            if t_s < acc {
+                return p;
+            }
+        }
+        // Cycles are built with at least one phase.
+        &self.phases[self.phases.len() - 1]
+    }
+
+    /// Typical cycles for calibration: 4 h heating at a constant duty, 4 h cooling.
+    pub fn calibration_set() -> Vec<ThermalCycle> {
+        vec![
+            ThermalCycle {
+                name: "cal_4000rpm".into(),
+                ambient: AMBIENT_20,
+                phases: vec![phase(4.0, 4000.0, [3000.0, 2000.0, 1000.0]), phase(4.0, 0.0, [0.0; 3])],
+            },
+            ThermalCycle {
+                name: "cal_8000rpm".into(),
+                ambient: AMBIENT_20,
+                phases: vec![phase(4.0, 8000.0, [4000.0, 3000.0, 2000.0]), phase(4.0, 0.0, [0.0; 3])],
+            },
+            ThermalCycle {
+                name: "cal_6000rpm".into(),
+                ambient: AMBIENT_20,
+                phases: vec![phase(4.0, 6000.0, [2000.0, 4000.0, 1500.0]), phase(4.0, 0.0, [0.0; 3])],
+            },
+        ]
+    }
+
+    /// Atypical cycles held out for evaluation. `seed` draws the random speed steps.
+    pub fn evaluation_set(seed: u64) -> Vec<ThermalCycle> {
+        // Random speed steps every 30 min, drawn from a small deterministic generator.
+        let mut state = sub_seed(seed, 77);
+        let mut next = || {
+            state = sub_seed(state, 1);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let steps: Vec<Phase> = (0..12)
+            .map(|_| {
+                let rpm = (next() * 10.0).floor() * 1000.0;
+                let duty = next();
+                phase(0.5, rpm, [4000.0 * duty, 3000.0 * duty, 2000.0 * duty])
+            })
+            .chain(std::iter::once(phase(2.0, 0.0, [0.0; 3])))
+            .collect();
+        vec![
+            ThermalCycle {
+                name: "eval_random_steps".into(),
+                ambient: AMBIENT_20,
+                phases: steps,
+            },
+            ThermalCycle {
+                name: "eval_ambient_swing".into(),
+                ambient: AmbientProfile::Sinusoid {
+                    mean_degc: 20.5,
+                    amplitude_degc: 1.5,
+                    period_s: 8.0 * 3600.0,
+                    phase_rad: 0.0,
+                },
+                phases: vec![phase(4.0, 7000.0, [3500.0, 2500.0, 1500.0]), phase(4.0, 0.0, [0.0; 3])],
+            },
+            ThermalCycle {
+                name: "eval_restart".into(),
+                ambient: AMBIENT_20,
+                phases: vec![
+                    phase(2.0, 9000.0, [4000.0, 3000.0, 2000.0]),
+                    phase(1.5, 0.0, [0.0; 3]),
+                    phase(2.5, 5000.0, [3000.0, 3000.0, 1000.0]),
+                    phase(2.0, 0.0, [0.0; 3]),
+                ],
+            },
+        ]
+    }
+}
+
+/// Drives a twin through a cycle's duty (cycle time `from_s` → `to_s`), the axes shuttling
+/// over 10–90 % of their travel at the phase speeds. `t0_s` is the twin time of the cycle start.
+pub fn drive(twin: &mut Twin, cycle: &ThermalCycle, t0_s: f64, to_s: f64, step_s: f64) -> Result<(), TwinError> {
+    let min = twin.spec().axes.travel_min_mm;
+    let max = twin.spec().axes.travel_max_mm;
+    while twin.time_s() - t0_s < to_s - 1e-9 {
+        let t = twin.time_s() - t0_s;
+        let dt = step_s.min(to_s - t);
+        let p = cycle.phase_at(t + 0.5 * dt);
+        let mut pos = [0.0; 3];
+        for a in 0..3 {
+            let lo = min[a] + 0.1 * (max[a] - min[a]);
+            let span = 0.8 * (max[a] - min[a]);
+            let v_mm_per_s = p.axis_speed_mm_per_min[a] / 60.0;
+            // Triangle wave: distance travelled folded into [0, span].
+            let d = (v_mm_per_s * (t + 0.5 * dt)) % (2.0 * span);
+            pos[a] = lo + if d <= span { d } else { 2.0 * span - d };
+            if v_mm_per_s == 0.0 {
+                pos[a] = 0.5 * (min[a] + max[a]);
+            }
+        }
+        let activity = Activity {
+            spindle_rpm: p.spindle_rpm,
+            axis_pos_mm: pos,
+            axis_speed_mm_per_min: p.axis_speed_mm_per_min,
+            coolant: false,
+        };
+        twin.advance(dt, &activity)?;
+    }
+    Ok(())
+}
+
+/// Settings of the calibration campaign.
+#[derive(Debug, Clone)]
+pub struct CampaignConfig {
+    /// Machine realisation (error field seed).
+    pub machine_seed: u64,
+    /// Time between measurement blocks, s (default 1800 = 30 min).
+    pub measure_every_s: f64,
+    /// Thermal step while driving the duty, s (default 1).
+    pub step_s: f64,
+    /// Volumetric grid: points per axis (default 3 → 27 points).
+    pub grid_points_per_axis: usize,
+}
+
+impl CampaignConfig {
+    /// Defaults for a machine seed.
+    pub fn new(machine_seed: u64) -> Self {
+        CampaignConfig {
+            machine_seed,
+            measure_every_s: 1800.0,
+            step_s: 1.0,
+            grid_points_per_axis: 3,
+        }
+    }
+}
+
+/// Middle of the travel, mm.
+fn mid(spec: &MachineSpec) -> [f64; 3] {
+    [0, 1, 2].map(|a| 0.5 * (spec.axes.travel_min_mm[a] + spec.axes.travel_max_mm[a]))
+}
+
+/// Grid of `n` points per axis over 10–90 % of the travel.
+pub fn volume_grid(spec: &MachineSpec, n: usize) -> Vec<[f64; 3]> {
+    let n = n.max(2);
+    let at = |a: usize, k: usize| {
+        let lo = spec.axes.travel_min_mm[a];
+        let span = spec.axes.travel_max_mm[a] - lo;
+        lo + span * (0.1 + 0.8 * k as f64 / (n - 1) as f64)
+    };
+    let mut v = Vec::with_capacity(n * n * n);
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                v.push([at(0, i), at(1, j), at(2, k)]);
+            }
+        }
+    }
+    v
+}
+
+/// Runs one measurement block at the twin's current state.
+fn measurement_block(
+    twin: &mut Twin,
+    inst: &mut Instruments,
+    grid: &[[f64; 3]],
+    cycle: &str,
+    t0_s: f64,
+    out: &mut Vec<Record>,
+) -> Result<(), TwinError> {
+    let park = mid(twin.spec());
+    for axis in 0..3 {
+        inst.laser_sweep(twin, axis, park, cycle, t0_s, out)?;
+    }
+    inst.spindle_test(twin, park, cycle, t0_s, out)?;
+    inst.squareness(twin, park, cycle, t0_s, out)?;
+    inst.volumetric(twin, grid, cycle, t0_s, out)
+}
+
+/// Runs the calibration campaign over `cycles` and returns the dataset.
+pub fn calibrate(spec: &MachineSpec, cycles: &[ThermalCycle], cfg: &CampaignConfig) -> Result<Dataset, TwinError> {
+    let mut records = Vec::new();
+    let grid = volume_grid(spec, cfg.grid_points_per_axis);
+    let mut sensor_names = Vec::new();
+    for (k, cycle) in cycles.iter().enumerate() {
+        let noise = sub_seed(cfg.machine_seed, 1000 + k as u64);
+        let mut twin = Twin::with_noise_seed(spec, cfg.machine_seed, noise)?;
+        twin.set_ambient(cycle.ambient.clone())?;
+        let mut inst = Instruments::new(&twin, sub_seed(noise, 5));
+        sensor_names = twin.sensor_readings().names.to_vec();
+        let t0 = twin.time_s();
+        let end = cycle.duration_s();
+        let mut next_block = 0.0;
+        loop {
+            let t = twin.time_s() - t0;
+            if t >= next_block - 1e-9 {
+                measurement_block(&mut twin, &mut inst, &grid, &cycle.name, t0, &mut records)?;
+                next_block += cfg.measure_every_s;
+                continue;
+            }
+            if t >= end - 1e-9 {
+                break;
+            }
+            drive(&mut twin, cycle, t0, next_block.min(end), cfg.step_s)?;
+        }
+    }
+    Ok(Dataset {
+        sensor_names,
+        records,
+    })
+}
+
+/// A thermal state at which diagonals are evaluated: a cycle run up to a time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvalState {
+    /// Report name, e.g. `cold` or `eval_restart@4h`.
+    pub name: String,
+    /// The cycle driving the machine.
+    pub cycle: ThermalCycle,
+    /// Cycle time at which the diagonal starts, s.
+    pub at_s: f64,
+}
+
+/// The held-out evaluation states: a cold machine, and each atypical cycle after 2 h and 4 h.
+pub fn evaluation_states(seed: u64) -> Vec<EvalState> {
+    let cycles = ThermalCycle::evaluation_set(seed);
+    let mut v = vec![EvalState {
+        name: "cold".into(),
+        cycle: cycles[0].clone(),
+        at_s: 0.0,
+    }];
+    for c in cycles {
+        for h in [2.0, 4.0] {
+            v.push(EvalState {
+                name: format!("{}@{h}h", c.name),
+                cycle: c.clone(),
+                at_s: h * 3600.0,
+            });
+        }
+    }
+    v
+}
+
+/// Runs `plan` at `state` on the machine `machine_seed` with evaluation noise `noise_seed`,
+/// optionally compensated, and returns the measurement points.
+pub fn run_at_state(
+    spec: &MachineSpec,
+    machine_seed: u64,
+    noise_seed: u64,
+    state: &EvalState,
+    plan: &crate::motion::Plan,
+    compensator: Option<&mut dyn crate::sim::Compensator>,
+) -> Result<Vec<crate::sim::PointRecord>, crate::sim::SimError> {
+    let mut twin = Twin::with_noise_seed(spec, machine_seed, noise_seed)?;
+    twin.set_ambient(state.cycle.ambient.clone())?;
+    drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0)?;
+    let mut log = crate::sim::CollectPoints::default();
+    crate::sim::execute(&mut twin, plan, &crate::sim::SimConfig::default(), compensator, &mut log)?;
+    Ok(log.points)
+}

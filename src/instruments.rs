@@ -1,0 +1,195 @@
+//! Virtual instruments (DESIGN §6): what a metrologist measures on the machine, with the
+//! instruments' noise and step sizes, while the machine keeps heating or cooling.
+//!
+//! Instruments are the one place besides the twin itself that touches truth: like real ones,
+//! they observe the physical machine. What they produce is a [`Record`] of the calibration
+//! dataset — the only form in which a predictor ever sees their findings.
+//!
+//! Idealisations (stated so users can judge them):
+//! - the 6-DOF interferometer is aligned to the machine frame and reads the six motion errors of
+//!   the swept axis at its reference point (Abbe offsets of the setup removed), plus noise:
+//!   linear σ = a + b·L (L = distance from the sweep start), straightness σ, angular σ;
+//! - the positioning reading includes the axis's reversal and non-repeatability (they are real
+//!   motion), which the predictor cannot separate from noise;
+//! - the 5-probe spindle test reads the spindle's own drifts (the axis errors at the test pose are
+//!   separated with the laser data), plus probe noise;
+//! - the squareness measurement (laser with optical square) reads the three angles plus angular
+//!   noise;
+//! - the volumetric instrument (laser tracker) reads the error vector at a point, plus linear noise.
+//!
+//! Each reading takes `laser_point_s` of machine time with the spindle stopped, during which
+//! the thermal network keeps evolving; temperatures are logged with every reading.
+
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+
+use crate::machine::InstrumentSpec;
+use crate::predict::dataset::{Instrument, Record};
+use crate::thermal::Activity;
+use crate::twin::{Twin, TwinError};
+
+/// The instrument set of one campaign, with its own noise generator.
+pub struct Instruments {
+    spec: InstrumentSpec,
+    travel_min_mm: [f64; 3],
+    travel_max_mm: [f64; 3],
+    rng: StdRng,
+}
+
+impl Instruments {
+    /// Instruments of `twin`'s machine description, noise drawn from `seed`.
+    pub fn new(twin: &Twin, seed: u64) -> Self {
+        let spec = twin.spec();
+        Instruments {
+            spec: spec.instruments.clone(),
+            travel_min_mm: spec.axes.travel_min_mm,
+            travel_max_mm: spec.axes.travel_max_mm,
+            rng: StdRng::seed_from_u64(seed),
+        }
+    }
+
+    fn gauss(&mut self, sigma: f64) -> f64 {
+        if sigma <= 0.0 {
+            return 0.0;
+        }
+        Normal::new(0.0, sigma).map(|n| n.sample(&mut self.rng)).unwrap_or(0.0)
+    }
+
+    /// Positions of a sweep of `axis`: from the travel minimum in laser steps, the last step
+    /// shortened to end at the maximum.
+    pub fn sweep_positions_mm(&self, axis: usize) -> Vec<f64> {
+        let (lo, hi) = (self.travel_min_mm[axis], self.travel_max_mm[axis]);
+        let step = self.spec.laser_step_mm[axis];
+        let mut v = Vec::new();
+        let mut x = lo;
+        while x < hi - 1e-9 {
+            v.push(x);
+            x += step;
+        }
+        v.push(hi);
+        v
+    }
+
+    /// Lets `duration_s` of machine time pass at axis position `q_mm`, spindle stopped, axis
+    /// `moving_axis` travelling `step_mm` during it (a measurement in progress).
+    fn dwell(&self, twin: &mut Twin, q_mm: [f64; 3], moving_axis: Option<(usize, f64)>, duration_s: f64) -> Result<(), TwinError> {
+        let mut speed = [0.0; 3];
+        if let Some((a, step_mm)) = moving_axis {
+            speed[a] = step_mm / duration_s * 60.0;
+        }
+        let activity = Activity {
+            spindle_rpm: 0.0,
+            axis_pos_mm: q_mm,
+            axis_speed_mm_per_min: speed,
+            coolant: false,
+        };
+        twin.advance(duration_s, &activity)
+    }
+
+    fn record(&self, twin: &Twin, cycle: &str, t0_s: f64, instrument: Instrument, q_mm: [f64; 3], values: [f64; 6]) -> Record {
+        Record {
+            cycle: cycle.to_string(),
+            time_s: twin.time_s() - t0_s,
+            instrument,
+            pos_mm: q_mm,
+            values,
+            temps_degc: twin.sensor_readings().values_degc,
+        }
+    }
+
+    /// A 6-DOF laser sweep of `axis` with the other axes at `park_mm`, forward from the travel
+    /// minimum. Appends one record per position. `t0_s` is the cycle's start (twin time).
+    pub fn laser_sweep(
+        &mut self,
+        twin: &mut Twin,
+        axis: usize,
+        park_mm: [f64; 3],
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) -> Result<(), TwinError> {
+        let positions = self.sweep_positions_mm(axis);
+        let mut prev = positions[0];
+        for &s in &positions {
+            let mut q = park_mm;
+            q[axis] = s;
+            self.dwell(twin, q, Some((axis, (s - prev).abs())), self.spec.laser_point_s)?;
+            twin.note_motion([0, 1, 2].map(|a| if a == axis { 1.0 } else { 0.0 }));
+            prev = s;
+            let approach = twin.draw_approach_mm();
+            let mut e = twin.elementary_errors(q).axes[axis];
+            e.lin_mm[axis] += approach[axis];
+            let dist_m = (s - positions[0]).abs() * 1e-3;
+            let lin_sigma = self.spec.laser_noise_um + self.spec.laser_noise_um_per_m * dist_m;
+            let mut values = [0.0; 6];
+            for c in 0..3 {
+                let sigma = if c == axis { lin_sigma } else { self.spec.straightness_noise_um };
+                values[c] = e.lin_mm[c] * 1e3 + self.gauss(sigma);
+                values[3 + c] = e.ang_rad[c] * 1e6 + self.gauss(self.spec.angular_noise_urad);
+            }
+            let r = self.record(twin, cycle, t0_s, Instrument::laser(axis), q, values);
+            out.push(r);
+        }
+        Ok(())
+    }
+
+    /// The 5-probe spindle test at `q_mm`: δx, δy, δz (µm), εx, εy (µrad).
+    pub fn spindle_test(&mut self, twin: &mut Twin, q_mm: [f64; 3], cycle: &str, t0_s: f64, out: &mut Vec<Record>) -> Result<(), TwinError> {
+        self.dwell(twin, q_mm, None, self.spec.laser_point_s)?;
+        let d = twin.elementary_errors(q_mm).spindle;
+        let p = self.spec.probe_noise_um;
+        // Tilts come from two radial probes 100 mm apart: σ_tilt = √2·σ_probe / 100 mm.
+        let tilt_sigma_urad = std::f64::consts::SQRT_2 * p / 100.0 * 1e3;
+        let values = [
+            d.lin_mm[0] * 1e3 + self.gauss(p),
+            d.lin_mm[1] * 1e3 + self.gauss(p),
+            d.lin_mm[2] * 1e3 + self.gauss(p),
+            d.tilt_rad[0] * 1e6 + self.gauss(tilt_sigma_urad),
+            d.tilt_rad[1] * 1e6 + self.gauss(tilt_sigma_urad),
+            f64::NAN,
+        ];
+        let r = self.record(twin, cycle, t0_s, Instrument::Spindle, q_mm, values);
+        out.push(r);
+        Ok(())
+    }
+
+    /// Squareness with a laser and optical square: α_yz, α_xz, α_xy (µrad) in rx, ry, rz.
+    pub fn squareness(&mut self, twin: &mut Twin, q_mm: [f64; 3], cycle: &str, t0_s: f64, out: &mut Vec<Record>) -> Result<(), TwinError> {
+        self.dwell(twin, q_mm, None, self.spec.laser_point_s)?;
+        let s = twin.elementary_errors(q_mm).squareness;
+        let a = self.spec.angular_noise_urad;
+        let values = [
+            f64::NAN,
+            f64::NAN,
+            f64::NAN,
+            s.yz_rad * 1e6 + self.gauss(a),
+            s.xz_rad * 1e6 + self.gauss(a),
+            s.xy_rad * 1e6 + self.gauss(a),
+        ];
+        let r = self.record(twin, cycle, t0_s, Instrument::Squareness, q_mm, values);
+        out.push(r);
+        Ok(())
+    }
+
+    /// Volumetric error measured at each point (laser tracker), µm.
+    pub fn volumetric(&mut self, twin: &mut Twin, points_mm: &[[f64; 3]], cycle: &str, t0_s: f64, out: &mut Vec<Record>) -> Result<(), TwinError> {
+        for &p in points_mm {
+            self.dwell(twin, p, None, self.spec.laser_point_s)?;
+            let approach = twin.draw_approach_mm();
+            let e = twin.tool_error_mm(p, p, approach);
+            let sigma = self.spec.laser_noise_um + self.spec.laser_noise_um_per_m * 0.5;
+            let values = [
+                e.x * 1e3 + self.gauss(sigma),
+                e.y * 1e3 + self.gauss(sigma),
+                e.z * 1e3 + self.gauss(sigma),
+                f64::NAN,
+                f64::NAN,
+                f64::NAN,
+            ];
+            let r = self.record(twin, cycle, t0_s, Instrument::Volumetric, p, values);
+            out.push(r);
+        }
+        Ok(())
+    }
+}
