@@ -38,7 +38,7 @@ fn reference_spec() -> ErrorFieldSpec {
     struct Wrap {
         errors: ErrorFieldSpec,
     }
-    let text = include_str!("../../machines/errors-reference.toml");
+    let text = include_str!("../../machines/vmc-reference.toml");
     toml::from_str::<Wrap>(text)
         .expect("reference error field parses")
         .errors

@@ -30,7 +30,7 @@
 //! is first order in dt/τ: with dt = 1 s and the fastest node time constants of minutes, the lag
 //! it adds is below 0.01 °C.
 //!
-//! The reference machine's network (39 nodes: the contract names plus `spindle_nose` and `z_support`) is `machines/thermal-reference.toml`.
+//! The reference machine's network (39 nodes: the contract names plus `spindle_nose` and `z_support`) is in `machines/vmc-reference.toml`.
 
 mod network;
 mod sources;

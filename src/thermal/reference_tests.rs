@@ -1,4 +1,4 @@
-//! Tests of the reference machine's network (`machines/thermal-reference.toml`): contract node
+//! Tests of the reference machine's network (`machines/vmc-reference.toml`): contract node
 //! names, conservation, robustness and the warm-up calibration figures.
 
 use super::*;
@@ -12,14 +12,15 @@ pub(crate) struct Fragment {
     pub sensors: Vec<SensorSpec>,
 }
 
-pub(crate) const REFERENCE_TOML: &str = include_str!("../../machines/thermal-reference.toml");
+pub(crate) const REFERENCE_TOML: &str = include_str!("../../machines/vmc-reference.toml");
 
 pub(crate) fn reference() -> Fragment {
     toml::from_str(REFERENCE_TOML).expect("reference fragment parses")
 }
 
-/// Travels (mm) assumed by the reference fragment.
+/// Travels (mm) of the reference machine, and their lower ends (Z is −450…0, Z up).
 const TRAVEL_MM: [f64; 3] = [560.0, 400.0, 450.0];
+const TRAVEL_MIN_MM: [f64; 3] = [0.0, 0.0, -450.0];
 
 /// Position of an axis shuttling over its full travel at constant speed (triangle wave).
 fn shuttle_mm(time_s: f64, speed_mm_per_min: f64, travel_mm: f64) -> f64 {
@@ -36,7 +37,7 @@ fn duty(time_s: f64, rpm: f64) -> Activity {
     let v = [4000.0, 3000.0, 2000.0];
     Activity {
         spindle_rpm: rpm,
-        axis_pos_mm: [0, 1, 2].map(|i| shuttle_mm(time_s, v[i], TRAVEL_MM[i])),
+        axis_pos_mm: [0, 1, 2].map(|i| TRAVEL_MIN_MM[i] + shuttle_mm(time_s, v[i], TRAVEL_MM[i])),
         axis_speed_mm_per_min: v,
         coolant: false,
     }
@@ -142,7 +143,7 @@ fn day_of_extreme_inputs_stays_finite_and_physically_bounded() {
         let v = [30_000.0; 3];
         let a = Activity {
             spindle_rpm: 15_000.0,
-            axis_pos_mm: [0, 1, 2].map(|i| shuttle_mm(time_s, v[i], TRAVEL_MM[i])),
+            axis_pos_mm: [0, 1, 2].map(|i| TRAVEL_MIN_MM[i] + shuttle_mm(time_s, v[i], TRAVEL_MM[i])),
             axis_speed_mm_per_min: v,
             coolant: false,
         };
