@@ -4,9 +4,8 @@
 use super::*;
 use crate::sensors::{validate_sensors, SensorSpec};
 
-/// The machine-file fragment: `[thermal]` plus `[[sensors]]`.
+/// The `[thermal]` and `[[sensors]]` sections of the reference machine file.
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 pub(crate) struct Fragment {
     pub thermal: ThermalSpec,
     pub sensors: Vec<SensorSpec>,
