@@ -306,7 +306,7 @@ pub fn run_at_state(
     noise_seed: u64,
     state: &EvalState,
     plan: &crate::motion::Plan,
-    compensator: Option<&mut dyn crate::sim::Compensator>,
+    compensator: Option<&mut dyn crate::sim::Controller>,
 ) -> Result<Vec<crate::sim::PointRecord>, crate::sim::SimError> {
     let mut twin = Twin::with_noise_seed(spec, machine_seed, noise_seed)?;
     twin.set_ambient(state.cycle.ambient.clone())?;

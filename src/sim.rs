@@ -51,7 +51,7 @@ impl Default for SimConfig {
 
 /// A controller that turns a commanded tool position into axis commands (the compensation).
 /// It gets nothing of the twin but the held sensor readings.
-pub trait Compensator {
+pub trait Controller {
     /// Axis command `q` (mm) for the commanded tool position `p_mm`.
     fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3];
 }
@@ -123,7 +123,7 @@ pub fn execute(
     twin: &mut Twin,
     plan: &Plan,
     cfg: &SimConfig,
-    mut compensator: Option<&mut dyn Compensator>,
+    mut compensator: Option<&mut dyn Controller>,
     observer: &mut dyn Observer,
 ) -> Result<(), SimError> {
     if !(cfg.thermal_step_s > 0.0 && cfg.thermal_step_s.is_finite()) {
@@ -229,7 +229,7 @@ pub fn activity_over(plan: &Plan, t0_s: f64, t1_s: f64) -> Activity {
 fn measure(
     twin: &mut Twin,
     readings: &SensorReadings,
-    compensator: &mut Option<&mut dyn Compensator>,
+    compensator: &mut Option<&mut dyn Controller>,
     observer: &mut dyn Observer,
     index: usize,
     line: usize,

@@ -1,0 +1,264 @@
+//! The whole study in one call (DESIGN §6–§9): calibration campaign → training of the three
+//! predictors → every face and body diagonal under held-out thermal states, without and with
+//! compensation → report.
+//!
+//! The predictors come from `vmc-predict` and see only the calibration dataset and, in the loop,
+//! the held sensor readings (through [`crate::sim::Controller`]). Evaluation states are atypical
+//! cycles that never enter the calibration data, and evaluation noise (sensors, repeatability,
+//! reversal) is drawn from other seeds than the calibration's: the same machine on another day.
+//!
+//! Prediction metrics compare, at each measurement point, the true uncompensated error E(p) with
+//! the error the controller compensated for, `p − q` (= E_pred(q) at the fixed point), over the
+//! three components pooled. MAPE is mean|e| / mean|y| (robust to small |y|).
+
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::campaign::{self, CampaignConfig, EvalState, ThermalCycle};
+use crate::machine::MachineSpec;
+use crate::motion::Plan;
+use crate::predict::controller::Compensator;
+use crate::predict::metrics::Metrics;
+use crate::predict::predictor::{self, ErrorPredictor, PredictError, Settings, TrainSummary};
+use crate::program::{self, ProgramError};
+use crate::report::error_stats;
+use crate::sensors::SensorReadings;
+use crate::sim::{Controller, PointRecord, SimError};
+use crate::twin::{sub_seed, TwinError};
+
+/// The diagonal tests run by the campaign: (report name, program text).
+pub const DIAGONALS: [(&str, &str); 7] = [
+    ("XY", include_str!("../trajectories/diag_xy.ngc")),
+    ("YZ", include_str!("../trajectories/diag_yz.ngc")),
+    ("XZ", include_str!("../trajectories/diag_xz.ngc")),
+    ("PPP", include_str!("../trajectories/diag_ppp.ngc")),
+    ("NPP", include_str!("../trajectories/diag_npp.ngc")),
+    ("PNP", include_str!("../trajectories/diag_pnp.ngc")),
+    ("PPN", include_str!("../trajectories/diag_ppn.ngc")),
+];
+
+/// A campaign that could not run.
+#[derive(Debug, Error)]
+pub enum EvalError {
+    /// Twin problem.
+    #[error(transparent)]
+    Twin(#[from] TwinError),
+    /// Simulation problem.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// Training or model problem.
+    #[error(transparent)]
+    Predict(#[from] PredictError),
+    /// A diagonal program failed to plan.
+    #[error(transparent)]
+    Program(#[from] ProgramError),
+}
+
+/// Adapts a knowledge-side compensator to the simulation loop: it passes on the sensor
+/// readings' values and nothing else.
+pub struct LoopController<P: ErrorPredictor>(pub Compensator<P>);
+
+impl<P: ErrorPredictor> Controller for LoopController<P> {
+    fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3] {
+        self.0.axis_command_mm(p_mm, &readings.values_degc)
+    }
+}
+
+/// One evaluated run: one predictor, one diagonal, one thermal state, one seed.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunReport {
+    /// `hybrid`, `volumetric` or `linear`.
+    pub predictor: String,
+    /// `XY`, `YZ`, `XZ`, `PPP`, `NPP`, `PNP`, `PPN`.
+    pub diagonal: String,
+    /// Thermal state (`cold`, `<cycle>@<h>h`).
+    pub thermal_state: String,
+    /// Machine seed.
+    pub seed: u64,
+    /// Measurement points.
+    pub points: usize,
+    /// RMS of |E| without compensation, µm.
+    pub rms_before_um: f64,
+    /// RMS of |E| with compensation, µm.
+    pub rms_after_um: f64,
+    /// Max |E| without compensation, µm.
+    pub max_before_um: f64,
+    /// Max |E| with compensation, µm.
+    pub max_after_um: f64,
+    /// 1 − RMS after / RMS before, of |E| (fraction).
+    pub reduction: f64,
+    /// 1 − max after / max before, of |E| (fraction).
+    pub max_reduction: f64,
+    /// RMS of Ex, Ey, Ez before, µm.
+    pub rms_before_xyz_um: [f64; 3],
+    /// RMS of Ex, Ey, Ez after, µm.
+    pub rms_after_xyz_um: [f64; 3],
+    /// Max |Ex|, |Ey|, |Ez| before, µm.
+    pub max_before_xyz_um: [f64; 3],
+    /// Max |Ex|, |Ey|, |Ez| after, µm.
+    pub max_after_xyz_um: [f64; 3],
+    /// Prediction: mean absolute deviation, µm.
+    pub mad_um: f64,
+    /// Prediction: mean|e| / mean|y| (fraction).
+    pub mape: Option<f64>,
+    /// Prediction: RMSE, µm.
+    pub rmse_um: f64,
+    /// Prediction: coefficient of determination.
+    pub r2: Option<f64>,
+}
+
+/// The whole campaign's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct CampaignReport {
+    /// Machine name.
+    pub machine: String,
+    /// Calibration cycles (used for training).
+    pub calibration_cycles: Vec<String>,
+    /// Held-out evaluation states.
+    pub evaluation_states: Vec<String>,
+    /// Training summaries, per seed and predictor.
+    pub training: Vec<(u64, TrainSummary)>,
+    /// Every evaluated run.
+    pub runs: Vec<RunReport>,
+}
+
+/// Summarises a compensated run.
+pub fn run_report(predictor: &str, diagonal: &str, state: &str, seed: u64, points: &[PointRecord]) -> Option<RunReport> {
+    let before: Vec<[f64; 3]> = points.iter().map(|p| p.error_before_um).collect();
+    let after: Vec<[f64; 3]> = points.iter().filter_map(|p| p.error_after_um).collect();
+    let b = error_stats(&before)?;
+    let a = error_stats(&after)?;
+    let mut y = Vec::with_capacity(3 * points.len());
+    let mut yhat = Vec::with_capacity(3 * points.len());
+    for p in points {
+        let q = p.compensated_command_mm?;
+        for k in 0..3 {
+            y.push(p.error_before_um[k]);
+            yhat.push((p.commanded_mm[k] - q[k]) * 1e3);
+        }
+    }
+    let m = Metrics::of(&y, &yhat).ok()?;
+    Some(RunReport {
+        predictor: predictor.into(),
+        diagonal: diagonal.into(),
+        thermal_state: state.into(),
+        seed,
+        points: points.len(),
+        rms_before_um: b.rms_um[3],
+        rms_after_um: a.rms_um[3],
+        max_before_um: b.max_abs_um[3],
+        max_after_um: a.max_abs_um[3],
+        reduction: 1.0 - a.rms_um[3] / b.rms_um[3],
+        max_reduction: 1.0 - a.max_abs_um[3] / b.max_abs_um[3],
+        rms_before_xyz_um: [b.rms_um[0], b.rms_um[1], b.rms_um[2]],
+        rms_after_xyz_um: [a.rms_um[0], a.rms_um[1], a.rms_um[2]],
+        max_before_xyz_um: [b.max_abs_um[0], b.max_abs_um[1], b.max_abs_um[2]],
+        max_after_xyz_um: [a.max_abs_um[0], a.max_abs_um[1], a.max_abs_um[2]],
+        mad_um: m.mad,
+        mape: m.mape,
+        rmse_um: m.rmse,
+        r2: m.r2,
+    })
+}
+
+/// Plans the campaign's diagonal programs for a machine (from its home position).
+pub fn diagonal_plans(spec: &MachineSpec) -> Result<Vec<(&'static str, Plan)>, EvalError> {
+    DIAGONALS
+        .iter()
+        .map(|(name, text)| {
+            let file = format!("trajectories/diag_{}.ngc", name.to_lowercase());
+            Ok((*name, program::plan_source(text, &file, spec, spec.axes.home_mm)?))
+        })
+        .collect()
+}
+
+/// Evaluates one compensator factory on every diagonal and state for one seed.
+pub fn evaluate_predictor<P: ErrorPredictor + Clone>(
+    spec: &MachineSpec,
+    seed: u64,
+    name: &str,
+    predictor: &P,
+    states: &[EvalState],
+    plans: &[(&str, Plan)],
+) -> Result<Vec<RunReport>, EvalError> {
+    let sensor_names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
+    let mut out = Vec::new();
+    for (si, state) in states.iter().enumerate() {
+        for (di, (diag, plan)) in plans.iter().enumerate() {
+            let ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
+            let mut ctrl = LoopController(ctrl);
+            // Evaluation noise: never the calibration's streams (those use 1000 + k).
+            let noise = sub_seed(seed, 5000 + (si * 100 + di) as u64);
+            let points = campaign::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
+            if let Some(r) = run_report(name, diag, &state.name, seed, &points) {
+                out.push(r);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the full campaign for `seeds`: calibrate, train the three predictors, evaluate.
+pub fn run_campaign(spec: &MachineSpec, seeds: &[u64], settings: &Settings) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
+    let cal_cycles = ThermalCycle::calibration_set();
+    let plans = diagonal_plans(spec)?;
+    let geometry = spec.geometry();
+    let mut report = CampaignReport {
+        machine: spec.machine.name.clone(),
+        calibration_cycles: cal_cycles.iter().map(|c| c.name.clone()).collect(),
+        evaluation_states: Vec::new(),
+        training: Vec::new(),
+        runs: Vec::new(),
+    };
+    let mut models = Vec::new();
+    for &seed in seeds {
+        let data = campaign::calibrate(spec, &cal_cycles, &CampaignConfig::new(seed))?;
+        let s = Settings { seed, ..settings.clone() };
+        let (hybrid, hs) = predictor::train_hybrid(&data, &geometry, &s)?;
+        let (volumetric, vs) = predictor::train_volumetric(&data, &geometry, &s)?;
+        let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
+        report.training.extend([(seed, hs), (seed, vs), (seed, ls)]);
+        let states = campaign::evaluation_states(seed);
+        report.evaluation_states = states.iter().map(|s| s.name.clone()).collect();
+        report.runs.extend(evaluate_predictor(spec, seed, "hybrid", &hybrid, &states, &plans)?);
+        report.runs.extend(evaluate_predictor(spec, seed, "volumetric", &volumetric, &states, &plans)?);
+        report.runs.extend(evaluate_predictor(spec, seed, "linear", &linear, &states, &plans)?);
+        models.push(TrainedModels { seed, hybrid, volumetric, linear });
+    }
+    Ok((report, models))
+}
+
+/// The three predictors trained for one seed.
+pub struct TrainedModels {
+    /// Machine seed.
+    pub seed: u64,
+    /// The study's hybrid predictor.
+    pub hybrid: predictor::HybridPredictor,
+    /// Direct volumetric MLP.
+    pub volumetric: predictor::VolumetricPredictor,
+    /// Linear regression baseline.
+    pub linear: predictor::LinearPredictor,
+}
+
+/// Median of a list (NaN-free); None if empty.
+pub fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
+}
+
+/// Per-predictor headline figures over all runs: (median reduction, min reduction, max |E| after µm, mean prediction RMSE µm).
+pub fn headline(runs: &[RunReport], predictor: &str) -> Option<(f64, f64, f64, f64)> {
+    let r: Vec<&RunReport> = runs.iter().filter(|r| r.predictor == predictor).collect();
+    if r.is_empty() {
+        return None;
+    }
+    let mut red: Vec<f64> = r.iter().map(|r| r.reduction).collect();
+    let min = red.iter().cloned().fold(f64::INFINITY, f64::min);
+    let max_after = r.iter().map(|r| r.max_after_um).fold(0.0, f64::max);
+    let rmse = r.iter().map(|r| r.rmse_um).sum::<f64>() / r.len() as f64;
+    Some((median(&mut red)?, min, max_after, rmse))
+}
