@@ -9,3 +9,5 @@ pub mod dataset;
 pub mod metrics;
 pub mod nn;
 pub mod synthesis;
+pub mod predictor;
+pub mod controller;

@@ -1,0 +1,318 @@
+//! Compensation in the loop (DESIGN §8).
+//!
+//! At each interpolation cycle the controller knows the commanded tool position `p` (workpiece
+//! coordinates, mm) and the latest held sensor readings `T` (°C). The machine puts the tool at
+//! `q + E(q, T)` when its axes are commanded to `q`, so the axis command that lands the tool on
+//! `p` solves `q + E_pred(q, T) = p`, i.e. the fixed point `q = p − E_pred(q, T)`:
+//!
+//! ```text
+//! q₀ = p,   q_{i+1} = p − E_pred(q_i, T),   stop when |q_{i+1} − q_i| < tol (1e-7 mm)
+//!                                           or after max_iterations (5) evaluations of E.
+//! ```
+//!
+//! The map is a contraction with factor `L = max ‖∂E/∂q‖` (µm of error change per mm of travel,
+//! ~1e-5), so the error after `i` iterations is `~Lⁱ·|E|`: two to three iterations reach the
+//! nanometre. At the stopping point the residual `|q + E(q) − p| = |E(q_i) − E(q_{i+1})| ≤ L·tol`.
+//! The tool then really lands at `p + E_true(q) − E_pred(q)`.
+//!
+//! The compensator is generic over the predictor (static dispatch) and allocation-free; its
+//! cost is `iterations × (one predictor query)`.
+
+use crate::predictor::{check_sensor_names, ErrorPredictor, PredictError};
+
+/// Convergence tolerance of the fixed-point step, mm [1e-7 mm = 0.1 nm].
+pub const DEFAULT_TOL_MM: f64 = 1e-7;
+/// Maximum predictor evaluations per solve [5].
+pub const DEFAULT_MAX_ITERATIONS: usize = 5;
+
+/// How the last solve went.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SolveInfo {
+    /// Predictor evaluations used.
+    pub iterations: usize,
+    /// Size of the last fixed-point step |q_{i+1} − q_i|, mm.
+    pub last_step_mm: f64,
+    /// Whether the last step was below the tolerance.
+    pub converged: bool,
+}
+
+/// Turns commanded tool positions into compensated axis commands with a predictor.
+#[derive(Debug, Clone)]
+pub struct Compensator<P: ErrorPredictor> {
+    predictor: P,
+    tol_mm: f64,
+    max_iterations: usize,
+    last: SolveInfo,
+}
+
+impl<P: ErrorPredictor> Compensator<P> {
+    /// A compensator with the default tolerance (1e-7 mm) and iteration cap (5).
+    pub fn new(predictor: P) -> Self {
+        Self {
+            predictor,
+            tol_mm: DEFAULT_TOL_MM,
+            max_iterations: DEFAULT_MAX_ITERATIONS,
+            last: SolveInfo::default(),
+        }
+    }
+
+    /// A compensator for a machine with sensors `machine_sensor_names` (checked against the model).
+    ///
+    /// # Errors
+    /// [`PredictError::SensorMismatch`] when names or order differ.
+    pub fn for_machine(predictor: P, machine_sensor_names: &[String]) -> Result<Self, PredictError> {
+        check_sensor_names(predictor.sensor_names(), machine_sensor_names)?;
+        Ok(Self::new(predictor))
+    }
+
+    /// Sets the step tolerance (mm, clamped to ≥ 0) and the evaluation cap (≥ 1).
+    #[must_use]
+    pub fn with_tolerance(mut self, tol_mm: f64, max_iterations: usize) -> Self {
+        self.tol_mm = tol_mm.max(0.0);
+        self.max_iterations = max_iterations.max(1);
+        self
+    }
+
+    /// Axis command `q` (mm) that should put the tool at `p_mm` under readings `temps_degc`
+    /// (model sensor order). Allocation-free; see the module doc for the iteration.
+    #[inline]
+    pub fn axis_command_mm(&mut self, p_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+        let mut q = p_mm;
+        let mut info = SolveInfo::default();
+        while info.iterations < self.max_iterations {
+            let e = self.predictor.predict_error_mm(q, temps_degc);
+            let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
+            let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
+            info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            info.iterations += 1;
+            q = next;
+            if info.last_step_mm < self.tol_mm {
+                info.converged = true;
+                break;
+            }
+        }
+        self.last = info;
+        q
+    }
+
+    /// How the last [`Self::axis_command_mm`] went.
+    pub fn last_solve(&self) -> SolveInfo {
+        self.last
+    }
+
+    /// The predictor.
+    pub fn predictor(&self) -> &P {
+        &self.predictor
+    }
+
+    /// The predictor, mutably (e.g. to query it directly for a report).
+    pub fn predictor_mut(&mut self) -> &mut P {
+        &mut self.predictor
+    }
+
+    /// Gives the predictor back.
+    pub fn into_inner(self) -> P {
+        self.predictor
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::predictor::{train_hybrid, train_linear, AnyPredictor, Settings};
+    use std::alloc::{GlobalAlloc, Layout, System};
+    use std::cell::Cell;
+
+    /// A smooth analytic error field of tens of µm with a thermal scale factor.
+    #[derive(Debug)]
+    struct Analytic {
+        sensors: Vec<String>,
+    }
+
+    fn analytic_e(q: [f64; 3], t: f64) -> [f64; 3] {
+        let s = 1.0 + 0.1 * (t - 20.0);
+        [
+            s * (0.02 * (q[1] / 80.0).sin() + 3e-5 * q[0] + 1e-5 * q[2]),
+            s * (0.015 * (q[0] / 120.0).cos() - 2e-5 * q[2]),
+            s * (0.03 * (q[0] * q[1] / 40000.0).sin() + 1e-5 * q[2]),
+        ]
+    }
+
+    impl ErrorPredictor for Analytic {
+        fn sensor_names(&self) -> &[String] {
+            &self.sensors
+        }
+        fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+            analytic_e(q_mm, temps_degc[0])
+        }
+    }
+
+    fn analytic() -> Analytic {
+        Analytic {
+            sensors: vec!["T".into()],
+        }
+    }
+
+    #[test]
+    fn fixed_point_solve_leaves_a_residual_below_a_picometre() {
+        let mut c = Compensator::new(analytic());
+        for p in [[0.0, 0.0, 0.0], [300.0, 150.0, -200.0], [560.0, 400.0, -450.0]] {
+            for t in [20.0, 26.0] {
+                let q = c.axis_command_mm(p, &[t]);
+                let e = analytic_e(q, t);
+                let residual = ((q[0] + e[0] - p[0]).powi(2)
+                    + (q[1] + e[1] - p[1]).powi(2)
+                    + (q[2] + e[2] - p[2]).powi(2))
+                .sqrt();
+                // 1e-9 mm = 1 pm; the uncompensated error |E(p)| is tens of µm.
+                assert!(residual < 1e-9, "residual {residual} mm at {p:?}");
+                let info = c.last_solve();
+                assert!(info.converged && info.iterations <= 4, "{info:?}");
+                assert!(q != p, "a non-zero error must move the axes");
+            }
+        }
+    }
+
+    #[test]
+    fn the_iteration_cap_is_respected_and_reported() {
+        /// A field too steep to converge: E = 0.9·q (a contraction with factor 0.9).
+        struct Steep(Vec<String>);
+        impl ErrorPredictor for Steep {
+            fn sensor_names(&self) -> &[String] {
+                &self.0
+            }
+            fn predict_error_mm(&mut self, q: [f64; 3], _: &[f64]) -> [f64; 3] {
+                q.map(|v| 0.9 * v)
+            }
+        }
+        let mut c = Compensator::new(Steep(vec!["T".into()]));
+        c.axis_command_mm([100.0, 0.0, 0.0], &[20.0]);
+        let info = c.last_solve();
+        assert_eq!(info.iterations, 5);
+        assert!(!info.converged && info.last_step_mm > 1.0, "{info:?}");
+        let mut c = c.with_tolerance(1e-7, 2);
+        c.axis_command_mm([100.0, 0.0, 0.0], &[20.0]);
+        assert_eq!(c.last_solve().iterations, 2);
+    }
+
+    #[test]
+    fn zero_error_commands_the_nominal_position_in_one_evaluation() {
+        struct Zero(Vec<String>);
+        impl ErrorPredictor for Zero {
+            fn sensor_names(&self) -> &[String] {
+                &self.0
+            }
+            fn predict_error_mm(&mut self, _: [f64; 3], _: &[f64]) -> [f64; 3] {
+                [0.0; 3]
+            }
+        }
+        let mut c = Compensator::new(Zero(vec!["T".into()]));
+        assert_eq!(c.axis_command_mm([1.0, 2.0, 3.0], &[20.0]), [1.0, 2.0, 3.0]);
+        assert_eq!(c.last_solve().iterations, 1);
+    }
+
+    #[test]
+    fn a_compensator_for_a_machine_with_other_sensors_is_refused() {
+        let err = Compensator::for_machine(analytic(), &["T".into(), "U".into()]).unwrap_err();
+        assert!(matches!(err, PredictError::SensorMismatch { .. }), "{err}");
+        assert!(Compensator::for_machine(analytic(), &["T".into()]).is_ok());
+    }
+
+    #[test]
+    fn compensating_with_a_trained_model_removes_most_of_the_true_error() {
+        use crate::predictor::testdata as td;
+        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let (p, _) = train_linear(&ds, &td::geometry(), &Settings::default()).unwrap();
+        let mut c = Compensator::new(AnyPredictor::Linear(p));
+        let (mut before, mut after) = (0.0, 0.0);
+        for (p_mm, t, _) in td::held_out(6.0, 5) {
+            let q = c.axis_command_mm(p_mm, &t);
+            // The tool really lands at q + E_true(q).
+            let e_at_q = td::true_error_mm(q, &t);
+            let landed: [f64; 3] = std::array::from_fn(|k| q[k] + e_at_q[k] - p_mm[k]);
+            let e_nominal = td::true_error_mm(p_mm, &t);
+            before += e_nominal.iter().map(|v| v * v).sum::<f64>();
+            after += landed.iter().map(|v| v * v).sum::<f64>();
+        }
+        let reduction = 1.0 - (after / before).sqrt();
+        assert!(reduction > 0.5, "reduction {reduction}");
+    }
+
+    // Allocation counting for the no-allocation test (per thread, so parallel tests don't mix).
+    struct Counting;
+    thread_local! {
+        static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+    }
+    unsafe impl GlobalAlloc for Counting {
+        unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+            ALLOCATIONS.with(|c| c.set(c.get() + 1));
+            unsafe { System.alloc(layout) }
+        }
+        unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+            unsafe { System.dealloc(ptr, layout) }
+        }
+        unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+            ALLOCATIONS.with(|c| c.set(c.get() + 1));
+            unsafe { System.realloc(ptr, layout, new_size) }
+        }
+    }
+    #[global_allocator]
+    static COUNTING: Counting = Counting;
+
+    #[test]
+    fn compensation_queries_do_not_allocate() {
+        use crate::predictor::testdata as td;
+        let ds = td::dataset(&[4.0, 7.0], 2);
+        let quick = Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 5,
+            ..Settings::default()
+        };
+        let (h, _) = train_hybrid(&ds, &td::geometry(), &quick).unwrap();
+        let (l, _) = train_linear(&ds, &td::geometry(), &quick).unwrap();
+        let (v, _) = crate::predictor::train_volumetric(&ds, &td::geometry(), &quick).unwrap();
+        for model in [AnyPredictor::Hybrid(h), AnyPredictor::Linear(l), AnyPredictor::Volumetric(v)] {
+            let mut c = Compensator::new(model);
+            let temps = [
+                td::temps_degc(5.0, 1000.0),
+                td::temps_degc(5.0, 2000.0),
+            ];
+            let before = ALLOCATIONS.with(Cell::get);
+            for i in 0..1000 {
+                let p = [i as f64 * 0.5, 200.0 - i as f64 * 0.1, -100.0];
+                std::hint::black_box(c.axis_command_mm(p, &temps[i / 500]));
+            }
+            let after = ALLOCATIONS.with(Cell::get);
+            assert_eq!(after - before, 0, "{:?} allocated", c.predictor().kind());
+        }
+    }
+
+    /// Release-mode timing (run with `cargo test --release -p vmc-predict -- --ignored
+    /// --nocapture query_timing`); not a pass/fail test.
+    #[test]
+    #[ignore]
+    fn query_timing() {
+        use crate::predictor::testdata as td;
+        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let t0 = std::time::Instant::now();
+        let (h, _) = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap();
+        println!("hybrid training: {:.2} s", t0.elapsed().as_secs_f64());
+        let mut c = Compensator::new(h);
+        let temps = td::temps_degc(5.0, 1000.0);
+        let n = 1_000_000;
+        let t0 = std::time::Instant::now();
+        let mut evals = 0;
+        for i in 0..n {
+            let p = [(i % 560) as f64, (i % 400) as f64, -((i % 450) as f64)];
+            std::hint::black_box(c.axis_command_mm(p, &temps));
+            evals += c.last_solve().iterations;
+        }
+        let dt = t0.elapsed().as_secs_f64();
+        println!(
+            "compensation: {:.0} ns per solve, {:.2} evaluations per solve, {:.0} ns per query",
+            dt / n as f64 * 1e9,
+            evals as f64 / n as f64,
+            dt / evals as f64 * 1e9
+        );
+    }
+}

@@ -1,0 +1,339 @@
+//! From dataset records to training tables: sensor selection, the validation split by cycle,
+//! and fitting one MLP with hidden-width selection.
+
+use crate::dataset::{Dataset, Instrument, Record};
+use crate::linreg::LinearModel;
+use crate::nn::{Regressor, Samples, TrainConfig};
+
+use super::{CandidateScore, NetSummary, PredictError, Settings, SplitKind};
+
+/// Column names of the six measurement values (µm, µrad), in `Record::values` order.
+pub(crate) const VALUE_COLUMNS: [&str; 6] =
+    ["dx_um", "dy_um", "dz_um", "rx_urad", "ry_urad", "rz_urad"];
+
+/// The sensors a model uses: names in model order and their dataset columns.
+#[derive(Debug, Clone)]
+pub(crate) struct SensorSelection {
+    /// Names in model order.
+    pub names: Vec<String>,
+    /// Index of each into `Record::temps_degc`.
+    pub cols: Vec<usize>,
+}
+
+impl SensorSelection {
+    /// Picks `settings.sensors` (all dataset sensors when empty) and checks every record.
+    pub fn new(ds: &Dataset, settings: &Settings) -> Result<Self, PredictError> {
+        for (index, r) in ds.records.iter().enumerate() {
+            if r.temps_degc.len() != ds.sensor_names.len() {
+                return Err(PredictError::RaggedTemperatures {
+                    index,
+                    expected: ds.sensor_names.len(),
+                    got: r.temps_degc.len(),
+                });
+            }
+        }
+        let names = if settings.sensors.is_empty() {
+            ds.sensor_names.clone()
+        } else {
+            settings.sensors.clone()
+        };
+        let missing: Vec<String> = names
+            .iter()
+            .filter(|n| !ds.sensor_names.contains(n))
+            .cloned()
+            .collect();
+        if !missing.is_empty() || names.is_empty() {
+            return Err(PredictError::SensorsNotInDataset {
+                missing,
+                asked: names,
+                found: ds.sensor_names.clone(),
+            });
+        }
+        let cols = names
+            .iter()
+            .filter_map(|n| ds.sensor_names.iter().position(|d| d == n))
+            .collect();
+        Ok(Self { names, cols })
+    }
+
+    /// Appends the selected temperatures of `r` to `row`.
+    pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>) {
+        row.extend(self.cols.iter().map(|&c| r.temps_degc[c]));
+    }
+}
+
+/// Cycle ids (first-appearance order over the whole dataset) and the validation cycles.
+#[derive(Debug, Clone)]
+pub(crate) struct CycleSplit {
+    /// Cycle names; a record's group id is the index of its cycle here.
+    pub names: Vec<String>,
+    /// Group ids held out for validation.
+    pub val: Vec<u64>,
+}
+
+impl CycleSplit {
+    /// Chooses the validation cycles: `settings.val_cycles` if given, else every
+    /// `round(1/val_fraction)`-th cycle (the last one if that picks none), none with one cycle.
+    pub fn new(ds: &Dataset, settings: &Settings) -> Result<Self, PredictError> {
+        let mut names: Vec<String> = Vec::new();
+        for r in &ds.records {
+            if !names.contains(&r.cycle) {
+                names.push(r.cycle.clone());
+            }
+        }
+        let val: Vec<u64> = if settings.val_cycles.is_empty() {
+            let f = settings.val_fraction;
+            if !(f > 0.0 && f < 1.0) {
+                return Err(PredictError::BadSettings {
+                    field: "val_fraction",
+                    reason: format!("must lie in (0, 1), got {f}"),
+                });
+            }
+            let stride = ((1.0 / f).round() as usize).max(2);
+            let n = names.len();
+            let mut v: Vec<u64> = (0..n)
+                .filter(|i| i % stride == stride - 1)
+                .map(|i| i as u64)
+                .collect();
+            if v.is_empty() && n >= 2 {
+                v.push((n - 1) as u64);
+            }
+            v
+        } else {
+            let mut v = Vec::new();
+            for c in &settings.val_cycles {
+                let id = names.iter().position(|n| n == c).ok_or_else(|| {
+                    PredictError::BadSettings {
+                        field: "val_cycles",
+                        reason: format!("cycle \"{c}\" is not in the dataset (cycles: {names:?})"),
+                    }
+                })?;
+                v.push(id as u64);
+            }
+            if v.len() == names.len() {
+                return Err(PredictError::BadSettings {
+                    field: "val_cycles",
+                    reason: "every cycle is held out: nothing is left to train on".into(),
+                });
+            }
+            v
+        };
+        Ok(Self { names, val })
+    }
+
+    /// Group id of a cycle name (it is always present: ids come from the same dataset).
+    pub fn id(&self, cycle: &str) -> u64 {
+        self.names.iter().position(|n| n == cycle).unwrap_or(0) as u64
+    }
+
+    /// Names of the validation cycles.
+    pub fn val_names(&self) -> Vec<String> {
+        self.val.iter().map(|&i| self.names[i as usize].clone()).collect()
+    }
+}
+
+/// Training rows of one model: samples plus the cycle id of each row.
+pub(crate) struct Table {
+    pub inputs: Vec<Vec<f64>>,
+    pub targets: Vec<Vec<f64>>,
+    pub groups: Vec<u64>,
+}
+
+impl Table {
+    pub fn new() -> Self {
+        Self {
+            inputs: Vec::new(),
+            targets: Vec::new(),
+            groups: Vec::new(),
+        }
+    }
+
+    /// Splits by cycle, or into contiguous blocks when one side would be empty.
+    pub fn split(
+        &self,
+        split: &CycleSplit,
+        net: &'static str,
+    ) -> Result<(Samples, Samples, SplitKind), PredictError> {
+        let err = |e| PredictError::Net {
+            net,
+            source: crate::nn::NnError::Data(e),
+        };
+        let all = Samples::from_rows(&self.inputs, &self.targets).map_err(err)?;
+        let (tr, va) = all.split_by_groups(&self.groups, &split.val).map_err(err)?;
+        if !tr.is_empty() && !va.is_empty() {
+            return Ok((tr, va, SplitKind::ByCycle));
+        }
+        let (tr, va) = all.split_blocks(5, 5).map_err(err)?;
+        Ok((tr, va, SplitKind::Blocks))
+    }
+}
+
+/// The values `cols` of a record, failing on an empty cell.
+pub(crate) fn required_values(
+    r: &Record,
+    cols: &[usize],
+    instrument: Instrument,
+) -> Result<Vec<f64>, PredictError> {
+    cols.iter()
+        .map(|&c| {
+            let v = r.values[c];
+            if v.is_nan() {
+                Err(PredictError::MissingValue {
+                    instrument: instrument.name(),
+                    cycle: r.cycle.clone(),
+                    time_s: r.time_s,
+                    column: VALUE_COLUMNS[c],
+                })
+            } else {
+                Ok(v)
+            }
+        })
+        .collect()
+}
+
+/// Records of `instrument`, failing when there are fewer than `needed`.
+pub(crate) fn records_of<'a>(
+    ds: &'a Dataset,
+    instrument: Instrument,
+    needed_for: &'static str,
+    needed: usize,
+) -> Result<Vec<&'a Record>, PredictError> {
+    let recs: Vec<&Record> = ds.of(instrument).collect();
+    if recs.is_empty() {
+        return Err(PredictError::MissingInstrument {
+            instrument: instrument.name(),
+            needed_for,
+        });
+    }
+    if recs.len() < needed {
+        return Err(PredictError::TooFewRecords {
+            instrument: instrument.name(),
+            found: recs.len(),
+            needed,
+        });
+    }
+    Ok(recs)
+}
+
+/// SplitMix64 step: decorrelates the per-network seeds derived from one master seed.
+pub(crate) fn mix_seed(seed: u64, net_index: u64) -> u64 {
+    let mut z = seed ^ net_index.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Per-output RMSE of `predict` over `data` (output units); empty for an empty set.
+pub(crate) fn rmse_per_output(
+    data: &Samples,
+    mut predict: impl FnMut(&[f64], &mut [f64]),
+) -> Vec<f64> {
+    if data.is_empty() {
+        return Vec::new();
+    }
+    let mut ss = vec![0.0; data.n_out()];
+    let mut out = vec![0.0; data.n_out()];
+    for i in 0..data.len() {
+        predict(data.input(i), &mut out);
+        for ((s, o), t) in ss.iter_mut().zip(&out).zip(data.target(i)) {
+            *s += (o - t) * (o - t);
+        }
+    }
+    ss.iter().map(|s| (s / data.len() as f64).sqrt()).collect()
+}
+
+/// Fits one-hidden-layer MLPs of every candidate width and keeps the best on validation.
+pub(crate) fn fit_mlp(
+    net: &'static str,
+    outputs: &[&str],
+    table: &Table,
+    split: &CycleSplit,
+    settings: &Settings,
+    net_index: u64,
+) -> Result<(Regressor, NetSummary), PredictError> {
+    if settings.hidden_candidates.is_empty() || settings.hidden_candidates.contains(&0) {
+        return Err(PredictError::BadSettings {
+            field: "hidden_candidates",
+            reason: format!(
+                "need at least one width ≥ 1, got {:?}",
+                settings.hidden_candidates
+            ),
+        });
+    }
+    let (tr, va, kind) = table.split(split, net)?;
+    let config = TrainConfig {
+        seed: mix_seed(settings.seed, net_index),
+        restarts: settings.restarts,
+        max_epochs: settings.max_epochs,
+        patience: settings.patience,
+        ..TrainConfig::default()
+    };
+    let mut best = None;
+    let mut candidates = Vec::new();
+    for &h in &settings.hidden_candidates {
+        let (reg, report) = Regressor::fit(&tr, Some(&va), &[h], &config)
+            .map_err(|source| PredictError::Net { net, source })?;
+        let score = report.val_rmse[report.best_epoch];
+        candidates.push(CandidateScore {
+            hidden_units: h,
+            val_rmse_norm: score,
+        });
+        if best.as_ref().is_none_or(|(_, _, s, _)| score < *s) {
+            best = Some((reg, report, score, h));
+        }
+    }
+    let (reg, report, _, h) = best.ok_or(PredictError::BadSettings {
+        field: "hidden_candidates",
+        reason: "no width was tried".into(),
+    })?;
+    let mut scratch = vec![0.0; reg.scratch_len()];
+    let mut predict = |x: &[f64], o: &mut [f64]| {
+        // Widths match by construction; an error here would leave `o` at its last value.
+        let _ = reg.predict_into(x, &mut scratch, o);
+    };
+    let summary = NetSummary {
+        name: net.into(),
+        outputs: outputs.iter().map(|s| s.to_string()).collect(),
+        hidden_units: Some(h),
+        n_train: tr.len(),
+        n_val: va.len(),
+        split: kind,
+        train_rmse: rmse_per_output(&tr, &mut predict),
+        val_rmse: rmse_per_output(&va, &mut predict),
+        epochs: Some(report.epochs),
+        stop_reason: Some(report.stop_reason),
+        candidates,
+    };
+    Ok((reg, summary))
+}
+
+/// Fits a linear model on the training part and reports both parts.
+pub(crate) fn fit_linear(
+    model: &'static str,
+    outputs: &[&str],
+    table: &Table,
+    split: &CycleSplit,
+    ridge: f64,
+) -> Result<(LinearModel, NetSummary), PredictError> {
+    let (tr, va, kind) = table.split(split, model)?;
+    let lin =
+        LinearModel::fit(&tr, ridge).map_err(|source| PredictError::Linear { model, source })?;
+    let mut predict = |x: &[f64], o: &mut [f64]| {
+        let _ = lin.predict_into(x, o);
+    };
+    let summary = NetSummary {
+        name: model.into(),
+        outputs: outputs.iter().map(|s| s.to_string()).collect(),
+        hidden_units: None,
+        n_train: tr.len(),
+        n_val: va.len(),
+        split: kind,
+        train_rmse: rmse_per_output(&tr, &mut predict),
+        val_rmse: rmse_per_output(&va, &mut predict),
+        epochs: None,
+        stop_reason: None,
+        candidates: Vec::new(),
+    };
+    Ok((lin, summary))
+}

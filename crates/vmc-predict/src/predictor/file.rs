@@ -1,0 +1,536 @@
+//! The model file: versioned JSON holding everything a predictor needs at run time.
+//!
+//! ```text
+//! {
+//!   "format": "vmc-twin-model",
+//!   "version": 1,
+//!   "kind": "hybrid" | "volumetric" | "linear",
+//!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
+//!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
+//!   "model": { … }                                          // kind-specific, below
+//! }
+//! ```
+//!
+//! `model` of a `hybrid`: `axis_nets` (3 regressors X, Y, Z: `[position mm, temps °C] →
+//! [dx, dy, dz µm, rx, ry, rz µrad]`), `spindle_net` (`temps → [dx, dy, dz µm, rx, ry µrad]`),
+//! `squareness` (linear model `temps → [α_yz, α_xz, α_xy] µrad`). Of a `volumetric`: `net`
+//! (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
+//! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
+//! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
+//! (normalisation in physical units, weights flat as documented in `nn::mlp`); a linear model is
+//! `{"n_in", "n_out", "intercept", "slopes", "ridge"}`.
+//!
+//! f64 values are written in shortest round-trip form and read with `serde_json`'s
+//! `float_roundtrip`, so a loaded model predicts bit-identically to the saved one.
+//! Loading checks `format`, `version` and `kind` first (clear messages), then the schema, then
+//! that the parts fit the sensor count.
+
+use std::fmt;
+use std::path::Path;
+
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+use crate::linreg::LinearModel;
+use crate::synthesis::MachineGeometry;
+
+use super::hybrid::{HybridParts, HybridPredictor};
+use super::linear::{LinearParts, LinearPredictor};
+use super::volumetric::VolumetricPredictor;
+use super::{ErrorPredictor, PredictError};
+
+/// Value of the `format` field.
+pub const FORMAT_NAME: &str = "vmc-twin-model";
+/// The model file version this build writes and reads.
+pub const FORMAT_VERSION: u64 = 1;
+/// The only temperature unit models use.
+const TEMP_UNIT: &str = "degC";
+
+/// Which model class a file or summary holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelKind {
+    /// Elementary-error nets + kinematic synthesis.
+    Hybrid,
+    /// Direct volumetric MLP.
+    Volumetric,
+    /// Linear regression on position/temperature features.
+    Linear,
+}
+
+impl ModelKind {
+    /// The name used in the `kind` field.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Hybrid => "hybrid",
+            ModelKind::Volumetric => "volumetric",
+            ModelKind::Linear => "linear",
+        }
+    }
+
+    fn from_name(s: &str) -> Option<Self> {
+        [ModelKind::Hybrid, ModelKind::Volumetric, ModelKind::Linear]
+            .into_iter()
+            .find(|k| k.name() == s)
+    }
+}
+
+impl fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One sensor entry of a model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensorInfo {
+    /// Sensor name (as in the dataset's `<name>_degc` column and the machine's sensor set).
+    pub name: String,
+    /// Unit of the reading; always `"degC"`.
+    pub unit: String,
+}
+
+#[derive(Serialize)]
+struct FileOut<'a, B> {
+    format: &'static str,
+    version: u64,
+    kind: ModelKind,
+    sensors: Vec<SensorInfo>,
+    geometry: &'a MachineGeometry,
+    model: &'a B,
+}
+
+#[derive(Deserialize)]
+struct FileIn<B> {
+    sensors: Vec<SensorInfo>,
+    geometry: MachineGeometry,
+    model: B,
+}
+
+fn json_err(e: serde_json::Error) -> PredictError {
+    PredictError::Json { msg: e.to_string() }
+}
+
+fn to_json<B: Serialize>(
+    kind: ModelKind,
+    sensors: &[String],
+    geometry: &MachineGeometry,
+    model: &B,
+) -> Result<String, PredictError> {
+    let out = FileOut {
+        format: FORMAT_NAME,
+        version: FORMAT_VERSION,
+        kind,
+        sensors: sensors
+            .iter()
+            .map(|n| SensorInfo {
+                name: n.clone(),
+                unit: TEMP_UNIT.into(),
+            })
+            .collect(),
+        geometry,
+        model,
+    };
+    serde_json::to_string_pretty(&out).map_err(json_err)
+}
+
+/// Checks `format` and `version` and returns the `kind`.
+fn read_header(text: &str) -> Result<ModelKind, PredictError> {
+    let v: serde_json::Value = serde_json::from_str(text).map_err(json_err)?;
+    let not_a_model = |reason: String| PredictError::NotAModel { reason };
+    let obj = v
+        .as_object()
+        .ok_or_else(|| not_a_model("the top level is not a JSON object".into()))?;
+    match obj.get("format") {
+        Some(serde_json::Value::String(f)) if f == FORMAT_NAME => {}
+        Some(f) => return Err(not_a_model(format!("`format` is {f}, expected \"{FORMAT_NAME}\""))),
+        None => return Err(not_a_model("no `format` field".into())),
+    }
+    let version = obj.get("version").ok_or_else(|| not_a_model("no `version` field".into()))?;
+    match version.as_u64() {
+        Some(FORMAT_VERSION) => {}
+        Some(found) => {
+            return Err(PredictError::UnsupportedVersion {
+                found,
+                supported: FORMAT_VERSION,
+            })
+        }
+        None => return Err(not_a_model(format!("`version` is {version}, expected an integer"))),
+    }
+    let kind = obj.get("kind").ok_or_else(|| not_a_model("no `kind` field".into()))?;
+    kind.as_str().and_then(ModelKind::from_name).ok_or_else(|| {
+        not_a_model(format!(
+            "unknown model kind {kind} (expected \"hybrid\", \"volumetric\" or \"linear\")"
+        ))
+    })
+}
+
+/// Parses a file of kind `expected`: header, schema, sensor units.
+fn from_json<B: DeserializeOwned>(
+    text: &str,
+    expected: ModelKind,
+) -> Result<(Vec<String>, MachineGeometry, B), PredictError> {
+    let kind = read_header(text)?;
+    if kind != expected {
+        return Err(PredictError::WrongKind {
+            expected: expected.name().into(),
+            found: kind.name().into(),
+        });
+    }
+    let f: FileIn<B> = serde_json::from_str(text).map_err(json_err)?;
+    if let Some(s) = f.sensors.iter().find(|s| s.unit != TEMP_UNIT) {
+        return Err(PredictError::Inconsistent {
+            reason: format!(
+                "sensor `{}` has unit \"{}\"; models read temperatures in \"{TEMP_UNIT}\"",
+                s.name, s.unit
+            ),
+        });
+    }
+    if f.sensors.is_empty() {
+        return Err(PredictError::Inconsistent {
+            reason: "the model lists no sensors".into(),
+        });
+    }
+    Ok((f.sensors.into_iter().map(|s| s.name).collect(), f.geometry, f.model))
+}
+
+fn read_file(path: &Path) -> Result<String, PredictError> {
+    std::fs::read_to_string(path).map_err(|e| PredictError::Io {
+        path: path.display().to_string(),
+        msg: e.to_string(),
+    })
+}
+
+fn write_file(path: &Path, text: &str) -> Result<(), PredictError> {
+    std::fs::write(path, text).map_err(|e| PredictError::Io {
+        path: path.display().to_string(),
+        msg: e.to_string(),
+    })
+}
+
+/// Checks a linear model's shape and values against the widths its predictor needs.
+pub(crate) fn check_linear_model(
+    name: &str,
+    m: &LinearModel,
+    n_in: usize,
+    n_out: usize,
+) -> Result<(), PredictError> {
+    let ok = m.n_in() == n_in
+        && m.n_out() == n_out
+        && m.intercept().len() == n_out
+        && m.slopes().len() == n_in * n_out
+        && m.intercept().iter().chain(m.slopes()).all(|v| v.is_finite());
+    if ok {
+        Ok(())
+    } else {
+        Err(PredictError::Inconsistent {
+            reason: format!(
+                "linear model `{name}` must map {n_in} → {n_out} values with finite coefficients \
+                 (has {} → {}, {} intercepts, {} slopes)",
+                m.n_in(),
+                m.n_out(),
+                m.intercept().len(),
+                m.slopes().len()
+            ),
+        })
+    }
+}
+
+/// Implements the JSON methods of one predictor type.
+macro_rules! json_methods {
+    ($ty:ty, $kind:expr, $body:ident, $from:expr) => {
+        impl $ty {
+            /// The model file text (pretty JSON, format in the `file` module doc).
+            ///
+            /// # Errors
+            /// Only if serialisation fails (it does not for finite weights).
+            pub fn to_json_string(&self) -> Result<String, PredictError> {
+                to_json($kind, self.sensor_names(), self.geometry(), &self.$body())
+            }
+
+            /// Parses a model file text of this kind.
+            ///
+            /// # Errors
+            /// Not JSON, not a model file, another version or kind, a schema error, or parts
+            /// that do not fit together.
+            pub fn from_json_str(text: &str) -> Result<Self, PredictError> {
+                let (sensors, geometry, body) = from_json(text, $kind)?;
+                $from(sensors, geometry, body)
+            }
+
+            /// Writes the model file.
+            ///
+            /// # Errors
+            /// As [`Self::to_json_string`], or the file cannot be written.
+            pub fn save_json(&self, path: &Path) -> Result<(), PredictError> {
+                write_file(path, &self.to_json_string()?)
+            }
+
+            /// Reads a model file.
+            ///
+            /// # Errors
+            /// As [`Self::from_json_str`], or the file cannot be read.
+            pub fn load_json(path: &Path) -> Result<Self, PredictError> {
+                Self::from_json_str(&read_file(path)?)
+            }
+        }
+    };
+}
+
+json_methods!(
+    HybridPredictor,
+    ModelKind::Hybrid,
+    parts,
+    |s, g, b: HybridParts| HybridPredictor::from_parts(s, g, b)
+);
+json_methods!(
+    VolumetricPredictor,
+    ModelKind::Volumetric,
+    volumetric_body,
+    |s, g, b: VolumetricBody| VolumetricPredictor::from_parts(s, g, b.net)
+);
+json_methods!(
+    LinearPredictor,
+    ModelKind::Linear,
+    parts,
+    |s, g, b: LinearParts| LinearPredictor::from_parts(s, g, b)
+);
+
+/// The `model` object of a volumetric file.
+#[derive(Serialize, Deserialize)]
+struct VolumetricBody {
+    net: crate::nn::Regressor,
+}
+
+impl VolumetricPredictor {
+    fn volumetric_body(&self) -> VolumetricBody {
+        VolumetricBody {
+            net: self.net().clone(),
+        }
+    }
+}
+
+/// A predictor of any kind, as loaded from a model file whose kind is not known in advance
+/// (the CLI's `--model FILE`). Dispatch is a `match`, so it stays static and inlinable.
+#[derive(Debug, Clone)]
+pub enum AnyPredictor {
+    /// A hybrid model.
+    Hybrid(HybridPredictor),
+    /// A volumetric MLP.
+    Volumetric(VolumetricPredictor),
+    /// A linear regression.
+    Linear(LinearPredictor),
+}
+
+impl AnyPredictor {
+    /// Which kind this is.
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            AnyPredictor::Hybrid(_) => ModelKind::Hybrid,
+            AnyPredictor::Volumetric(_) => ModelKind::Volumetric,
+            AnyPredictor::Linear(_) => ModelKind::Linear,
+        }
+    }
+
+    /// Parses a model file of any kind.
+    ///
+    /// # Errors
+    /// Not JSON, not a model file, another version, a schema error, or inconsistent parts.
+    pub fn from_json_str(text: &str) -> Result<Self, PredictError> {
+        Ok(match read_header(text)? {
+            ModelKind::Hybrid => AnyPredictor::Hybrid(HybridPredictor::from_json_str(text)?),
+            ModelKind::Volumetric => {
+                AnyPredictor::Volumetric(VolumetricPredictor::from_json_str(text)?)
+            }
+            ModelKind::Linear => AnyPredictor::Linear(LinearPredictor::from_json_str(text)?),
+        })
+    }
+
+    /// Reads a model file of any kind.
+    ///
+    /// # Errors
+    /// As [`Self::from_json_str`], or the file cannot be read.
+    pub fn load_json(path: &Path) -> Result<Self, PredictError> {
+        Self::from_json_str(&read_file(path)?)
+    }
+
+    /// The model file text.
+    ///
+    /// # Errors
+    /// Only if serialisation fails.
+    pub fn to_json_string(&self) -> Result<String, PredictError> {
+        match self {
+            AnyPredictor::Hybrid(p) => p.to_json_string(),
+            AnyPredictor::Volumetric(p) => p.to_json_string(),
+            AnyPredictor::Linear(p) => p.to_json_string(),
+        }
+    }
+
+    /// Writes the model file.
+    ///
+    /// # Errors
+    /// Serialisation or file errors.
+    pub fn save_json(&self, path: &Path) -> Result<(), PredictError> {
+        write_file(path, &self.to_json_string()?)
+    }
+
+    /// Rejects a machine whose sensor names or order differ from the model's.
+    ///
+    /// # Errors
+    /// [`PredictError::SensorMismatch`] listing expected and found names.
+    pub fn check_sensors(&self, machine_sensor_names: &[String]) -> Result<(), PredictError> {
+        super::check_sensor_names(self.sensor_names(), machine_sensor_names)
+    }
+
+    /// The machine geometry stored with the model.
+    pub fn geometry(&self) -> &MachineGeometry {
+        match self {
+            AnyPredictor::Hybrid(p) => p.geometry(),
+            AnyPredictor::Volumetric(p) => p.geometry(),
+            AnyPredictor::Linear(p) => p.geometry(),
+        }
+    }
+}
+
+impl ErrorPredictor for AnyPredictor {
+    fn sensor_names(&self) -> &[String] {
+        match self {
+            AnyPredictor::Hybrid(p) => p.sensor_names(),
+            AnyPredictor::Volumetric(p) => p.sensor_names(),
+            AnyPredictor::Linear(p) => p.sensor_names(),
+        }
+    }
+
+    #[inline]
+    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+        match self {
+            AnyPredictor::Hybrid(p) => p.predict_error_mm(q_mm, temps_degc),
+            AnyPredictor::Volumetric(p) => p.predict_error_mm(q_mm, temps_degc),
+            AnyPredictor::Linear(p) => p.predict_error_mm(q_mm, temps_degc),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testdata as td;
+    use super::super::{train_hybrid, train_linear, train_volumetric, Settings};
+    use super::*;
+
+    /// Quick settings: round trips need a trained model, not a good one.
+    fn quick() -> Settings {
+        Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 15,
+            ..Settings::default()
+        }
+    }
+
+    fn all_kinds() -> Vec<AnyPredictor> {
+        let ds = td::dataset(&[4.0, 7.0], 2);
+        let g = td::geometry();
+        vec![
+            AnyPredictor::Hybrid(train_hybrid(&ds, &g, &quick()).unwrap().0),
+            AnyPredictor::Volumetric(train_volumetric(&ds, &g, &quick()).unwrap().0),
+            AnyPredictor::Linear(train_linear(&ds, &g, &quick()).unwrap().0),
+        ]
+    }
+
+    #[test]
+    fn every_kind_round_trips_through_json_bit_identically() {
+        for mut model in all_kinds() {
+            let text = model.to_json_string().unwrap();
+            assert!(text.contains("\"format\": \"vmc-twin-model\""));
+            assert!(text.contains(&format!("\"kind\": \"{}\"", model.kind())));
+            assert!(text.contains("\"chain\": \"w X Y b Z t\""));
+            assert!(text.contains("\"unit\": \"degC\""));
+            let mut back = AnyPredictor::from_json_str(&text).unwrap();
+            assert_eq!(back.kind(), model.kind());
+            assert_eq!(back.sensor_names(), model.sensor_names());
+            assert_eq!(back.geometry(), model.geometry());
+            for (q, t, _) in td::held_out(5.0, 9).into_iter().take(50) {
+                let a = model.predict_error_mm(q, &t);
+                let b = back.predict_error_mm(q, &t);
+                assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{}", model.kind());
+            }
+            // And the text itself is a fixed point.
+            assert_eq!(back.to_json_string().unwrap(), text);
+        }
+    }
+
+    #[test]
+    fn a_file_round_trip_through_the_file_system_works() {
+        let ds = td::dataset(&[4.0, 7.0], 2);
+        let (mut p, _) = train_linear(&ds, &td::geometry(), &quick()).unwrap();
+        let path = std::env::temp_dir().join(format!("vmc-predict-model-{}.json", std::process::id()));
+        p.save_json(&path).unwrap();
+        let mut back = LinearPredictor::load_json(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        let t = td::temps_degc(5.0, 3600.0);
+        assert_eq!(p.predict_error_mm([1.0, 2.0, -3.0], &t), back.predict_error_mm([1.0, 2.0, -3.0], &t));
+        let missing = Path::new("/nonexistent/dir/model.json");
+        let err = LinearPredictor::load_json(missing).unwrap_err();
+        assert!(err.to_string().starts_with("/nonexistent/dir/model.json: "), "{err}");
+    }
+
+    #[test]
+    fn a_sensor_mismatch_lists_expected_and_found() {
+        let model = all_kinds().remove(2);
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert!(model.check_sensors(&names(&td::SENSORS)).is_ok());
+        let err = model.check_sensors(&names(&["S2", "S1", "S3", "Amb"])).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "sensor mismatch: the model expects sensors [\"S1\", \"S2\", \"S3\", \"Amb\"] (in \
+             this order), the machine has [\"S2\", \"S1\", \"S3\", \"Amb\"]"
+        );
+        assert!(model.check_sensors(&names(&["S1", "S2", "S3"])).is_err());
+    }
+
+    #[test]
+    fn bad_version_format_and_kind_give_the_documented_messages() {
+        let model = all_kinds().remove(2);
+        let text = model.to_json_string().unwrap();
+        let v2 = text.replacen("\"version\": 1", "\"version\": 2", 1);
+        assert_eq!(
+            AnyPredictor::from_json_str(&v2).unwrap_err().to_string(),
+            "model file version 2 is not supported (this build reads version 1)"
+        );
+        let other = text.replacen("vmc-twin-model", "something-else", 1);
+        assert_eq!(
+            AnyPredictor::from_json_str(&other).unwrap_err().to_string(),
+            "not a vmc-twin model file: `format` is \"something-else\", expected \"vmc-twin-model\""
+        );
+        assert_eq!(
+            HybridPredictor::from_json_str(&text).unwrap_err().to_string(),
+            "model file holds a `linear` model, expected `hybrid`"
+        );
+        let unknown = text.replacen("\"kind\": \"linear\"", "\"kind\": \"quantum\"", 1);
+        assert_eq!(
+            AnyPredictor::from_json_str(&unknown).unwrap_err().to_string(),
+            "not a vmc-twin model file: unknown model kind \"quantum\" (expected \"hybrid\", \
+             \"volumetric\" or \"linear\")"
+        );
+        let kelvin = text.replacen("\"degC\"", "\"K\"", 1);
+        assert_eq!(
+            AnyPredictor::from_json_str(&kelvin).unwrap_err().to_string(),
+            "inconsistent model file: sensor `S1` has unit \"K\"; models read temperatures in \"degC\""
+        );
+        assert!(AnyPredictor::from_json_str("{ not json").unwrap_err().to_string().starts_with("model file: "));
+    }
+
+    #[test]
+    fn a_net_that_does_not_fit_the_sensor_count_is_rejected_on_load() {
+        let model = all_kinds().remove(0);
+        let text = model.to_json_string().unwrap();
+        // Drop the last sensor from the list: the nets still expect four.
+        let cut = text.replacen(
+            ",\n    {\n      \"name\": \"Amb\",\n      \"unit\": \"degC\"\n    }",
+            "",
+            1,
+        );
+        assert_ne!(cut, text, "the edit must apply");
+        let err = AnyPredictor::from_json_str(&cut).unwrap_err().to_string();
+        assert!(err.starts_with("inconsistent model file: network `axis_x` maps 5 → 6 values"), "{err}");
+    }
+}

@@ -1,0 +1,402 @@
+//! The hybrid predictor: elementary-error networks + first-order kinematic synthesis
+//! (the study's method; model in the `predictor` module doc).
+
+use serde::{Deserialize, Serialize};
+
+use crate::dataset::{Dataset, Instrument};
+use crate::linreg::LinearModel;
+use crate::nn::Regressor;
+use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
+
+use super::data::{
+    fit_linear, fit_mlp, records_of, required_values, CycleSplit, SensorSelection, Table,
+    VALUE_COLUMNS,
+};
+use super::fastnet::SplitNet;
+use super::file::{check_linear_model, ModelKind};
+use super::{assert_temps_len, ErrorPredictor, PredictError, Settings, TrainSummary};
+
+/// Network names of the X, Y, Z axis nets.
+const AXIS_NETS: [&str; 3] = ["axis_x", "axis_y", "axis_z"];
+/// Outputs of the squareness regression (the `rx, ry, rz` columns of `squareness` records).
+const SQUARENESS_OUTPUTS: [&str; 3] = ["a_yz_urad", "a_xz_urad", "a_xy_urad"];
+/// Squareness records needed at least (a few per cycle are usual).
+const MIN_SQUARENESS_RECORDS: usize = 5;
+
+/// The trained parts of a hybrid model, in the dataset's units (µm, µrad); what the model file
+/// stores under `"model"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub(crate) struct HybridParts {
+    /// X, Y, Z: `(position along the axis mm, temperatures °C) → (dx, dy, dz µm, rx, ry, rz µrad)`.
+    pub axis_nets: [Regressor; 3],
+    /// `temperatures °C → (dx, dy, dz µm, rx, ry µrad)` of the spindle.
+    pub spindle_net: Regressor,
+    /// `temperatures °C → (α_yz, α_xz, α_xy) µrad`.
+    pub squareness: LinearModel,
+}
+
+/// Query-time state: split nets, cached temperature-only results, scratch.
+#[derive(Debug, Clone)]
+struct Runtime {
+    axes: [SplitNet; 3],
+    spindle: SplitNet,
+    /// Spindle and squareness fields hold the values for `last_temps`.
+    errs: ElementaryErrors,
+    last_temps: Vec<f64>,
+    cache_valid: bool,
+}
+
+/// Hybrid predictor: 3 axis MLPs + spindle MLP + squareness regression + first-order synthesis.
+#[derive(Debug, Clone)]
+pub struct HybridPredictor {
+    sensors: Vec<String>,
+    geometry: MachineGeometry,
+    parts: HybridParts,
+    rt: Runtime,
+}
+
+impl HybridPredictor {
+    /// Assembles a predictor, checking that every part fits `sensors`.
+    pub(crate) fn from_parts(
+        sensors: Vec<String>,
+        geometry: MachineGeometry,
+        parts: HybridParts,
+    ) -> Result<Self, PredictError> {
+        let k = sensors.len();
+        let check = |net: &str, reg: &Regressor, n_in: usize, n_out: usize| {
+            if reg.n_in() == n_in && reg.n_out() == n_out {
+                Ok(())
+            } else {
+                Err(PredictError::Inconsistent {
+                    reason: format!(
+                        "network `{net}` maps {} → {} values; with {k} sensors it must map \
+                         {n_in} → {n_out}",
+                        reg.n_in(),
+                        reg.n_out()
+                    ),
+                })
+            }
+        };
+        for (name, net) in AXIS_NETS.iter().zip(&parts.axis_nets) {
+            check(name, net, k + 1, 6)?;
+        }
+        check("spindle", &parts.spindle_net, k, 5)?;
+        check_linear_model("squareness", &parts.squareness, k, 3)?;
+        let axes = [
+            SplitNet::new(&parts.axis_nets[0], 1, AXIS_NETS[0])?,
+            SplitNet::new(&parts.axis_nets[1], 1, AXIS_NETS[1])?,
+            SplitNet::new(&parts.axis_nets[2], 1, AXIS_NETS[2])?,
+        ];
+        let spindle = SplitNet::new(&parts.spindle_net, 0, "spindle")?;
+        let rt = Runtime {
+            axes,
+            spindle,
+            errs: ElementaryErrors::default(),
+            last_temps: vec![0.0; k],
+            cache_valid: false,
+        };
+        Ok(Self {
+            sensors,
+            geometry,
+            parts,
+            rt,
+        })
+    }
+
+    /// The machine geometry used by the synthesis.
+    pub fn geometry(&self) -> &MachineGeometry {
+        &self.geometry
+    }
+
+    /// The trained parts (for the model file).
+    pub(crate) fn parts(&self) -> &HybridParts {
+        &self.parts
+    }
+
+    /// Rejects a machine whose sensor names or order differ from the model's.
+    ///
+    /// # Errors
+    /// [`PredictError::SensorMismatch`] listing expected and found names.
+    pub fn check_sensors(&self, machine_sensor_names: &[String]) -> Result<(), PredictError> {
+        super::check_sensor_names(&self.sensors, machine_sensor_names)
+    }
+
+    /// The 26 predicted elementary errors (mm, rad) at axis positions `q_mm` and readings
+    /// `temps_degc` (model sensor order). Allocation-free.
+    pub fn elementary_errors(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> ElementaryErrors {
+        assert_temps_len(temps_degc, self.sensors.len());
+        self.update_temps(temps_degc);
+        let mut v = [0.0; 6];
+        for (k, net) in self.rt.axes.iter_mut().enumerate() {
+            net.eval(&[q_mm[k]], &mut v);
+            let a = &mut self.rt.errs.axes[k];
+            a.lin_mm = [v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3];
+            a.ang_rad = [v[3] * 1e-6, v[4] * 1e-6, v[5] * 1e-6];
+        }
+        self.rt.errs
+    }
+
+    /// Recomputes the temperature-only parts when the readings changed (bitwise).
+    fn update_temps(&mut self, temps: &[f64]) {
+        let rt = &mut self.rt;
+        if rt.cache_valid
+            && rt
+                .last_temps
+                .iter()
+                .zip(temps)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        {
+            return;
+        }
+        rt.last_temps.copy_from_slice(temps);
+        rt.cache_valid = true;
+        for net in &mut rt.axes {
+            net.set_temps(temps);
+        }
+        rt.spindle.set_temps(temps);
+        let mut s = [0.0; 5];
+        rt.spindle.eval(&[], &mut s);
+        rt.errs.spindle.lin_mm = [s[0] * 1e-3, s[1] * 1e-3, s[2] * 1e-3];
+        rt.errs.spindle.tilt_rad = [s[3] * 1e-6, s[4] * 1e-6];
+        let mut a = [0.0; 3];
+        // Widths were checked in `from_parts`, so this cannot fail.
+        if self.parts.squareness.predict_into(temps, &mut a).is_ok() {
+            rt.errs.squareness.yz_rad = a[0] * 1e-6;
+            rt.errs.squareness.xz_rad = a[1] * 1e-6;
+            rt.errs.squareness.xy_rad = a[2] * 1e-6;
+        }
+    }
+}
+
+impl ErrorPredictor for HybridPredictor {
+    fn sensor_names(&self) -> &[String] {
+        &self.sensors
+    }
+
+    #[inline]
+    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+        let errs = self.elementary_errors(q_mm, temps_degc);
+        let e = first_order_error_mm(&self.geometry, q_mm, &errs);
+        [e.x, e.y, e.z]
+    }
+}
+
+/// Trains the hybrid predictor on the `laser_x/y/z`, `spindle` and `squareness` records.
+///
+/// # Errors
+/// A missing instrument, too few records, an empty measurement cell, sensors not in the
+/// dataset, unusable settings, or a training failure.
+pub fn train_hybrid(
+    ds: &Dataset,
+    geometry: &MachineGeometry,
+    settings: &Settings,
+) -> Result<(HybridPredictor, TrainSummary), PredictError> {
+    let sel = SensorSelection::new(ds, settings)?;
+    let split = CycleSplit::new(ds, settings)?;
+    let mut nets = Vec::new();
+    let mut axis_nets = Vec::with_capacity(3);
+    const NEEDED_FOR: [&str; 3] = ["the X-axis network", "the Y-axis network", "the Z-axis network"];
+    for k in 0..3 {
+        let instrument = Instrument::laser(k);
+        let recs = records_of(ds, instrument, NEEDED_FOR[k], settings.min_records)?;
+        let mut table = Table::new();
+        for r in recs {
+            let mut row = vec![r.pos_mm[k]];
+            sel.push_temps(r, &mut row);
+            table.inputs.push(row);
+            table.targets.push(required_values(r, &[0, 1, 2, 3, 4, 5], instrument)?);
+            table.groups.push(split.id(&r.cycle));
+        }
+        let (reg, summary) =
+            fit_mlp(AXIS_NETS[k], &VALUE_COLUMNS, &table, &split, settings, k as u64)?;
+        axis_nets.push(reg);
+        nets.push(summary);
+    }
+
+    let recs = records_of(ds, Instrument::Spindle, "the spindle network", settings.min_records)?;
+    let mut table = Table::new();
+    for r in recs {
+        let mut row = Vec::with_capacity(sel.names.len());
+        sel.push_temps(r, &mut row);
+        table.inputs.push(row);
+        table.targets.push(required_values(r, &[0, 1, 2, 3, 4], Instrument::Spindle)?);
+        table.groups.push(split.id(&r.cycle));
+    }
+    let (spindle_net, summary) =
+        fit_mlp("spindle", &VALUE_COLUMNS[..5], &table, &split, settings, 3)?;
+    nets.push(summary);
+
+    let recs = records_of(
+        ds,
+        Instrument::Squareness,
+        "the squareness regression",
+        MIN_SQUARENESS_RECORDS,
+    )?;
+    let mut table = Table::new();
+    for r in recs {
+        let mut row = Vec::with_capacity(sel.names.len());
+        sel.push_temps(r, &mut row);
+        table.inputs.push(row);
+        table.targets.push(required_values(r, &[3, 4, 5], Instrument::Squareness)?);
+        table.groups.push(split.id(&r.cycle));
+    }
+    let (squareness, summary) = fit_linear(
+        "squareness",
+        &SQUARENESS_OUTPUTS,
+        &table,
+        &split,
+        settings.squareness_ridge,
+    )?;
+    nets.push(summary);
+
+    let [ax, ay, az]: [Regressor; 3] = axis_nets.try_into().map_err(|_| PredictError::Inconsistent {
+        reason: "expected three axis networks".into(),
+    })?;
+    let parts = HybridParts {
+        axis_nets: [ax, ay, az],
+        spindle_net,
+        squareness,
+    };
+    let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
+    let summary = TrainSummary {
+        kind: ModelKind::Hybrid,
+        sensors: sel.names,
+        val_cycles: split.val_names(),
+        nets,
+    };
+    Ok((predictor, summary))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testdata as td;
+    use super::*;
+    use crate::dataset::Record;
+
+    fn trained() -> (HybridPredictor, TrainSummary) {
+        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap()
+    }
+
+    /// RMS of the prediction error and of the true error (µm) on a held-out cycle, with the
+    /// readings transformed by `tweak` before they reach the predictor.
+    fn held_out_rms(p: &mut HybridPredictor, tweak: impl Fn(&[f64]) -> Vec<f64>) -> (f64, f64) {
+        let pairs: Vec<_> = td::held_out(6.0, 5)
+            .into_iter()
+            .map(|(q, t, e)| (p.predict_error_mm(q, &tweak(&t)), e))
+            .collect();
+        td::rms_um(&pairs)
+    }
+
+    #[test]
+    fn hybrid_predicts_a_held_out_cycle_within_half_a_micrometre_rms() {
+        let (mut p, summary) = trained();
+        let (err, truth) = held_out_rms(&mut p, |t| t.to_vec());
+        // True E is several µm RMS; the prediction must be within 0.5 µm RMS (instrument noise
+        // is 0.1–0.2 µm) and remove ≥ 90 % of it.
+        assert!(truth > 5.0, "truth RMS {truth} µm");
+        assert!(err < 0.5, "prediction RMS error {err} µm vs truth {truth} µm\n{summary:#?}");
+        assert!(err < 0.1 * truth);
+        assert_eq!(summary.val_cycles, vec!["cycle3".to_string()]);
+        assert_eq!(summary.nets.len(), 5);
+        for n in &summary.nets {
+            assert_eq!(n.train_rmse.len(), n.outputs.len());
+            assert_eq!(n.val_rmse.len(), n.outputs.len());
+            assert!(n.n_val > 0 && n.n_train > 2 * n.n_val, "{n:?}");
+        }
+    }
+
+    #[test]
+    fn zeroed_or_shuffled_temperatures_degrade_the_hybrid() {
+        let (mut p, _) = trained();
+        let (good, _) = held_out_rms(&mut p, |t| t.to_vec());
+        let (zeroed, _) = held_out_rms(&mut p, |t| vec![20.0; t.len()]);
+        let (shuffled, _) = held_out_rms(&mut p, |t| vec![t[2], t[0], t[3], t[1]]);
+        assert!(zeroed > 5.0 * good, "good {good} µm, ambient-only {zeroed} µm");
+        assert!(shuffled > 5.0 * good, "good {good} µm, shuffled {shuffled} µm");
+    }
+
+    #[test]
+    fn the_spindle_and_squareness_parts_follow_their_truth() {
+        let (mut p, _) = trained();
+        let temps = td::temps_degc(6.0, 7200.0);
+        let e = p.elementary_errors([100.0, 100.0, -100.0], &temps);
+        let sp = td::spindle(&temps);
+        let sq = td::squareness(&temps);
+        // δz_b is tens of µm here; 0.5 µm and 0.5 µrad tolerances (noise 0.2).
+        assert!((e.spindle.lin_mm[2] * 1e3 - sp[2]).abs() < 0.5, "{e:?} {sp:?}");
+        assert!((e.squareness.xy_rad * 1e6 - sq[2]).abs() < 0.5, "{e:?} {sq:?}");
+        assert!((e.squareness.yz_rad * 1e6 - sq[0]).abs() < 0.5, "{e:?} {sq:?}");
+    }
+
+    #[test]
+    fn same_seed_gives_identical_weights_and_another_seed_does_not() {
+        let ds = td::dataset(&[4.0, 7.0, 5.5], 3);
+        let s = Settings {
+            hidden_candidates: vec![6],
+            ..Settings::default()
+        };
+        let (a, _) = train_hybrid(&ds, &td::geometry(), &s).unwrap();
+        let (b, _) = train_hybrid(&ds, &td::geometry(), &s).unwrap();
+        assert_eq!(a.parts(), b.parts());
+        let (c, _) = train_hybrid(&ds, &td::geometry(), &Settings { seed: 1, ..s }).unwrap();
+        assert_ne!(a.parts().axis_nets[0], c.parts().axis_nets[0]);
+    }
+
+    #[test]
+    fn a_dataset_without_spindle_records_is_named_in_the_error() {
+        let mut ds = td::dataset(&[4.0, 7.0], 1);
+        ds.records.retain(|r| r.instrument != Instrument::Spindle);
+        let err = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the dataset has no `spindle` records (needed for the spindle network)"
+        );
+    }
+
+    #[test]
+    fn too_few_laser_records_are_rejected() {
+        let mut ds = td::dataset(&[4.0, 7.0], 1);
+        let mut kept = 0;
+        ds.records.retain(|r: &Record| {
+            if r.instrument != Instrument::LaserY {
+                return true;
+            }
+            kept += 1;
+            kept <= 7
+        });
+        let err = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the dataset has 7 `laser_y` records, at least 20 are needed"
+        );
+    }
+
+    #[test]
+    fn asking_for_a_sensor_the_dataset_lacks_lists_both_sets() {
+        let ds = td::dataset(&[4.0, 7.0], 1);
+        let s = Settings {
+            sensors: vec!["S1".into(), "XD".into()],
+            ..Settings::default()
+        };
+        let err = train_hybrid(&ds, &td::geometry(), &s).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "sensor columns differ from what is asked: missing [\"XD\"]; asked for [\"S1\", \
+             \"XD\"], the dataset has [\"S1\", \"S2\", \"S3\", \"Amb\"]"
+        );
+    }
+
+    #[test]
+    fn an_empty_laser_cell_is_reported_with_its_record() {
+        let mut ds = td::dataset(&[4.0, 7.0], 1);
+        if let Some(r) = ds.records.iter_mut().find(|r| r.instrument == Instrument::LaserZ) {
+            r.values[4] = f64::NAN;
+        }
+        let err = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "`laser_z` record of cycle \"cycle0\" at t = 0 s has no `ry_urad` value"
+        );
+    }
+}

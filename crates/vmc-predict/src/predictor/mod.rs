@@ -1,0 +1,336 @@
+//! Volumetric error predictors trained on a calibration [`Dataset`] (DESIGN §7).
+//!
+//! Every predictor answers one question at run time: given the axis positions `q` (mm) and the
+//! current temperature sensor readings `T` (°C, in the model's sensor order), what is the
+//! volumetric error `E(q, T)` = actual − nominal tool tip relative to the workpiece, in the
+//! workpiece frame, in mm ([`ErrorPredictor::predict_error_mm`]). Three model classes:
+//!
+//! - [`HybridPredictor`] (the study's method): per axis `k` an MLP `(q_k, T) → (δx, δy, δz, εx,
+//!   εy, εz)_k` trained on `laser_k` records; a spindle MLP `T → (δx_b, δy_b, δz_b, εx_b, εy_b)`
+//!   on `spindle` records; squareness `α = α₀ + A·T` by linear regression on `squareness`
+//!   records; all 26 elementary errors feed [`first_order_error_mm`]. Nets work in the dataset's
+//!   units (µm, µrad); the conversion to mm and rad (×1e-3, ×1e-6) happens at the synthesis.
+//! - [`VolumetricPredictor`] (baseline): one MLP `(X, Y, Z, T) → (Ex, Ey, Ez)` in µm on
+//!   `volumetric` records.
+//! - [`LinearPredictor`] (baseline): per component of E a linear model of the features
+//!   `[1, x, y, z, x², y², z², xy, xz, yz, ΔT_i, ΔT_i·x, ΔT_i·y, ΔT_i·z]` with `x = (X − c_x)/h_x`
+//!   (centre and half range of the training positions) and `ΔT_i = T_i − T̄_i` (training mean),
+//!   on `volumetric` records.
+//!
+//! All MLPs have one tanh hidden layer; its width is picked among
+//! [`Settings::hidden_candidates`] by validation RMSE. Training uses Levenberg–Marquardt with
+//! early stopping ([`crate::nn`]); the validation set is made of whole thermal cycles (the
+//! `cycle` column, see [`Settings::val_cycles`]) so that near-copies of validation samples never
+//! sit in the training set. Only when a dataset holds a single cycle are contiguous time blocks
+//! used instead ([`SplitKind`]). Every seed is derived from [`Settings::seed`].
+//!
+//! Query cost: the temperature part of each first layer (`b₁ + W₁,T · z_T`), the spindle drifts
+//! and the squareness are computed once per new set of readings and cached (readings are held
+//! for a whole sensor period while the controller queries at the interpolation rate, and the
+//! compensation's fixed-point iterations reuse them); a query then costs the position columns,
+//! the tanh of each hidden unit and the output layers. Nothing is allocated on the query path.
+//!
+//! Models are saved as versioned JSON ([`file`]).
+
+mod data;
+mod fastnet;
+pub mod file;
+mod hybrid;
+mod linear;
+mod volumetric;
+
+#[cfg(test)]
+pub(crate) mod testdata;
+
+pub use file::{AnyPredictor, ModelKind, SensorInfo, FORMAT_NAME, FORMAT_VERSION};
+pub use hybrid::{train_hybrid, HybridPredictor};
+pub use linear::{train_linear, LinearPredictor};
+pub use volumetric::{train_volumetric, VolumetricPredictor};
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::linreg::LinRegError;
+use crate::nn::{NnError, StopReason};
+#[allow(unused_imports)] // for the module doc links
+use crate::{dataset::Dataset, synthesis::first_order_error_mm};
+
+/// A volumetric error model usable in the control loop.
+pub trait ErrorPredictor {
+    /// Sensor names the model expects, in the order of `temps_degc`.
+    fn sensor_names(&self) -> &[String];
+
+    /// Predicted volumetric error E (actual − nominal tool tip, workpiece frame, mm) at axis
+    /// positions `q_mm` (mm) with sensor readings `temps_degc` (°C, [`Self::sensor_names`] order).
+    ///
+    /// Allocation-free. `temps_degc.len()` must equal `sensor_names().len()` (checked with an
+    /// assertion: the sensor set is validated once when the model is attached to a machine,
+    /// see [`check_sensor_names`]).
+    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3];
+}
+
+/// Errors of training, loading and checking predictors.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PredictError {
+    /// The dataset has no records of an instrument the model needs.
+    #[error("the dataset has no `{instrument}` records (needed for {needed_for})")]
+    MissingInstrument {
+        /// Instrument name as in the `instrument` column.
+        instrument: &'static str,
+        /// What the records are needed for.
+        needed_for: &'static str,
+    },
+    /// The dataset has too few records of an instrument.
+    #[error("the dataset has {found} `{instrument}` records, at least {needed} are needed")]
+    TooFewRecords {
+        /// Instrument name.
+        instrument: &'static str,
+        /// Records found.
+        found: usize,
+        /// Minimum required.
+        needed: usize,
+    },
+    /// Sensors asked for in the settings are not columns of the dataset.
+    #[error(
+        "sensor columns differ from what is asked: missing {missing:?}; asked for {asked:?}, \
+         the dataset has {found:?}"
+    )]
+    SensorsNotInDataset {
+        /// Asked names absent from the dataset.
+        missing: Vec<String>,
+        /// The names asked for.
+        asked: Vec<String>,
+        /// The dataset's sensor names.
+        found: Vec<String>,
+    },
+    /// A model's sensors do not match the machine's (names or order).
+    #[error("sensor mismatch: the model expects sensors {expected:?} (in this order), the machine has {found:?}")]
+    SensorMismatch {
+        /// The model's sensor names.
+        expected: Vec<String>,
+        /// The machine's sensor names.
+        found: Vec<String>,
+    },
+    /// A record lacks a value the model needs (empty cell).
+    #[error("`{instrument}` record of cycle \"{cycle}\" at t = {time_s} s has no `{column}` value")]
+    MissingValue {
+        /// Instrument name.
+        instrument: &'static str,
+        /// Cycle of the record.
+        cycle: String,
+        /// Time of the record, s.
+        time_s: f64,
+        /// The empty column.
+        column: &'static str,
+    },
+    /// A record's number of temperatures differs from the dataset's sensor list.
+    #[error("record {index} has {got} temperatures, the dataset lists {expected} sensors")]
+    RaggedTemperatures {
+        /// Record index in the dataset.
+        index: usize,
+        /// Sensors listed.
+        expected: usize,
+        /// Temperatures in the record.
+        got: usize,
+    },
+    /// A setting is unusable.
+    #[error("invalid setting `{field}`: {reason}")]
+    BadSettings {
+        /// The setting.
+        field: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Network construction or training failed.
+    #[error("network `{net}`: {source}")]
+    Net {
+        /// Which network.
+        net: &'static str,
+        /// The cause.
+        source: NnError,
+    },
+    /// A linear regression failed.
+    #[error("linear model `{model}`: {source}")]
+    Linear {
+        /// Which model.
+        model: &'static str,
+        /// The cause.
+        source: LinRegError,
+    },
+    /// The text is not a vmc-twin model file.
+    #[error("not a vmc-twin model file: {reason}")]
+    NotAModel {
+        /// What is wrong.
+        reason: String,
+    },
+    /// The model file has a version this build cannot read.
+    #[error("model file version {found} is not supported (this build reads version {supported})")]
+    UnsupportedVersion {
+        /// Version in the file.
+        found: u64,
+        /// The version this build reads.
+        supported: u64,
+    },
+    /// The model file holds another kind of model than asked for.
+    #[error("model file holds a `{found}` model, expected `{expected}`")]
+    WrongKind {
+        /// Kind asked for.
+        expected: String,
+        /// Kind in the file.
+        found: String,
+    },
+    /// The model file is malformed JSON or does not fit the schema.
+    #[error("model file: {msg}")]
+    Json {
+        /// The parser's message (with line and column).
+        msg: String,
+    },
+    /// The model file parses but its parts do not fit together.
+    #[error("inconsistent model file: {reason}")]
+    Inconsistent {
+        /// What does not fit.
+        reason: String,
+    },
+    /// Reading or writing a model file failed.
+    #[error("{path}: {msg}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The OS message.
+        msg: String,
+    },
+}
+
+/// Training settings shared by the three predictors. Defaults in brackets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Settings {
+    /// Master seed; every network's initialisation seed is derived from it [0].
+    pub seed: u64,
+    /// Hidden-layer widths tried for each MLP; the best on validation is kept [6, 10].
+    /// Why these: with ~12 sensors, 6 tanh units already fit smooth thermal drifts; more
+    /// than ~12 over-fits four-hour cycles and slows the 1 MHz query.
+    pub hidden_candidates: Vec<usize>,
+    /// Maximum Levenberg–Marquardt iterations per net [150].
+    pub max_epochs: usize,
+    /// Early stopping: epochs without validation improvement [8].
+    pub patience: usize,
+    /// Independent initialisations per candidate [1].
+    pub restarts: usize,
+    /// Validation cycles when [`Settings::val_cycles`] is empty: every `round(1/val_fraction)`-th
+    /// cycle in file order (at least one when there are ≥ 2 cycles) [0.25].
+    pub val_fraction: f64,
+    /// Explicit validation cycles (names of the `cycle` column) [empty = automatic].
+    pub val_cycles: Vec<String>,
+    /// Sensors to use, in this order [empty = all dataset sensors in column order].
+    pub sensors: Vec<String>,
+    /// Minimum records per network (each axis, spindle, volumetric) [20].
+    pub min_records: usize,
+    /// Ridge λ (dimensionless, on normalised slopes) of the squareness regression [1e-3].
+    pub squareness_ridge: f64,
+    /// Ridge λ of the linear baseline [1e-6]: just enough to survive collinear features.
+    pub linear_ridge: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            hidden_candidates: vec![6, 10],
+            max_epochs: 150,
+            patience: 8,
+            restarts: 1,
+            val_fraction: 0.25,
+            val_cycles: Vec::new(),
+            sensors: Vec::new(),
+            min_records: 20,
+            squareness_ridge: 1e-3,
+            linear_ridge: 1e-6,
+        }
+    }
+}
+
+/// How a network's data were split into training and validation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SplitKind {
+    /// Whole cycles held out (the normal case).
+    ByCycle,
+    /// Contiguous time blocks (every 5th fifth) — only when the records span a single cycle.
+    Blocks,
+}
+
+/// Score of one hidden-layer width tried.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    /// Hidden units.
+    pub hidden_units: usize,
+    /// Best validation RMSE, normalised units (multiples of each output's training std).
+    pub val_rmse_norm: f64,
+}
+
+/// What training one network (or regression) gave.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NetSummary {
+    /// Network name (`axis_x`, `axis_y`, `axis_z`, `spindle`, `squareness`, `volumetric`, `linear`).
+    pub name: String,
+    /// Output names with units (`dx_um`, `rx_urad`, `ex_um`, …), in output order.
+    pub outputs: Vec<String>,
+    /// Hidden units of the kept net (`None` for a linear regression).
+    pub hidden_units: Option<usize>,
+    /// Training samples.
+    pub n_train: usize,
+    /// Validation samples.
+    pub n_val: usize,
+    /// How the split was made.
+    pub split: SplitKind,
+    /// Training RMSE per output, in the output's unit.
+    pub train_rmse: Vec<f64>,
+    /// Validation RMSE per output, in the output's unit.
+    pub val_rmse: Vec<f64>,
+    /// LM iterations of the kept run (`None` for a regression).
+    pub epochs: Option<usize>,
+    /// Why the kept run stopped (`None` for a regression).
+    pub stop_reason: Option<StopReason>,
+    /// Every width tried and its validation score.
+    pub candidates: Vec<CandidateScore>,
+}
+
+/// What a training call did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainSummary {
+    /// Which model class.
+    pub kind: ModelKind,
+    /// Sensors used, in model order.
+    pub sensors: Vec<String>,
+    /// Cycles held out for validation (empty when the dataset has one cycle).
+    pub val_cycles: Vec<String>,
+    /// One entry per network or regression.
+    pub nets: Vec<NetSummary>,
+}
+
+/// Checks that a model's sensor list equals the machine's, names and order.
+///
+/// # Errors
+/// [`PredictError::SensorMismatch`] listing both lists.
+pub fn check_sensor_names(model: &[String], machine: &[String]) -> Result<(), PredictError> {
+    if model == machine {
+        Ok(())
+    } else {
+        Err(PredictError::SensorMismatch {
+            expected: model.to_vec(),
+            found: machine.to_vec(),
+        })
+    }
+}
+
+/// Asserts the reading count on the query path (a programming error, see [`ErrorPredictor`]).
+#[inline]
+fn assert_temps_len(temps_degc: &[f64], n_sensors: usize) {
+    assert_eq!(
+        temps_degc.len(),
+        n_sensors,
+        "predictor called with {} temperatures, the model has {} sensors",
+        temps_degc.len(),
+        n_sensors
+    );
+}
