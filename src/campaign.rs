@@ -12,10 +12,10 @@
 //! stopped, taking machine time, temperatures logged with each reading.
 
 use crate::instruments::Instruments;
+use crate::machine::MachineSpec;
 use crate::predict::dataset::{Dataset, Record};
 use crate::thermal::{Activity, AmbientProfile};
 use crate::twin::{sub_seed, Twin, TwinError};
-use crate::machine::MachineSpec;
 
 /// One duty phase of a thermal cycle.
 #[derive(Debug, Clone, PartialEq)]
@@ -68,24 +68,52 @@ impl ThermalCycle {
         &self.phases[self.phases.len() - 1]
     }
 
-    /// Typical cycles for calibration: 4 h heating at a constant duty, 4 h cooling.
+    /// Typical cycles for calibration: heating at constant duties (one with a speed change, one
+    /// axis-heavy), then cooling, over an ordinary workshop day (one with a slow ambient drift).
     pub fn calibration_set() -> Vec<ThermalCycle> {
+        let cool = || phase(4.0, 0.0, [0.0; 3]);
+        let cycle = |name: &str, ambient: AmbientProfile, phases: Vec<Phase>| ThermalCycle {
+            name: name.into(),
+            ambient,
+            phases,
+        };
         vec![
-            ThermalCycle {
-                name: "cal_4000rpm".into(),
-                ambient: AMBIENT_20,
-                phases: vec![phase(4.0, 4000.0, [3000.0, 2000.0, 1000.0]), phase(4.0, 0.0, [0.0; 3])],
-            },
-            ThermalCycle {
-                name: "cal_8000rpm".into(),
-                ambient: AMBIENT_20,
-                phases: vec![phase(4.0, 8000.0, [4000.0, 3000.0, 2000.0]), phase(4.0, 0.0, [0.0; 3])],
-            },
-            ThermalCycle {
-                name: "cal_6000rpm".into(),
-                ambient: AMBIENT_20,
-                phases: vec![phase(4.0, 6000.0, [2000.0, 4000.0, 1500.0]), phase(4.0, 0.0, [0.0; 3])],
-            },
+            cycle(
+                "cal_3000rpm",
+                AMBIENT_20,
+                vec![phase(4.0, 3000.0, [2000.0, 1500.0, 800.0]), cool()],
+            ),
+            cycle(
+                "cal_6000rpm",
+                AMBIENT_20,
+                vec![phase(4.0, 6000.0, [2000.0, 4000.0, 1500.0]), cool()],
+            ),
+            cycle(
+                "cal_9000rpm",
+                AMBIENT_20,
+                vec![phase(4.0, 9000.0, [4000.0, 3000.0, 2000.0]), cool()],
+            ),
+            cycle(
+                "cal_4000_8000rpm",
+                AMBIENT_20,
+                vec![
+                    phase(2.0, 4000.0, [3000.0, 2000.0, 1000.0]),
+                    phase(2.0, 8000.0, [3000.0, 2000.0, 1000.0]),
+                    cool(),
+                ],
+            ),
+            cycle(
+                "cal_axes_2000rpm",
+                AMBIENT_20,
+                vec![phase(4.0, 2000.0, [6000.0, 5000.0, 3000.0]), cool()],
+            ),
+            cycle(
+                "cal_day_drift",
+                AmbientProfile::Table {
+                    points: vec![[0.0, 19.5], [8.0 * 3600.0, 21.5]],
+                },
+                vec![phase(4.0, 7000.0, [3000.0, 3000.0, 1500.0]), cool()],
+            ),
         ]
     }
 
@@ -119,7 +147,10 @@ impl ThermalCycle {
                     period_s: 8.0 * 3600.0,
                     phase_rad: 0.0,
                 },
-                phases: vec![phase(4.0, 7000.0, [3500.0, 2500.0, 1500.0]), phase(4.0, 0.0, [0.0; 3])],
+                phases: vec![
+                    phase(4.0, 7000.0, [3500.0, 2500.0, 1500.0]),
+                    phase(4.0, 0.0, [0.0; 3]),
+                ],
             },
             ThermalCycle {
                 name: "eval_restart".into(),
@@ -137,7 +168,13 @@ impl ThermalCycle {
 
 /// Drives a twin through a cycle's duty (cycle time `from_s` → `to_s`), the axes shuttling
 /// over 10–90 % of their travel at the phase speeds. `t0_s` is the twin time of the cycle start.
-pub fn drive(twin: &mut Twin, cycle: &ThermalCycle, t0_s: f64, to_s: f64, step_s: f64) -> Result<(), TwinError> {
+pub fn drive(
+    twin: &mut Twin,
+    cycle: &ThermalCycle,
+    t0_s: f64,
+    to_s: f64,
+    step_s: f64,
+) -> Result<(), TwinError> {
     let min = twin.spec().axes.travel_min_mm;
     let max = twin.spec().axes.travel_max_mm;
     while twin.time_s() - t0_s < to_s - 1e-9 {
@@ -235,7 +272,11 @@ fn measurement_block(
 }
 
 /// Runs the calibration campaign over `cycles` and returns the dataset.
-pub fn calibrate(spec: &MachineSpec, cycles: &[ThermalCycle], cfg: &CampaignConfig) -> Result<Dataset, TwinError> {
+pub fn calibrate(
+    spec: &MachineSpec,
+    cycles: &[ThermalCycle],
+    cfg: &CampaignConfig,
+) -> Result<Dataset, TwinError> {
     let mut records = Vec::new();
     let grid = volume_grid(spec, cfg.grid_points_per_axis);
     let mut sensor_names = Vec::new();
@@ -312,6 +353,12 @@ pub fn run_at_state(
     twin.set_ambient(state.cycle.ambient.clone())?;
     drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0)?;
     let mut log = crate::sim::CollectPoints::default();
-    crate::sim::execute(&mut twin, plan, &crate::sim::SimConfig::default(), compensator, &mut log)?;
+    crate::sim::execute(
+        &mut twin,
+        plan,
+        &crate::sim::SimConfig::default(),
+        compensator,
+        &mut log,
+    )?;
     Ok(log.points)
 }

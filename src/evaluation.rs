@@ -123,7 +123,13 @@ pub struct CampaignReport {
 }
 
 /// Summarises a compensated run.
-pub fn run_report(predictor: &str, diagonal: &str, state: &str, seed: u64, points: &[PointRecord]) -> Option<RunReport> {
+pub fn run_report(
+    predictor: &str,
+    diagonal: &str,
+    state: &str,
+    seed: u64,
+    points: &[PointRecord],
+) -> Option<RunReport> {
     let before: Vec<[f64; 3]> = points.iter().map(|p| p.error_before_um).collect();
     let after: Vec<[f64; 3]> = points.iter().filter_map(|p| p.error_after_um).collect();
     let b = error_stats(&before)?;
@@ -167,7 +173,10 @@ pub fn diagonal_plans(spec: &MachineSpec) -> Result<Vec<(&'static str, Plan)>, E
         .iter()
         .map(|(name, text)| {
             let file = format!("trajectories/diag_{}.ngc", name.to_lowercase());
-            Ok((*name, program::plan_source(text, &file, spec, spec.axes.home_mm)?))
+            Ok((
+                *name,
+                program::plan_source(text, &file, spec, spec.axes.home_mm)?,
+            ))
         })
         .collect()
 }
@@ -199,7 +208,11 @@ pub fn evaluate_predictor<P: ErrorPredictor + Clone>(
 }
 
 /// Runs the full campaign for `seeds`: calibrate, train the three predictors, evaluate.
-pub fn run_campaign(spec: &MachineSpec, seeds: &[u64], settings: &Settings) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
+pub fn run_campaign(
+    spec: &MachineSpec,
+    seeds: &[u64],
+    settings: &Settings,
+) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
     let cal_cycles = ThermalCycle::calibration_set();
     let plans = diagonal_plans(spec)?;
     let geometry = spec.geometry();
@@ -213,17 +226,36 @@ pub fn run_campaign(spec: &MachineSpec, seeds: &[u64], settings: &Settings) -> R
     let mut models = Vec::new();
     for &seed in seeds {
         let data = campaign::calibrate(spec, &cal_cycles, &CampaignConfig::new(seed))?;
-        let s = Settings { seed, ..settings.clone() };
+        let s = Settings {
+            seed,
+            ..settings.clone()
+        };
         let (hybrid, hs) = predictor::train_hybrid(&data, &geometry, &s)?;
         let (volumetric, vs) = predictor::train_volumetric(&data, &geometry, &s)?;
         let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
         report.training.extend([(seed, hs), (seed, vs), (seed, ls)]);
         let states = campaign::evaluation_states(seed);
         report.evaluation_states = states.iter().map(|s| s.name.clone()).collect();
-        report.runs.extend(evaluate_predictor(spec, seed, "hybrid", &hybrid, &states, &plans)?);
-        report.runs.extend(evaluate_predictor(spec, seed, "volumetric", &volumetric, &states, &plans)?);
-        report.runs.extend(evaluate_predictor(spec, seed, "linear", &linear, &states, &plans)?);
-        models.push(TrainedModels { seed, hybrid, volumetric, linear });
+        report.runs.extend(evaluate_predictor(
+            spec, seed, "hybrid", &hybrid, &states, &plans,
+        )?);
+        report.runs.extend(evaluate_predictor(
+            spec,
+            seed,
+            "volumetric",
+            &volumetric,
+            &states,
+            &plans,
+        )?);
+        report.runs.extend(evaluate_predictor(
+            spec, seed, "linear", &linear, &states, &plans,
+        )?);
+        models.push(TrainedModels {
+            seed,
+            hybrid,
+            volumetric,
+            linear,
+        });
     }
     Ok((report, models))
 }
@@ -247,7 +279,11 @@ pub fn median(v: &mut [f64]) -> Option<f64> {
     }
     v.sort_by(|a, b| a.total_cmp(b));
     let n = v.len();
-    Some(if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) })
+    Some(if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    })
 }
 
 /// Per-predictor headline figures over all runs: (median reduction, min reduction, max |E| after µm, mean prediction RMSE µm).
@@ -261,4 +297,38 @@ pub fn headline(runs: &[RunReport], predictor: &str) -> Option<(f64, f64, f64, f
     let max_after = r.iter().map(|r| r.max_after_um).fold(0.0, f64::max);
     let rmse = r.iter().map(|r| r.rmse_um).sum::<f64>() / r.len() as f64;
     Some((median(&mut red)?, min, max_after, rmse))
+}
+
+/// Writes the campaign report as terminal tables: per run, then per predictor.
+pub fn write_campaign_table(
+    rep: &CampaignReport,
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "vmc-twin campaign on {}: calibrated on {}; evaluated on held-out states {}",
+        rep.machine,
+        rep.calibration_cycles.join(", "),
+        rep.evaluation_states.join(", ")
+    )?;
+    writeln!(out, "{:<10} {:<5} {:<24} {:>4} | {:>7} {:>7} {:>7} {:>7} | {:>7} {:>7} {:>7} {:>7} | {:>6} | {:>6} {:>6} {:>6} {:>6}",
+        "predictor", "diag", "thermal state", "seed",
+        "rmsEx", "rmsEy", "rmsEz", "rms|E|", "rmsEx'", "rmsEy'", "rmsEz'", "rms|E'|", "red%", "MAD", "MAPE%", "RMSE", "R2")?;
+    for r in &rep.runs {
+        writeln!(out, "{:<10} {:<5} {:<24} {:>4} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>6.1} | {:>6.2} {:>6.1} {:>6.2} {:>6.3}",
+            r.predictor, r.diagonal, r.thermal_state, r.seed,
+            r.rms_before_xyz_um[0], r.rms_before_xyz_um[1], r.rms_before_xyz_um[2], r.rms_before_um,
+            r.rms_after_xyz_um[0], r.rms_after_xyz_um[1], r.rms_after_xyz_um[2], r.rms_after_um,
+            r.reduction * 100.0, r.mad_um, r.mape.unwrap_or(f64::NAN) * 100.0, r.rmse_um, r.r2.unwrap_or(f64::NAN))?;
+    }
+    writeln!(out, "(µm; primed = compensated; red% = 1 − RMS|E'|/RMS|E|; MAD/MAPE/RMSE/R2 of the predicted vs true error, components pooled; MAPE = mean|e|/mean|y|)")?;
+    writeln!(out, "summary over all diagonals, states and seeds:")?;
+    for p in ["hybrid", "volumetric", "linear"] {
+        if let Some((med, min, max_after, rmse)) = headline(&rep.runs, p) {
+            let n = rep.runs.iter().filter(|r| r.predictor == p).count();
+            writeln!(out, "  {p:<10} runs {n:>4}  median reduction {:>5.1} %  worst run {:>5.1} %  max residual |E| {:>5.2} µm  mean prediction RMSE {:>5.2} µm",
+                med * 100.0, min * 100.0, max_after, rmse)?;
+        }
+    }
+    Ok(())
 }

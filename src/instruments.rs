@@ -53,7 +53,9 @@ impl Instruments {
         if sigma <= 0.0 {
             return 0.0;
         }
-        Normal::new(0.0, sigma).map(|n| n.sample(&mut self.rng)).unwrap_or(0.0)
+        Normal::new(0.0, sigma)
+            .map(|n| n.sample(&mut self.rng))
+            .unwrap_or(0.0)
     }
 
     /// Positions of a sweep of `axis`: from the travel minimum in laser steps, the last step
@@ -73,7 +75,13 @@ impl Instruments {
 
     /// Lets `duration_s` of machine time pass at axis position `q_mm`, spindle stopped, axis
     /// `moving_axis` travelling `step_mm` during it (a measurement in progress).
-    fn dwell(&self, twin: &mut Twin, q_mm: [f64; 3], moving_axis: Option<(usize, f64)>, duration_s: f64) -> Result<(), TwinError> {
+    fn dwell(
+        &self,
+        twin: &mut Twin,
+        q_mm: [f64; 3],
+        moving_axis: Option<(usize, f64)>,
+        duration_s: f64,
+    ) -> Result<(), TwinError> {
         let mut speed = [0.0; 3];
         if let Some((a, step_mm)) = moving_axis {
             speed[a] = step_mm / duration_s * 60.0;
@@ -87,7 +95,15 @@ impl Instruments {
         twin.advance(duration_s, &activity)
     }
 
-    fn record(&self, twin: &Twin, cycle: &str, t0_s: f64, instrument: Instrument, q_mm: [f64; 3], values: [f64; 6]) -> Record {
+    fn record(
+        &self,
+        twin: &Twin,
+        cycle: &str,
+        t0_s: f64,
+        instrument: Instrument,
+        q_mm: [f64; 3],
+        values: [f64; 6],
+    ) -> Record {
         Record {
             cycle: cycle.to_string(),
             time_s: twin.time_s() - t0_s,
@@ -114,7 +130,12 @@ impl Instruments {
         for &s in &positions {
             let mut q = park_mm;
             q[axis] = s;
-            self.dwell(twin, q, Some((axis, (s - prev).abs())), self.spec.laser_point_s)?;
+            self.dwell(
+                twin,
+                q,
+                Some((axis, (s - prev).abs())),
+                self.spec.laser_point_s,
+            )?;
             twin.note_motion([0, 1, 2].map(|a| if a == axis { 1.0 } else { 0.0 }));
             prev = s;
             let approach = twin.draw_approach_mm();
@@ -124,7 +145,11 @@ impl Instruments {
             let lin_sigma = self.spec.laser_noise_um + self.spec.laser_noise_um_per_m * dist_m;
             let mut values = [0.0; 6];
             for c in 0..3 {
-                let sigma = if c == axis { lin_sigma } else { self.spec.straightness_noise_um };
+                let sigma = if c == axis {
+                    lin_sigma
+                } else {
+                    self.spec.straightness_noise_um
+                };
                 values[c] = e.lin_mm[c] * 1e3 + self.gauss(sigma);
                 values[3 + c] = e.ang_rad[c] * 1e6 + self.gauss(self.spec.angular_noise_urad);
             }
@@ -135,7 +160,14 @@ impl Instruments {
     }
 
     /// The 5-probe spindle test at `q_mm`: δx, δy, δz (µm), εx, εy (µrad).
-    pub fn spindle_test(&mut self, twin: &mut Twin, q_mm: [f64; 3], cycle: &str, t0_s: f64, out: &mut Vec<Record>) -> Result<(), TwinError> {
+    pub fn spindle_test(
+        &mut self,
+        twin: &mut Twin,
+        q_mm: [f64; 3],
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) -> Result<(), TwinError> {
         self.dwell(twin, q_mm, None, self.spec.laser_point_s)?;
         let d = twin.elementary_errors(q_mm).spindle;
         let p = self.spec.probe_noise_um;
@@ -155,7 +187,14 @@ impl Instruments {
     }
 
     /// Squareness with a laser and optical square: α_yz, α_xz, α_xy (µrad) in rx, ry, rz.
-    pub fn squareness(&mut self, twin: &mut Twin, q_mm: [f64; 3], cycle: &str, t0_s: f64, out: &mut Vec<Record>) -> Result<(), TwinError> {
+    pub fn squareness(
+        &mut self,
+        twin: &mut Twin,
+        q_mm: [f64; 3],
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) -> Result<(), TwinError> {
         self.dwell(twin, q_mm, None, self.spec.laser_point_s)?;
         let s = twin.elementary_errors(q_mm).squareness;
         let a = self.spec.angular_noise_urad;
@@ -173,7 +212,14 @@ impl Instruments {
     }
 
     /// Volumetric error measured at each point (laser tracker), µm.
-    pub fn volumetric(&mut self, twin: &mut Twin, points_mm: &[[f64; 3]], cycle: &str, t0_s: f64, out: &mut Vec<Record>) -> Result<(), TwinError> {
+    pub fn volumetric(
+        &mut self,
+        twin: &mut Twin,
+        points_mm: &[[f64; 3]],
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) -> Result<(), TwinError> {
         for &p in points_mm {
             self.dwell(twin, p, None, self.spec.laser_point_s)?;
             let approach = twin.draw_approach_mm();

@@ -9,6 +9,7 @@ pub use vmc_predict as predict;
 
 pub mod campaign;
 pub mod errors;
+pub mod evaluation;
 pub mod gcode;
 pub mod instruments;
 pub mod interp;

@@ -199,7 +199,11 @@ impl MachineSpec {
                 ("home_mm", a.home_mm[i]),
             ] {
                 if !v.is_finite() {
-                    return Err(invalid(path, format!("axes.{name}[{i}]"), format!("{ax}: must be a finite number")));
+                    return Err(invalid(
+                        path,
+                        format!("axes.{name}[{i}]"),
+                        format!("{ax}: must be a finite number"),
+                    ));
                 }
             }
             let travel = a.travel_max_mm[i] - a.travel_min_mm[i];
@@ -214,15 +218,27 @@ impl MachineSpec {
                 ));
             }
             if a.home_mm[i] < a.travel_min_mm[i] || a.home_mm[i] > a.travel_max_mm[i] {
-                return Err(invalid(path, format!("axes.home_mm[{i}]"), format!("{ax} home {} mm is outside the travel", a.home_mm[i])));
+                return Err(invalid(
+                    path,
+                    format!("axes.home_mm[{i}]"),
+                    format!("{ax} home {} mm is outside the travel", a.home_mm[i]),
+                ));
             }
             for (k, off) in a.work_offsets_mm.iter().enumerate() {
                 if !off[i].is_finite() {
-                    return Err(invalid(path, format!("axes.work_offsets_mm[{k}][{i}]"), "must be a finite number"));
+                    return Err(invalid(
+                        path,
+                        format!("axes.work_offsets_mm[{k}][{i}]"),
+                        "must be a finite number",
+                    ));
                 }
             }
             if !self.tool.offset_mm[i].is_finite() || self.tool.offset_mm[i].abs() > 1000.0 {
-                return Err(invalid(path, format!("tool.offset_mm[{i}]"), "must be a finite number within ±1000 mm"));
+                return Err(invalid(
+                    path,
+                    format!("tool.offset_mm[{i}]"),
+                    "must be a finite number within ±1000 mm",
+                ));
             }
         }
         if !(self.tool.diameter_mm.is_finite() && self.tool.diameter_mm > 0.0) {
@@ -263,14 +279,22 @@ impl MachineSpec {
             ("probe_noise_um", s.probe_noise_um),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(invalid(path, format!("instruments.{name}"), format!("must be a finite number ≥ 0, got {v}")));
+                return Err(invalid(
+                    path,
+                    format!("instruments.{name}"),
+                    format!("must be a finite number ≥ 0, got {v}"),
+                ));
             }
         }
         for i in 0..3 {
             let span = self.axes.travel_max_mm[i] - self.axes.travel_min_mm[i];
             let st = s.laser_step_mm[i];
             if !(st.is_finite() && st > 0.0 && st <= span) {
-                return Err(invalid(path, format!("instruments.laser_step_mm[{i}]"), format!("must be in (0, travel = {span} mm], got {st}")));
+                return Err(invalid(
+                    path,
+                    format!("instruments.laser_step_mm[{i}]"),
+                    format!("must be in (0, travel = {span} mm], got {st}"),
+                ));
             }
         }
         if !(s.laser_point_s.is_finite() && s.laser_point_s > 0.0) {

@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use vmc_twin::campaign;
+use vmc_twin::evaluation;
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::program;
 use vmc_twin::report::{self, RunLog};
@@ -16,7 +17,11 @@ use vmc_twin::sim::{self, SampleMode, SimConfig};
 use vmc_twin::twin::Twin;
 
 #[derive(Parser)]
-#[command(name = "vmc-twin", version, about = "Digital twin of a 3-axis vertical machining center: run G-code on a machine with thermally drifting geometric errors and see where the tool really was")]
+#[command(
+    name = "vmc-twin",
+    version,
+    about = "Digital twin of a 3-axis vertical machining center: run G-code on a machine with thermally drifting geometric errors and see where the tool really was"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -29,6 +34,50 @@ enum Command {
     /// Run the virtual calibration campaign (laser sweeps, spindle test, squareness, volumetric
     /// grid, temperatures over typical thermal cycles) and write the dataset as CSV.
     Calibrate(CalibrateArgs),
+    /// The main job: calibration campaign, training of the hybrid predictor and the two
+    /// baselines, every face and body diagonal under held-out thermal states without and with
+    /// compensation, and the report.
+    Campaign(CampaignArgs),
+    /// Train a predictor on a calibration dataset (CSV) and write the model (JSON).
+    Train(TrainArgs),
+}
+
+#[derive(clap::Args)]
+struct CampaignArgs {
+    /// Machine description (TOML); default: the embedded reference machine.
+    #[arg(long)]
+    machine: Option<PathBuf>,
+    /// Machine realisations to calibrate and evaluate (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [1u64, 2, 3])]
+    seeds: Vec<u64>,
+    /// Folder for report.json and the trained models (created if missing).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Overwrite existing output files.
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(clap::Args)]
+struct TrainArgs {
+    /// Calibration dataset (CSV, as written by `vmc-twin calibrate`).
+    #[arg(long)]
+    data: PathBuf,
+    /// Model class: hybrid (4 MLPs + kinematic synthesis), volumetric (one MLP) or linear.
+    #[arg(long, default_value = "hybrid")]
+    kind: String,
+    /// Machine description for the nominal geometry and sensor check; default: reference.
+    #[arg(long)]
+    machine: Option<PathBuf>,
+    /// Seed of the network initialisation.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output model file.
+    #[arg(short = 'o', long, default_value = "model.json")]
+    out: PathBuf,
+    /// Overwrite an existing output file.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(clap::Args)]
@@ -85,6 +134,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run(args),
         Command::Calibrate(args) => calibrate(args),
+        Command::Campaign(args) => run_campaign(args),
+        Command::Train(args) => train(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -105,7 +156,10 @@ fn load_machine(path: Option<&Path>) -> Result<MachineSpec> {
 fn run(args: RunArgs) -> Result<()> {
     let machine = load_machine(args.machine.as_deref())?;
     if !(args.interp_cycle_ms > 0.0 && args.interp_cycle_ms.is_finite()) {
-        anyhow::bail!("--interp-cycle-ms must be > 0, got {}", args.interp_cycle_ms);
+        anyhow::bail!(
+            "--interp-cycle-ms must be > 0, got {}",
+            args.interp_cycle_ms
+        );
     }
     if !(args.thermal_step_s > 0.0 && args.thermal_step_s.is_finite()) {
         anyhow::bail!("--thermal-step-s must be > 0, got {}", args.thermal_step_s);
@@ -121,7 +175,8 @@ fn run(args: RunArgs) -> Result<()> {
     let plan = program::load_plan(&args.program, &machine, start)?;
     let out_files = match &args.out {
         Some(dir) => {
-            std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create output folder", dir.display()))?;
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("{}: cannot create output folder", dir.display()))?;
             let files = (dir.join("samples.csv"), dir.join("summary.json"));
             report::check_writable(&files.0, args.force)?;
             report::check_writable(&files.1, args.force)?;
@@ -134,17 +189,28 @@ fn run(args: RunArgs) -> Result<()> {
     let cfg = SimConfig {
         thermal_step_s: args.thermal_step_s,
         interp_cycle_s: args.interp_cycle_ms * 1e-3,
-        sample_mode: if args.every_cycle { SampleMode::EveryCycle } else { SampleMode::Dwells },
+        sample_mode: if args.every_cycle {
+            SampleMode::EveryCycle
+        } else {
+            SampleMode::Dwells
+        },
         ..SimConfig::default()
     };
-    let warm_cfg = SimConfig { sample_mode: SampleMode::Dwells, ..cfg };
+    let warm_cfg = SimConfig {
+        sample_mode: SampleMode::Dwells,
+        ..cfg
+    };
     for p in &warmups {
         sim::execute(&mut twin, p, &warm_cfg, None, &mut sim::NullObserver)?;
     }
     let mut log = RunLog::default();
     sim::execute(&mut twin, &plan, &cfg, None, &mut log)?;
 
-    let warmup_names: Vec<String> = args.warmup.iter().map(|p| p.display().to_string()).collect();
+    let warmup_names: Vec<String> = args
+        .warmup
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
     let program_name = args.program.display().to_string();
     let summary = log
         .summary(&program_name, &machine.machine.name, args.seed, &warmup_names)
@@ -152,14 +218,28 @@ fn run(args: RunArgs) -> Result<()> {
 
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    writeln!(out, "vmc-twin run: {program_name} on {} (seed {})", machine.machine.name, args.seed)?;
+    writeln!(
+        out,
+        "vmc-twin run: {program_name} on {} (seed {})",
+        machine.machine.name, args.seed
+    )?;
     if warmup_names.is_empty() {
         writeln!(out, "thermal state: cold start (machine at ambient)")?;
     } else {
-        writeln!(out, "thermal state: after warm-up {} ({:.1} h)", warmup_names.join(", "), summary.time_span_s[0] / 3600.0)?;
+        writeln!(
+            out,
+            "thermal state: after warm-up {} ({:.1} h)",
+            warmup_names.join(", "),
+            summary.time_span_s[0] / 3600.0
+        )?;
     }
     if let Some(temps) = log.sensor_degc.first() {
-        let list: Vec<String> = log.sensor_names.iter().zip(temps).map(|(n, t)| format!("{n} {t:.2}")).collect();
+        let list: Vec<String> = log
+            .sensor_names
+            .iter()
+            .zip(temps)
+            .map(|(n, t)| format!("{n} {t:.2}"))
+            .collect();
         writeln!(out, "sensors at the first point (°C): {}", list.join(", "))?;
     }
     writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")?;
@@ -177,7 +257,10 @@ fn run(args: RunArgs) -> Result<()> {
 fn calibrate(args: CalibrateArgs) -> Result<()> {
     let machine = load_machine(args.machine.as_deref())?;
     if !(args.measure_every_min > 0.0 && args.measure_every_min.is_finite()) {
-        anyhow::bail!("--measure-every-min must be > 0, got {}", args.measure_every_min);
+        anyhow::bail!(
+            "--measure-every-min must be > 0, got {}",
+            args.measure_every_min
+        );
     }
     report::check_writable(&args.out, args.force)?;
     let cycles = campaign::ThermalCycle::calibration_set();
@@ -195,5 +278,115 @@ fn calibrate(args: CalibrateArgs) -> Result<()> {
         data.sensor_names.len(),
         args.out.display()
     );
+    Ok(())
+}
+
+fn run_campaign(args: CampaignArgs) -> Result<()> {
+    let machine = load_machine(args.machine.as_deref())?;
+    if args.seeds.is_empty() {
+        anyhow::bail!("--seeds needs at least one seed");
+    }
+    let out_files = match &args.out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("{}: cannot create output folder", dir.display()))?;
+            let mut files = vec![dir.join("report.json")];
+            for s in &args.seeds {
+                for k in ["hybrid", "volumetric", "linear"] {
+                    files.push(dir.join(format!("model_{k}_seed{s}.json")));
+                }
+            }
+            for f in &files {
+                report::check_writable(f, args.force)?;
+            }
+            Some(dir.clone())
+        }
+        None => None,
+    };
+    let settings = vmc_twin::predict::predictor::Settings::default();
+    let (rep, models) = evaluation::run_campaign(&machine, &args.seeds, &settings)?;
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    evaluation::write_campaign_table(&rep, &mut out)?;
+    if let Some(dir) = out_files {
+        let path = dir.join("report.json");
+        report::write_atomic(
+            &path,
+            serde_json::to_string_pretty(&rep)?.as_bytes(),
+            args.force,
+        )?;
+        for m in &models {
+            for (k, text) in [
+                ("hybrid", m.hybrid.to_json_string()?),
+                ("volumetric", m.volumetric.to_json_string()?),
+                ("linear", m.linear.to_json_string()?),
+            ] {
+                report::write_atomic(
+                    &dir.join(format!("model_{k}_seed{}.json", m.seed)),
+                    text.as_bytes(),
+                    args.force,
+                )?;
+            }
+        }
+        writeln!(out, "wrote {} and the trained models", path.display())?;
+    }
+    Ok(())
+}
+
+fn train(args: TrainArgs) -> Result<()> {
+    use vmc_twin::predict::dataset::Dataset;
+    use vmc_twin::predict::predictor::{self, Settings};
+    let machine = load_machine(args.machine.as_deref())?;
+    report::check_writable(&args.out, args.force)?;
+    let name = args.data.display().to_string();
+    let text = std::fs::read_to_string(&args.data)
+        .with_context(|| format!("{name}: cannot read dataset"))?;
+    let data = Dataset::from_csv(&text, &name)?;
+    let settings = Settings {
+        seed: args.seed,
+        ..Settings::default()
+    };
+    let geometry = machine.geometry();
+    let (json, summary) = match args.kind.as_str() {
+        "hybrid" => {
+            let (m, s) = predictor::train_hybrid(&data, &geometry, &settings)?;
+            (m.to_json_string()?, s)
+        }
+        "volumetric" => {
+            let (m, s) = predictor::train_volumetric(&data, &geometry, &settings)?;
+            (m.to_json_string()?, s)
+        }
+        "linear" => {
+            let (m, s) = predictor::train_linear(&data, &geometry, &settings)?;
+            (m.to_json_string()?, s)
+        }
+        other => anyhow::bail!("--kind must be hybrid, volumetric or linear, got \"{other}\""),
+    };
+    report::write_atomic(&args.out, json.as_bytes(), args.force)?;
+    println!(
+        "trained {} model on {name} ({} records, sensors {}):",
+        args.kind,
+        data.records.len(),
+        summary.sensors.join(", ")
+    );
+    for n in &summary.nets {
+        let val: Vec<String> = n
+            .outputs
+            .iter()
+            .zip(&n.val_rmse)
+            .map(|(o, v)| format!("{o} {v:.3}"))
+            .collect();
+        println!(
+            "  {:<11} hidden {:>4}  train {:>5} val {:>5}  validation RMSE: {}",
+            n.name,
+            n.hidden_units
+                .map(|h| h.to_string())
+                .unwrap_or_else(|| "-".into()),
+            n.n_train,
+            n.n_val,
+            val.join(", ")
+        );
+    }
+    println!("wrote {}", args.out.display());
     Ok(())
 }

@@ -40,22 +40,45 @@ pub enum ProgramError {
 }
 
 /// Reads, interprets, plans and travel-checks a program file, starting at `start_mm`.
-pub fn load_plan(path: &Path, machine: &MachineSpec, start_mm: [f64; 3]) -> Result<Plan, ProgramError> {
+pub fn load_plan(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|err| ProgramError::Io { file: file.clone(), err })?;
+    let text = std::fs::read_to_string(path).map_err(|err| ProgramError::Io {
+        file: file.clone(),
+        err,
+    })?;
     plan_source(&text, &file, machine, start_mm)
 }
 
 /// Interprets, plans and travel-checks program text; `file` names it in errors.
-pub fn plan_source(text: &str, file: &str, machine: &MachineSpec, start_mm: [f64; 3]) -> Result<Plan, ProgramError> {
+pub fn plan_source(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
     let cfg = InterpConfig {
         start_mm,
         work_offsets_mm: machine.axes.work_offsets_mm,
         ..InterpConfig::default()
     };
-    let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode { file: file.to_string(), err })?;
-    let motion_err = |err| ProgramError::Motion { file: file.to_string(), err };
+    let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
+        file: file.to_string(),
+        err,
+    })?;
+    let motion_err = |err| ProgramError::Motion {
+        file: file.to_string(),
+        err,
+    };
     let plan = motion::plan(&moves, start_mm, &machine.motion).map_err(motion_err)?;
-    motion::check_travel(&plan, machine.axes.travel_min_mm, machine.axes.travel_max_mm).map_err(motion_err)?;
+    motion::check_travel(
+        &plan,
+        machine.axes.travel_min_mm,
+        machine.axes.travel_max_mm,
+    )
+    .map_err(motion_err)?;
     Ok(plan)
 }

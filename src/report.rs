@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::sim::{Observer, PointRecord};
 use crate::sensors::SensorReadings;
+use crate::sim::{Observer, PointRecord};
 
 /// Statistics of an error series, µm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -92,10 +92,20 @@ pub struct RunSummary {
 
 impl RunLog {
     /// Summarises the run. None if it has no points.
-    pub fn summary(&self, program: &str, machine: &str, seed: u64, warmup: &[String]) -> Option<RunSummary> {
+    pub fn summary(
+        &self,
+        program: &str,
+        machine: &str,
+        seed: u64,
+        warmup: &[String],
+    ) -> Option<RunSummary> {
         let before: Vec<[f64; 3]> = self.points.iter().map(|p| p.error_before_um).collect();
         let thermal: Vec<[f64; 3]> = self.points.iter().map(|p| p.thermal_part_um).collect();
-        let after: Vec<[f64; 3]> = self.points.iter().filter_map(|p| p.error_after_um).collect();
+        let after: Vec<[f64; 3]> = self
+            .points
+            .iter()
+            .filter_map(|p| p.error_after_um)
+            .collect();
         let b = error_stats(&before)?;
         let a = error_stats(&after);
         let first = &self.sensor_degc[0];
@@ -105,7 +115,10 @@ impl RunLog {
             seed,
             warmup: warmup.to_vec(),
             points: self.points.len(),
-            time_span_s: [self.points[0].time_s, self.points[self.points.len() - 1].time_s],
+            time_span_s: [
+                self.points[0].time_s,
+                self.points[self.points.len() - 1].time_s,
+            ],
             mean_sensor_temp_degc: first.iter().sum::<f64>() / first.len().max(1) as f64,
             before: b,
             thermal_part: error_stats(&thermal)?,
@@ -120,10 +133,24 @@ impl RunLog {
         write!(
             out,
             "{:>4} {:>9} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
-            "pt", "time_s", "line", "x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um", "|e|_um", "therm_um"
+            "pt",
+            "time_s",
+            "line",
+            "x_mm",
+            "y_mm",
+            "z_mm",
+            "ex_um",
+            "ey_um",
+            "ez_um",
+            "|e|_um",
+            "therm_um"
         )?;
         if comp {
-            write!(out, " | {:>8} {:>8} {:>8} {:>8}", "ex'_um", "ey'_um", "ez'_um", "|e'|_um")?;
+            write!(
+                out,
+                " | {:>8} {:>8} {:>8} {:>8}",
+                "ex'_um", "ey'_um", "ez'_um", "|e'|_um"
+            )?;
         }
         writeln!(out)?;
         for p in &self.points {
@@ -145,7 +172,14 @@ impl RunLog {
                 norm(t),
             )?;
             if let Some(a) = p.error_after_um {
-                write!(out, " | {:>8.2} {:>8.2} {:>8.2} {:>8.2}", a[0], a[1], a[2], norm(a))?;
+                write!(
+                    out,
+                    " | {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+                    a[0],
+                    a[1],
+                    a[2],
+                    norm(a)
+                )?;
             }
             writeln!(out)?;
         }
@@ -221,8 +255,11 @@ pub fn write_summary(s: &RunSummary, out: &mut dyn Write) -> std::io::Result<()>
             st.rms_um[0], st.rms_um[1], st.rms_um[2], st.rms_um[3]
         )
     };
-    writeln!(out, "summary ({} points, t = {:.0} … {:.0} s, mean sensor temperature {:.2} °C):",
-        s.points, s.time_span_s[0], s.time_span_s[1], s.mean_sensor_temp_degc)?;
+    writeln!(
+        out,
+        "summary ({} points, t = {:.0} … {:.0} s, mean sensor temperature {:.2} °C):",
+        s.points, s.time_span_s[0], s.time_span_s[1], s.mean_sensor_temp_degc
+    )?;
     row(out, "error", &s.before)?;
     row(out, "  of which thermal", &s.thermal_part)?;
     if let Some(a) = &s.after {
@@ -267,8 +304,14 @@ pub fn write_atomic(path: &Path, contents: &[u8], force: bool) -> Result<(), Out
         path: path.to_path_buf(),
         err,
     };
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
     let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
@@ -304,7 +347,10 @@ mod tests {
         let f = dir.join("a.txt");
         let _ = std::fs::remove_file(&f);
         write_atomic(&f, b"one", false).unwrap();
-        assert!(matches!(write_atomic(&f, b"two", false), Err(OutputError::Exists(_))));
+        assert!(matches!(
+            write_atomic(&f, b"two", false),
+            Err(OutputError::Exists(_))
+        ));
         assert_eq!(std::fs::read(&f).unwrap(), b"one");
         write_atomic(&f, b"two", true).unwrap();
         assert_eq!(std::fs::read(&f).unwrap(), b"two");

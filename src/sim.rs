@@ -127,10 +127,16 @@ pub fn execute(
     observer: &mut dyn Observer,
 ) -> Result<(), SimError> {
     if !(cfg.thermal_step_s > 0.0 && cfg.thermal_step_s.is_finite()) {
-        return Err(SimError::Config(format!("thermal step must be > 0 s, got {}", cfg.thermal_step_s)));
+        return Err(SimError::Config(format!(
+            "thermal step must be > 0 s, got {}",
+            cfg.thermal_step_s
+        )));
     }
     if !(cfg.interp_cycle_s > 0.0 && cfg.interp_cycle_s.is_finite()) {
-        return Err(SimError::Config(format!("interpolation cycle must be > 0 s, got {}", cfg.interp_cycle_s)));
+        return Err(SimError::Config(format!(
+            "interpolation cycle must be > 0 s, got {}",
+            cfg.interp_cycle_s
+        )));
     }
     let mut clock = Clock {
         plan_t_s: 0.0,
@@ -140,14 +146,26 @@ pub fn execute(
     };
     let mut index = 0;
     for (si, seg) in plan.segments().iter().enumerate() {
-        let moving = matches!(seg.kind, SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc);
+        let moving = matches!(
+            seg.kind,
+            SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc
+        );
         match (seg.kind, cfg.sample_mode) {
             (SegmentKind::Dwell, _) => {
                 let t = seg.t_start_s + 0.5 * seg.duration_s;
                 clock.run_until(twin, plan, t, observer)?;
                 clock.note_direction(twin, plan, si);
                 let p = seg.end_mm;
-                measure(twin, &clock.readings, &mut compensator, observer, index, seg.line, p, true);
+                measure(
+                    twin,
+                    &clock.readings,
+                    &mut compensator,
+                    observer,
+                    index,
+                    seg.line,
+                    p,
+                    true,
+                );
                 index += 1;
             }
             (_, SampleMode::EveryCycle) if moving && seg.duration_s > 0.0 => {
@@ -157,7 +175,16 @@ pub fn execute(
                     clock.run_until(twin, plan, t, observer)?;
                     twin.note_motion(plan.velocity_at(t));
                     let p = plan.position_at(t);
-                    measure(twin, &clock.readings, &mut compensator, observer, index, seg.line, p, false);
+                    measure(
+                        twin,
+                        &clock.readings,
+                        &mut compensator,
+                        observer,
+                        index,
+                        seg.line,
+                        p,
+                        false,
+                    );
                     index += 1;
                 }
             }

@@ -37,8 +37,7 @@ pub enum TwinError {
 
 /// Derives independent sub-seeds from one user seed (SplitMix64 finaliser).
 pub fn sub_seed(seed: u64, stream: u64) -> u64 {
-    let mut z = seed
-        .wrapping_add(0x9E37_79B9_7F4A_7C15_u64.wrapping_mul(stream.wrapping_add(1)));
+    let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15_u64.wrapping_mul(stream.wrapping_add(1)));
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -64,7 +63,11 @@ impl Twin {
     /// Builds the machine realisation `machine_seed` (its error field) with the random noise of
     /// sensors, non-repeatability and reversal drawn from `noise_seed`: the same machine on
     /// another day. Calibration and evaluation use one machine and different noise.
-    pub fn with_noise_seed(spec: &MachineSpec, machine_seed: u64, noise_seed: u64) -> Result<Self, TwinError> {
+    pub fn with_noise_seed(
+        spec: &MachineSpec,
+        machine_seed: u64,
+        noise_seed: u64,
+    ) -> Result<Self, TwinError> {
         let seed = machine_seed;
         let thermal = ThermalNetwork::new(&spec.thermal, spec.thermal.ambient.temp_degc(0.0))?;
         let field = ErrorField::new(
@@ -142,7 +145,12 @@ impl Twin {
 
     /// Truth: tool tip relative to the workpiece minus `p_mm`, with axes at `q_mm` and the given
     /// random positioning parts (mm). Full HTM product.
-    pub fn tool_error_mm(&self, p_mm: [f64; 3], q_mm: [f64; 3], approach_mm: [f64; 3]) -> Vector3<f64> {
+    pub fn tool_error_mm(
+        &self,
+        p_mm: [f64; 3],
+        q_mm: [f64; 3],
+        approach_mm: [f64; 3],
+    ) -> Vector3<f64> {
         let mut e = self.elementary_errors(q_mm);
         for a in 0..3 {
             e.axes[a].lin_mm[a] += approach_mm[a];
@@ -154,7 +162,12 @@ impl Twin {
     /// Truth, for reports: the same error as [`Twin::tool_error_mm`] but with every thermal node
     /// at the error field's reference temperature, i.e. the machine's cold geometry. The
     /// difference between the two is the thermal part of the error.
-    pub fn tool_error_at_ref_temp_mm(&self, p_mm: [f64; 3], q_mm: [f64; 3], approach_mm: [f64; 3]) -> Vector3<f64> {
+    pub fn tool_error_at_ref_temp_mm(
+        &self,
+        p_mm: [f64; 3],
+        q_mm: [f64; 3],
+        approach_mm: [f64; 3],
+    ) -> Vector3<f64> {
         let cold = vec![self.field.ref_temp_degc(); self.thermal.temps_degc().len()];
         let mut e = self.field.elementary(q_mm, &cold);
         for a in 0..3 {

@@ -142,7 +142,8 @@ fn day_of_extreme_inputs_stays_finite_and_physically_bounded() {
         let v = [30_000.0; 3];
         let a = Activity {
             spindle_rpm: 15_000.0,
-            axis_pos_mm: [0, 1, 2].map(|i| TRAVEL_MIN_MM[i] + shuttle_mm(time_s, v[i], TRAVEL_MM[i])),
+            axis_pos_mm: [0, 1, 2]
+                .map(|i| TRAVEL_MIN_MM[i] + shuttle_mm(time_s, v[i], TRAVEL_MM[i])),
             axis_speed_mm_per_min: v,
             coolant: false,
         };

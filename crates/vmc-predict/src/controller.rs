@@ -60,7 +60,10 @@ impl<P: ErrorPredictor> Compensator<P> {
     ///
     /// # Errors
     /// [`PredictError::SensorMismatch`] when names or order differ.
-    pub fn for_machine(predictor: P, machine_sensor_names: &[String]) -> Result<Self, PredictError> {
+    pub fn for_machine(
+        predictor: P,
+        machine_sensor_names: &[String],
+    ) -> Result<Self, PredictError> {
         check_sensor_names(predictor.sensor_names(), machine_sensor_names)?;
         Ok(Self::new(predictor))
     }
@@ -156,7 +159,11 @@ mod tests {
     #[test]
     fn fixed_point_solve_leaves_a_residual_below_a_picometre() {
         let mut c = Compensator::new(analytic());
-        for p in [[0.0, 0.0, 0.0], [300.0, 150.0, -200.0], [560.0, 400.0, -450.0]] {
+        for p in [
+            [0.0, 0.0, 0.0],
+            [300.0, 150.0, -200.0],
+            [560.0, 400.0, -450.0],
+        ] {
             for t in [20.0, 26.0] {
                 let q = c.axis_command_mm(p, &[t]);
                 let e = analytic_e(q, t);
@@ -271,12 +278,13 @@ mod tests {
         let (h, _) = train_hybrid(&ds, &td::geometry(), &quick).unwrap();
         let (l, _) = train_linear(&ds, &td::geometry(), &quick).unwrap();
         let (v, _) = crate::predictor::train_volumetric(&ds, &td::geometry(), &quick).unwrap();
-        for model in [AnyPredictor::Hybrid(h), AnyPredictor::Linear(l), AnyPredictor::Volumetric(v)] {
+        for model in [
+            AnyPredictor::Hybrid(h),
+            AnyPredictor::Linear(l),
+            AnyPredictor::Volumetric(v),
+        ] {
             let mut c = Compensator::new(model);
-            let temps = [
-                td::temps_degc(5.0, 1000.0),
-                td::temps_degc(5.0, 2000.0),
-            ];
+            let temps = [td::temps_degc(5.0, 1000.0), td::temps_degc(5.0, 2000.0)];
             let before = ALLOCATIONS.with(Cell::get);
             for i in 0..1000 {
                 let p = [i as f64 * 0.5, 200.0 - i as f64 * 0.1, -100.0];

@@ -132,8 +132,18 @@ pub enum DatasetError {
 }
 
 const FIXED: [&str; 12] = [
-    "cycle", "time_s", "instrument", "x_mm", "y_mm", "z_mm", "dx_um", "dy_um", "dz_um", "rx_urad",
-    "ry_urad", "rz_urad",
+    "cycle",
+    "time_s",
+    "instrument",
+    "x_mm",
+    "y_mm",
+    "z_mm",
+    "dx_um",
+    "dy_um",
+    "dz_um",
+    "rx_urad",
+    "ry_urad",
+    "rz_urad",
 ];
 
 fn cell(v: f64) -> String {
@@ -147,7 +157,9 @@ fn cell(v: f64) -> String {
 impl Dataset {
     /// Records of one instrument.
     pub fn of(&self, instrument: Instrument) -> impl Iterator<Item = &Record> {
-        self.records.iter().filter(move |r| r.instrument == instrument)
+        self.records
+            .iter()
+            .filter(move |r| r.instrument == instrument)
     }
 
     /// Writes the CSV text (shortest round-trip formatting of f64: reading it back gives the
@@ -182,7 +194,10 @@ impl Dataset {
 
     /// Parses CSV text; `source_name` names the file in errors.
     pub fn from_csv(text: &str, source_name: &str) -> Result<Dataset, DatasetError> {
-        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty());
         let (_, header) = lines.next().ok_or_else(|| DatasetError::Empty {
             source_name: source_name.into(),
             msg: "empty file (no header line)".into(),
@@ -190,10 +205,13 @@ impl Dataset {
         let cols: Vec<&str> = header.split(',').map(|c| c.trim()).collect();
         let mut idx = [0usize; 12];
         for (k, name) in FIXED.iter().enumerate() {
-            idx[k] = cols.iter().position(|c| c == name).ok_or_else(|| DatasetError::MissingColumn {
-                source_name: source_name.into(),
-                column: name.to_string(),
-            })?;
+            idx[k] =
+                cols.iter()
+                    .position(|c| c == name)
+                    .ok_or_else(|| DatasetError::MissingColumn {
+                        source_name: source_name.into(),
+                        column: name.to_string(),
+                    })?;
         }
         let sensor_cols: Vec<(usize, String)> = cols
             .iter()
@@ -217,21 +235,29 @@ impl Dataset {
                 msg,
             };
             if cells.len() != cols.len() {
-                return Err(bad("*", format!("{} cells, the header has {}", cells.len(), cols.len())));
+                return Err(bad(
+                    "*",
+                    format!("{} cells, the header has {}", cells.len(), cols.len()),
+                ));
             }
             let num = |k: usize, required: bool| -> Result<f64, DatasetError> {
                 let c = cells[idx[k]];
                 if c.is_empty() && !required {
                     return Ok(f64::NAN);
                 }
-                let v: f64 = c.parse().map_err(|_| bad(FIXED[k], format!("not a number: \"{c}\"")))?;
+                let v: f64 = c
+                    .parse()
+                    .map_err(|_| bad(FIXED[k], format!("not a number: \"{c}\"")))?;
                 if !v.is_finite() {
                     return Err(bad(FIXED[k], format!("not a finite number: \"{c}\"")));
                 }
                 Ok(v)
             };
             let instrument = Instrument::from_name(cells[idx[2]]).ok_or_else(|| {
-                bad("instrument", format!("unknown instrument \"{}\"", cells[idx[2]]))
+                bad(
+                    "instrument",
+                    format!("unknown instrument \"{}\"", cells[idx[2]]),
+                )
             })?;
             let mut values = [f64::NAN; 6];
             for (k, v) in values.iter_mut().enumerate() {
@@ -244,7 +270,12 @@ impl Dataset {
                     .parse()
                     .ok()
                     .filter(|v: &f64| v.is_finite())
-                    .ok_or_else(|| bad(&format!("{name}_degc"), format!("not a finite temperature: \"{c}\"")))?;
+                    .ok_or_else(|| {
+                        bad(
+                            &format!("{name}_degc"),
+                            format!("not a finite temperature: \"{c}\""),
+                        )
+                    })?;
                 temps.push(v);
             }
             records.push(Record {
@@ -321,13 +352,19 @@ mod tests {
     fn a_nan_temperature_names_line_and_column() {
         let text = sample().to_csv().replace("25.125", "NaN");
         let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
-        assert_eq!(err.to_string(), "d.csv: line 3, column `BXH_degc`: not a finite temperature: \"NaN\"");
+        assert_eq!(
+            err.to_string(),
+            "d.csv: line 3, column `BXH_degc`: not a finite temperature: \"NaN\""
+        );
     }
 
     #[test]
     fn an_unknown_instrument_is_rejected() {
         let text = sample().to_csv().replace("spindle", "ballbar");
         let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
-        assert!(err.to_string().contains("unknown instrument \"ballbar\""), "{err}");
+        assert!(
+            err.to_string().contains("unknown instrument \"ballbar\""),
+            "{err}"
+        );
     }
 }

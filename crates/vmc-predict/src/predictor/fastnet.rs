@@ -157,7 +157,10 @@ mod tests {
             let mut got = [0.0; 4];
             fast.eval(&pos, &mut got);
             for k in 0..4 {
-                assert!((got[k] - want[k]).abs() < 1e-12 * (1.0 + want[k].abs()), "{got:?} {want:?}");
+                assert!(
+                    (got[k] - want[k]).abs() < 1e-12 * (1.0 + want[k].abs()),
+                    "{got:?} {want:?}"
+                );
             }
         }
     }

@@ -195,7 +195,11 @@ pub fn train_hybrid(
     let split = CycleSplit::new(ds, settings)?;
     let mut nets = Vec::new();
     let mut axis_nets = Vec::with_capacity(3);
-    const NEEDED_FOR: [&str; 3] = ["the X-axis network", "the Y-axis network", "the Z-axis network"];
+    const NEEDED_FOR: [&str; 3] = [
+        "the X-axis network",
+        "the Y-axis network",
+        "the Z-axis network",
+    ];
     for k in 0..3 {
         let instrument = Instrument::laser(k);
         let recs = records_of(ds, instrument, NEEDED_FOR[k], settings.min_records)?;
@@ -204,22 +208,37 @@ pub fn train_hybrid(
             let mut row = vec![r.pos_mm[k]];
             sel.push_temps(r, &mut row);
             table.inputs.push(row);
-            table.targets.push(required_values(r, &[0, 1, 2, 3, 4, 5], instrument)?);
+            table
+                .targets
+                .push(required_values(r, &[0, 1, 2, 3, 4, 5], instrument)?);
             table.groups.push(split.id(&r.cycle));
         }
-        let (reg, summary) =
-            fit_mlp(AXIS_NETS[k], &VALUE_COLUMNS, &table, &split, settings, k as u64)?;
+        let (reg, summary) = fit_mlp(
+            AXIS_NETS[k],
+            &VALUE_COLUMNS,
+            &table,
+            &split,
+            settings,
+            k as u64,
+        )?;
         axis_nets.push(reg);
         nets.push(summary);
     }
 
-    let recs = records_of(ds, Instrument::Spindle, "the spindle network", settings.min_records)?;
+    let recs = records_of(
+        ds,
+        Instrument::Spindle,
+        "the spindle network",
+        settings.min_records,
+    )?;
     let mut table = Table::new();
     for r in recs {
         let mut row = Vec::with_capacity(sel.names.len());
         sel.push_temps(r, &mut row);
         table.inputs.push(row);
-        table.targets.push(required_values(r, &[0, 1, 2, 3, 4], Instrument::Spindle)?);
+        table
+            .targets
+            .push(required_values(r, &[0, 1, 2, 3, 4], Instrument::Spindle)?);
         table.groups.push(split.id(&r.cycle));
     }
     let (spindle_net, summary) =
@@ -237,7 +256,9 @@ pub fn train_hybrid(
         let mut row = Vec::with_capacity(sel.names.len());
         sel.push_temps(r, &mut row);
         table.inputs.push(row);
-        table.targets.push(required_values(r, &[3, 4, 5], Instrument::Squareness)?);
+        table
+            .targets
+            .push(required_values(r, &[3, 4, 5], Instrument::Squareness)?);
         table.groups.push(split.id(&r.cycle));
     }
     let (squareness, summary) = fit_linear(
@@ -249,9 +270,12 @@ pub fn train_hybrid(
     )?;
     nets.push(summary);
 
-    let [ax, ay, az]: [Regressor; 3] = axis_nets.try_into().map_err(|_| PredictError::Inconsistent {
-        reason: "expected three axis networks".into(),
-    })?;
+    let [ax, ay, az]: [Regressor; 3] =
+        axis_nets
+            .try_into()
+            .map_err(|_| PredictError::Inconsistent {
+                reason: "expected three axis networks".into(),
+            })?;
     let parts = HybridParts {
         axis_nets: [ax, ay, az],
         spindle_net,
@@ -295,7 +319,10 @@ mod tests {
         // True E is several µm RMS; the prediction must be within 0.5 µm RMS (instrument noise
         // is 0.1–0.2 µm) and remove ≥ 90 % of it.
         assert!(truth > 5.0, "truth RMS {truth} µm");
-        assert!(err < 0.5, "prediction RMS error {err} µm vs truth {truth} µm\n{summary:#?}");
+        assert!(
+            err < 0.5,
+            "prediction RMS error {err} µm vs truth {truth} µm\n{summary:#?}"
+        );
         assert!(err < 0.1 * truth);
         assert_eq!(summary.val_cycles, vec!["cycle3".to_string()]);
         assert_eq!(summary.nets.len(), 5);
@@ -312,8 +339,14 @@ mod tests {
         let (good, _) = held_out_rms(&mut p, |t| t.to_vec());
         let (zeroed, _) = held_out_rms(&mut p, |t| vec![20.0; t.len()]);
         let (shuffled, _) = held_out_rms(&mut p, |t| vec![t[2], t[0], t[3], t[1]]);
-        assert!(zeroed > 5.0 * good, "good {good} µm, ambient-only {zeroed} µm");
-        assert!(shuffled > 5.0 * good, "good {good} µm, shuffled {shuffled} µm");
+        assert!(
+            zeroed > 5.0 * good,
+            "good {good} µm, ambient-only {zeroed} µm"
+        );
+        assert!(
+            shuffled > 5.0 * good,
+            "good {good} µm, shuffled {shuffled} µm"
+        );
     }
 
     #[test]
@@ -324,9 +357,18 @@ mod tests {
         let sp = td::spindle(&temps);
         let sq = td::squareness(&temps);
         // δz_b is tens of µm here; 0.5 µm and 0.5 µrad tolerances (noise 0.2).
-        assert!((e.spindle.lin_mm[2] * 1e3 - sp[2]).abs() < 0.5, "{e:?} {sp:?}");
-        assert!((e.squareness.xy_rad * 1e6 - sq[2]).abs() < 0.5, "{e:?} {sq:?}");
-        assert!((e.squareness.yz_rad * 1e6 - sq[0]).abs() < 0.5, "{e:?} {sq:?}");
+        assert!(
+            (e.spindle.lin_mm[2] * 1e3 - sp[2]).abs() < 0.5,
+            "{e:?} {sp:?}"
+        );
+        assert!(
+            (e.squareness.xy_rad * 1e6 - sq[2]).abs() < 0.5,
+            "{e:?} {sq:?}"
+        );
+        assert!(
+            (e.squareness.yz_rad * 1e6 - sq[0]).abs() < 0.5,
+            "{e:?} {sq:?}"
+        );
     }
 
     #[test]
@@ -390,7 +432,11 @@ mod tests {
     #[test]
     fn an_empty_laser_cell_is_reported_with_its_record() {
         let mut ds = td::dataset(&[4.0, 7.0], 1);
-        if let Some(r) = ds.records.iter_mut().find(|r| r.instrument == Instrument::LaserZ) {
+        if let Some(r) = ds
+            .records
+            .iter_mut()
+            .find(|r| r.instrument == Instrument::LaserZ)
+        {
             r.values[4] = f64::NAN;
         }
         let err = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap_err();

@@ -112,7 +112,9 @@ pub enum PredictError {
         found: Vec<String>,
     },
     /// A record lacks a value the model needs (empty cell).
-    #[error("`{instrument}` record of cycle \"{cycle}\" at t = {time_s} s has no `{column}` value")]
+    #[error(
+        "`{instrument}` record of cycle \"{cycle}\" at t = {time_s} s has no `{column}` value"
+    )]
     MissingValue {
         /// Instrument name.
         instrument: &'static str,
