@@ -215,6 +215,8 @@ pub struct CampaignConfig {
     pub step_s: f64,
     /// Volumetric grid: points per axis (default 3 → 27 points).
     pub grid_points_per_axis: usize,
+    /// Interval of the continuously logging 5-probe spindle test, s (default 300).
+    pub spindle_every_s: f64,
 }
 
 impl CampaignConfig {
@@ -225,6 +227,7 @@ impl CampaignConfig {
             measure_every_s: 1800.0,
             step_s: 1.0,
             grid_points_per_axis: 3,
+            spindle_every_s: 300.0,
         }
     }
 }
@@ -266,7 +269,6 @@ fn measurement_block(
     for axis in 0..3 {
         inst.laser_sweep(twin, axis, park, cycle, t0_s, out)?;
     }
-    inst.spindle_test(twin, park, cycle, t0_s, out)?;
     inst.squareness(twin, park, cycle, t0_s, out)?;
     inst.volumetric(twin, grid, cycle, t0_s, out)
 }
@@ -299,7 +301,14 @@ pub fn calibrate(
             if t >= end - 1e-9 {
                 break;
             }
-            drive(&mut twin, cycle, t0, next_block.min(end), cfg.step_s)?;
+            // Drive the duty to the next block, logging the spindle probes on the way.
+            let target = next_block.min(end);
+            while twin.time_s() - t0 < target - 1e-9 {
+                let t = twin.time_s() - t0;
+                let next_probe = ((t / cfg.spindle_every_s).floor() + 1.0) * cfg.spindle_every_s;
+                drive(&mut twin, cycle, t0, next_probe.min(target), cfg.step_s)?;
+                inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
+            }
         }
     }
     Ok(Dataset {

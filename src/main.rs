@@ -127,6 +127,12 @@ struct RunArgs {
     /// Thermal integration and sensor sampling step, s.
     #[arg(long, default_value_t = 1.0)]
     thermal_step_s: f64,
+    /// Trained model (JSON, from `train` or `campaign --out`) for compensation.
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Put the model in the control loop: each point is reported before and after compensation.
+    #[arg(long, requires = "model")]
+    compensate: bool,
 }
 
 fn main() -> ExitCode {
@@ -185,6 +191,18 @@ fn run(args: RunArgs) -> Result<()> {
         None => None,
     };
 
+    let mut controller = match (&args.model, args.compensate) {
+        (Some(path), true) => {
+            use vmc_twin::predict::controller::Compensator;
+            use vmc_twin::predict::predictor::AnyPredictor;
+            let model = AnyPredictor::load_json(path).with_context(|| format!("{}", path.display()))?;
+            let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
+            let ctrl = Compensator::for_machine(model, &names).with_context(|| format!("{}: model does not fit machine {}", path.display(), machine.machine.name))?;
+            Some(evaluation::LoopController(ctrl))
+        }
+        (Some(path), false) => anyhow::bail!("{}: a model was given without --compensate; add --compensate to put it in the loop", path.display()),
+        _ => None,
+    };
     let mut twin = Twin::new(&machine, args.seed)?;
     let cfg = SimConfig {
         thermal_step_s: args.thermal_step_s,
@@ -204,7 +222,13 @@ fn run(args: RunArgs) -> Result<()> {
         sim::execute(&mut twin, p, &warm_cfg, None, &mut sim::NullObserver)?;
     }
     let mut log = RunLog::default();
-    sim::execute(&mut twin, &plan, &cfg, None, &mut log)?;
+    sim::execute(
+        &mut twin,
+        &plan,
+        &cfg,
+        controller.as_mut().map(|c| c as &mut dyn sim::Controller),
+        &mut log,
+    )?;
 
     let warmup_names: Vec<String> = args
         .warmup
