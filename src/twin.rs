@@ -161,6 +161,15 @@ impl Twin {
         self.thermal.temps_degc()
     }
 
+    /// Truth side, for tests and what-if studies: overwrites every thermal node temperature, °C
+    /// (one value per node, in [`Twin::node_names`] order). Time does not move; the sensors keep
+    /// their readings and follow the new temperatures with their own time constants at the next
+    /// [`Twin::advance`].
+    pub fn set_node_temps_degc(&mut self, temps_degc: &[f64]) -> Result<(), TwinError> {
+        self.thermal.set_temps_degc(temps_degc)?;
+        Ok(())
+    }
+
     /// Truth, for tests and instruments: node names.
     pub fn node_names(&self) -> &[String] {
         self.thermal.node_names()
