@@ -313,3 +313,282 @@ impl MachineSpec {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::errors::spec::ValueUnit;
+    use crate::errors::{MOTION_NAMES, SPINDLE_NAMES, SQUARENESS_NAMES};
+
+    const REF_PATH: &str = "machines/vmc-reference.toml";
+
+    fn reference() -> MachineSpec {
+        MachineSpec::from_toml_str(REFERENCE_TOML, REF_PATH)
+            .expect("the reference machine is valid")
+    }
+
+    /// The reference text with the first `from` after `section` replaced by `to`.
+    fn reference_text_with(section: &str, from: &str, to: &str) -> String {
+        let start = REFERENCE_TOML.find(section).expect("section present");
+        let at = start
+            + REFERENCE_TOML[start..]
+                .find(from)
+                .expect("text present in section");
+        format!(
+            "{}{}{}",
+            &REFERENCE_TOML[..at],
+            to,
+            &REFERENCE_TOML[at + from.len()..]
+        )
+    }
+
+    /// Validates `spec` and returns the invalid field's path and the whole message.
+    fn invalid_field(spec: &MachineSpec) -> (String, String) {
+        match spec.validate("m.toml") {
+            Err(e @ MachineError::Invalid { .. }) => {
+                let msg = e.to_string();
+                let MachineError::Invalid { field, path, .. } = e else {
+                    unreachable!()
+                };
+                assert_eq!(path, "m.toml", "the message names the file");
+                assert!(msg.starts_with("m.toml: "), "{msg}");
+                assert!(!msg.contains('\n'), "one line: {msg}");
+                (field, msg)
+            }
+            other => panic!("expected an invalid field, got {other:?}"),
+        }
+    }
+
+    fn text_error(text: &str) -> String {
+        match MachineSpec::from_toml_str(text, "m.toml") {
+            Ok(_) => panic!("expected a rejected machine file"),
+            Err(e) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.starts_with("m.toml: ") && !msg.contains('\n'),
+                    "one line naming the file: {msg}"
+                );
+                msg
+            }
+        }
+    }
+
+    #[test]
+    fn the_embedded_reference_machine_loads_and_validates() {
+        let spec = reference();
+        spec.validate(REF_PATH).unwrap();
+        assert_eq!(MachineSpec::reference(), spec);
+        assert_eq!(spec.machine.chain, "w X Y b Z t");
+        assert_eq!(spec.axes.travel_min_mm, [0.0, 0.0, -450.0]);
+        assert_eq!(spec.axes.travel_max_mm, [560.0, 400.0, 0.0]);
+        let g = spec.geometry();
+        assert_eq!(g.tool_offset_mm, [0.0, 0.0, -150.0]);
+    }
+
+    #[test]
+    fn the_reference_machine_has_the_18_motion_3_squareness_and_5_spindle_errors_in_their_units() {
+        let e = &reference().errors;
+        assert_eq!(
+            (e.motion.len(), e.squareness.len(), e.spindle.len()),
+            (18, 3, 5)
+        );
+        for names in MOTION_NAMES {
+            for (c, name) in names.iter().enumerate() {
+                let p = e
+                    .motion
+                    .get(*name)
+                    .unwrap_or_else(|| panic!("{name} missing"));
+                let want = if c < 3 {
+                    ValueUnit::Um
+                } else {
+                    ValueUnit::Urad
+                };
+                assert_eq!(p.unit, want, "{name}");
+            }
+        }
+        for name in SQUARENESS_NAMES {
+            assert_eq!(e.squareness[name].unit, ValueUnit::Urad, "{name}");
+        }
+        for (i, name) in SPINDLE_NAMES.iter().enumerate() {
+            let want = if i < 3 {
+                ValueUnit::Um
+            } else {
+                ValueUnit::Urad
+            };
+            assert_eq!(e.spindle[*name].unit, want, "{name}");
+        }
+        // ISO 230-1 names as the study writes them.
+        let all: Vec<&str> = e
+            .motion
+            .keys()
+            .chain(e.squareness.keys())
+            .chain(e.spindle.keys())
+            .map(|s| s.as_str())
+            .collect();
+        for n in ["EXX", "ECZ", "EC0Y", "EB0Z", "EA0Z", "EZS", "EBS"] {
+            assert!(all.contains(&n), "{n} in {all:?}");
+        }
+    }
+
+    #[test]
+    fn the_reference_sensors_are_the_studys_eleven_plus_ambient() {
+        let spec = reference();
+        let names: Vec<&str> = spec.sensors.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["BXH", "BYH", "BXB", "BYB", "XD", "XG", "YAv", "YAr", "ZH", "ZB", "ZT", "Amb"]
+        );
+        let node_of = |n: &str| {
+            spec.sensors
+                .iter()
+                .find(|s| s.name == n)
+                .unwrap()
+                .node
+                .clone()
+        };
+        assert_eq!(node_of("Amb"), crate::thermal::AMBIENT_NODE);
+        // Every other sensor sits on a real node, and no two on the same one.
+        let mut nodes: Vec<String> = names[..11].iter().map(|n| node_of(n)).collect();
+        for n in &nodes {
+            assert!(
+                spec.thermal.nodes.iter().any(|m| &m.name == n),
+                "{n} is a node"
+            );
+        }
+        nodes.sort();
+        nodes.dedup();
+        assert_eq!(nodes.len(), 11, "distinct locations");
+        for s in &spec.sensors {
+            // The study's thermistors: 0.0625 °C resolution, −20…120 °C.
+            assert_eq!(s.resolution_degc, 0.0625, "{}", s.name);
+            assert_eq!(s.range_degc, [-20.0, 120.0], "{}", s.name);
+        }
+    }
+
+    #[test]
+    fn a_negative_or_zero_travel_names_the_max_field_of_that_axis() {
+        let mut spec = reference();
+        spec.axes.travel_max_mm[0] = -10.0;
+        let (field, msg) = invalid_field(&spec);
+        assert_eq!(field, "axes.travel_max_mm[0]");
+        assert!(msg.contains("X travel must be positive"), "{msg}");
+
+        let mut spec = reference();
+        spec.axes.travel_min_mm[1] = 400.0; // zero travel on Y
+        assert_eq!(invalid_field(&spec).0, "axes.travel_max_mm[1]");
+
+        // Through the text path as well: the message carries the file and the field.
+        let text =
+            reference_text_with("[axes]", "travel_max_mm = [560.0", "travel_max_mm = [-10.0");
+        let msg = text_error(&text);
+        assert!(msg.contains("field `axes.travel_max_mm[0]`"), "{msg}");
+    }
+
+    #[test]
+    fn a_home_outside_the_travel_or_a_non_finite_travel_is_named() {
+        let mut spec = reference();
+        spec.axes.home_mm[2] = 10.0;
+        assert_eq!(invalid_field(&spec).0, "axes.home_mm[2]");
+        let mut spec = reference();
+        spec.axes.travel_min_mm[1] = f64::NAN;
+        assert_eq!(invalid_field(&spec).0, "axes.travel_min_mm[1]");
+    }
+
+    #[test]
+    fn a_misspelt_field_is_named_with_its_line() {
+        let text = reference_text_with("[instruments]", "laser_point_s", "laser_pont_s");
+        let msg = text_error(&text);
+        assert!(msg.contains("unknown field `laser_pont_s`"), "{msg}");
+        let line = 1 + REFERENCE_TOML[..REFERENCE_TOML.find("laser_point_s").unwrap()]
+            .matches('\n')
+            .count();
+        assert!(
+            msg.contains(&format!("line {line}")),
+            "names line {line}: {msg}"
+        );
+        let text = reference_text_with("[errors.motion.EXX]", "random_sigma", "random_sigmaa");
+        let msg = text_error(&text);
+        assert!(msg.contains("random_sigmaa"), "{msg}");
+    }
+
+    #[test]
+    fn bad_values_in_the_error_field_are_named_by_their_dotted_path() {
+        let mut spec = reference();
+        spec.errors.motion.get_mut("EBX").unwrap().unit = ValueUnit::Um;
+        let (field, msg) = invalid_field(&spec);
+        assert_eq!(field, "errors.motion.EBX.unit");
+        assert!(msg.contains("\"urad\""), "{msg}");
+
+        let text = reference_text_with("[errors.motion.EBX]", "unit = \"urad\"", "unit = \"um\"");
+        assert!(text_error(&text).contains("field `errors.motion.EBX.unit`"));
+
+        let mut spec = reference();
+        spec.errors.motion.get_mut("EBX").unwrap().poly[1] = f64::NAN;
+        assert_eq!(invalid_field(&spec).0, "errors.motion.EBX.poly[1]");
+
+        let mut spec = reference();
+        spec.errors.motion.get_mut("EYY").unwrap().random_sigma = -1.0;
+        assert_eq!(invalid_field(&spec).0, "errors.motion.EYY.random_sigma");
+
+        let mut spec = reference();
+        spec.errors.motion.remove("EAZ");
+        let (field, msg) = invalid_field(&spec);
+        assert_eq!(field, "errors.motion.EAZ");
+        assert!(msg.contains("missing"), "{msg}");
+
+        let mut spec = reference();
+        let p = spec.errors.motion["EXX"].clone();
+        spec.errors.motion.insert("EQX".into(), p);
+        assert_eq!(invalid_field(&spec).0, "errors.motion.EQX");
+
+        let mut spec = reference();
+        spec.errors.squareness.get_mut("EA0Z").unwrap().unit = ValueUnit::Um;
+        assert_eq!(invalid_field(&spec).0, "errors.squareness.EA0Z.unit");
+
+        let mut spec = reference();
+        spec.errors.random[1].repeatability_sigma_um = -0.1;
+        assert_eq!(
+            invalid_field(&spec).0,
+            "errors.random[1].repeatability_sigma_um"
+        );
+
+        let mut spec = reference();
+        spec.errors.motion.get_mut("EXX").unwrap().thermal[0].nodes[2] = "x_screw_9".into();
+        let (field, msg) = invalid_field(&spec);
+        assert_eq!(field, "errors.motion.EXX.thermal[0].nodes[2]");
+        assert!(msg.contains("x_screw_9"), "{msg}");
+    }
+
+    #[test]
+    fn bad_values_in_other_sections_are_named() {
+        let mut spec = reference();
+        spec.machine.chain = "w X Q b Z t".into();
+        assert_eq!(invalid_field(&spec).0, "machine.chain");
+
+        let mut spec = reference();
+        spec.tool.diameter_mm = 0.0;
+        assert_eq!(invalid_field(&spec).0, "tool.diameter_mm");
+
+        let mut spec = reference();
+        spec.instruments.laser_step_mm[2] = 500.0; // Z travel is 450 mm
+        assert_eq!(invalid_field(&spec).0, "instruments.laser_step_mm[2]");
+
+        // Thermal and sensor problems: the section is the field, the message the exact path.
+        let mut spec = reference();
+        spec.thermal.nodes[3].capacity_j_per_k = -1.0;
+        let (field, msg) = invalid_field(&spec);
+        assert_eq!(field, "thermal");
+        assert!(msg.contains("thermal.nodes[3].capacity_j_per_k"), "{msg}");
+
+        let mut spec = reference();
+        spec.sensors[4].noise_sigma_degc = -0.1;
+        let (field, msg) = invalid_field(&spec);
+        assert_eq!(field, "sensors[4]");
+        assert!(msg.contains("noise_sigma_degc"), "{msg}");
+
+        let mut spec = reference();
+        spec.sensors[0].node = "nowhere".into();
+        let (_, msg) = invalid_field(&spec);
+        assert!(msg.contains("nowhere") && msg.contains("BXH"), "{msg}");
+    }
+}
