@@ -124,16 +124,16 @@ fn uniform_screw_warming_gives_linear_expansion_from_the_fixed_end() {
     for n in ["z_screw_0", "z_screw_1", "z_screw_2", "z_screw_3"] {
         temps[node_index(n).unwrap()] = 22.0;
     }
-    // X: 4.5 µm/(K·m) · 1 K · 0.560 m = 2.52 µm at the far end, half of it at mid-travel.
+    // X: 1.5 µm/(K·m) · 1 K · 0.560 m = 0.84 µm at the far end, half of it at mid-travel.
     let at_end = f.axis_errors(0, 560.0, &temps).lin_mm[0];
     let at_mid = f.axis_errors(0, 280.0, &temps).lin_mm[0];
-    assert!((at_end - 2.52e-3).abs() < 1e-9, "{at_end}");
-    assert!((at_mid - 1.26e-3).abs() < 1e-9, "{at_mid}");
+    assert!((at_end - 0.84e-3).abs() < 1e-9, "{at_end}");
+    assert!((at_mid - 0.42e-3).abs() < 1e-9, "{at_mid}");
     // Z is fixed at the top (max): at the bottom the nut is 450 mm away:
-    // −5 µm/(K·m) · 2 K · 0.450 m = −4.5 µm; at the top 0.
+    // −1 µm/(K·m) · 2 K · 0.450 m = −0.9 µm; at the top 0.
     let bottom = f.axis_errors(2, -450.0, &temps).lin_mm[2];
     let top = f.axis_errors(2, 0.0, &temps).lin_mm[2];
-    assert!((bottom + 4.5e-3).abs() < 1e-9, "{bottom}");
+    assert!((bottom + 0.9e-3).abs() < 1e-9, "{bottom}");
     assert!(top.abs() < 1e-12, "{top}");
 }
 
@@ -150,9 +150,9 @@ fn only_the_heated_segment_under_the_span_contributes() {
     let mut temps = vec![20.0; NODES.len()];
     temps[node_index("x_screw_4").unwrap()] = 30.0; // the last 112 mm of the screw
     assert_eq!(f.axis_errors(0, 400.0, &temps).lin_mm[0], 0.0);
-    // 4.5e-3 µm/(K·mm) · 10 K · (500 − 448) mm = 2.34 µm.
+    // 1.5e-3 µm/(K·mm) · 10 K · (500 − 448) mm = 0.78 µm.
     let v = f.axis_errors(0, 500.0, &temps).lin_mm[0];
-    assert!((v - 2.34e-3).abs() < 1e-9, "{v}");
+    assert!((v - 0.78e-3).abs() < 1e-9, "{v}");
 }
 
 #[test]
