@@ -294,6 +294,7 @@ pub fn calibrate(
         loop {
             let t = twin.time_s() - t0;
             if t >= next_block - 1e-9 {
+                inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
                 measurement_block(&mut twin, &mut inst, &grid, &cycle.name, t0, &mut records)?;
                 next_block += cfg.measure_every_s;
                 continue;
