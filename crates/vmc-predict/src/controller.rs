@@ -60,7 +60,10 @@ impl<P: ErrorPredictor> Compensator<P> {
     ///
     /// # Errors
     /// [`PredictError::SensorMismatch`] when names or order differ.
-    pub fn for_machine(predictor: P, machine_sensor_names: &[String]) -> Result<Self, PredictError> {
+    pub fn for_machine(
+        predictor: P,
+        machine_sensor_names: &[String],
+    ) -> Result<Self, PredictError> {
         check_sensor_names(predictor.sensor_names(), machine_sensor_names)?;
         Ok(Self::new(predictor))
     }
@@ -156,7 +159,11 @@ mod tests {
     #[test]
     fn fixed_point_solve_leaves_a_residual_below_a_picometre() {
         let mut c = Compensator::new(analytic());
-        for p in [[0.0, 0.0, 0.0], [300.0, 150.0, -200.0], [560.0, 400.0, -450.0]] {
+        for p in [
+            [0.0, 0.0, 0.0],
+            [300.0, 150.0, -200.0],
+            [560.0, 400.0, -450.0],
+        ] {
             for t in [20.0, 26.0] {
                 let q = c.axis_command_mm(p, &[t]);
                 let e = analytic_e(q, t);
@@ -271,12 +278,13 @@ mod tests {
         let (h, _) = train_hybrid(&ds, &td::geometry(), &quick).unwrap();
         let (l, _) = train_linear(&ds, &td::geometry(), &quick).unwrap();
         let (v, _) = crate::predictor::train_volumetric(&ds, &td::geometry(), &quick).unwrap();
-        for model in [AnyPredictor::Hybrid(h), AnyPredictor::Linear(l), AnyPredictor::Volumetric(v)] {
+        for model in [
+            AnyPredictor::Hybrid(h),
+            AnyPredictor::Linear(l),
+            AnyPredictor::Volumetric(v),
+        ] {
             let mut c = Compensator::new(model);
-            let temps = [
-                td::temps_degc(5.0, 1000.0),
-                td::temps_degc(5.0, 2000.0),
-            ];
+            let temps = [td::temps_degc(5.0, 1000.0), td::temps_degc(5.0, 2000.0)];
             let before = ALLOCATIONS.with(Cell::get);
             for i in 0..1000 {
                 let p = [i as f64 * 0.5, 200.0 - i as f64 * 0.1, -100.0];
@@ -295,11 +303,53 @@ mod tests {
         use crate::predictor::testdata as td;
         let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
         let t0 = std::time::Instant::now();
-        let (h, _) = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap();
+        let (h, summary) = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap();
         println!("hybrid training: {:.2} s", t0.elapsed().as_secs_f64());
-        let mut c = Compensator::new(h);
+        for n in &summary.nets {
+            println!(
+                "  {} h={:?} epochs={:?} {:?} train {:.3?} val {:.3?}",
+                n.name, n.hidden_units, n.epochs, n.stop_reason, n.train_rmse, n.val_rmse
+            );
+        }
+        let t0 = std::time::Instant::now();
+        let (v, vs) =
+            crate::predictor::train_volumetric(&ds, &td::geometry(), &Settings::default()).unwrap();
+        println!(
+            "volumetric training: {:.2} s {:?}",
+            t0.elapsed().as_secs_f64(),
+            vs.nets[0].val_rmse
+        );
+        let t0 = std::time::Instant::now();
+        let (l, _) = train_linear(&ds, &td::geometry(), &Settings::default()).unwrap();
+        println!("linear training: {:.3} s", t0.elapsed().as_secs_f64());
+        for mut m in [
+            AnyPredictor::Hybrid(h.clone()),
+            AnyPredictor::Volumetric(v),
+            AnyPredictor::Linear(l),
+        ] {
+            let pairs: Vec<_> = td::held_out(6.0, 5)
+                .into_iter()
+                .map(|(q, t, e)| (m.predict_error_mm(q, &t), e))
+                .collect();
+            let (err, truth) = td::rms_um(&pairs);
+            println!(
+                "{}: held-out RMS error {err:.3} µm of {truth:.3} µm",
+                m.kind()
+            );
+        }
         let temps = td::temps_degc(5.0, 1000.0);
         let n = 1_000_000;
+        let mut direct = h.clone();
+        let t0 = std::time::Instant::now();
+        for i in 0..n {
+            let q = [(i % 560) as f64, (i % 400) as f64, -((i % 450) as f64)];
+            std::hint::black_box(direct.predict_error_mm(q, &temps));
+        }
+        println!(
+            "hybrid query: {:.0} ns",
+            t0.elapsed().as_secs_f64() / n as f64 * 1e9
+        );
+        let mut c = Compensator::new(h);
         let t0 = std::time::Instant::now();
         let mut evals = 0;
         for i in 0..n {

@@ -4,10 +4,10 @@
 //! so nothing in it can name the twin's error functions, thermal nodes, parameters or seeds. It
 //! sees only what a real controller sees: nominal machine geometry, calibration datasets and
 //! sensor readings.
-pub mod linreg;
+pub mod controller;
 pub mod dataset;
+pub mod linreg;
 pub mod metrics;
 pub mod nn;
-pub mod synthesis;
 pub mod predictor;
-pub mod controller;
+pub mod synthesis;

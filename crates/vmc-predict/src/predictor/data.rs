@@ -81,43 +81,46 @@ impl CycleSplit {
                 names.push(r.cycle.clone());
             }
         }
-        let val: Vec<u64> = if settings.val_cycles.is_empty() {
-            let f = settings.val_fraction;
-            if !(f > 0.0 && f < 1.0) {
-                return Err(PredictError::BadSettings {
-                    field: "val_fraction",
-                    reason: format!("must lie in (0, 1), got {f}"),
-                });
-            }
-            let stride = ((1.0 / f).round() as usize).max(2);
-            let n = names.len();
-            let mut v: Vec<u64> = (0..n)
-                .filter(|i| i % stride == stride - 1)
-                .map(|i| i as u64)
-                .collect();
-            if v.is_empty() && n >= 2 {
-                v.push((n - 1) as u64);
-            }
-            v
-        } else {
-            let mut v = Vec::new();
-            for c in &settings.val_cycles {
-                let id = names.iter().position(|n| n == c).ok_or_else(|| {
-                    PredictError::BadSettings {
+        let val: Vec<u64> =
+            if settings.val_cycles.is_empty() {
+                let f = settings.val_fraction;
+                if !(f > 0.0 && f < 1.0) {
+                    return Err(PredictError::BadSettings {
+                        field: "val_fraction",
+                        reason: format!("must lie in (0, 1), got {f}"),
+                    });
+                }
+                let stride = ((1.0 / f).round() as usize).max(2);
+                let n = names.len();
+                let mut v: Vec<u64> = (0..n)
+                    .filter(|i| i % stride == stride - 1)
+                    .map(|i| i as u64)
+                    .collect();
+                if v.is_empty() && n >= 2 {
+                    v.push((n - 1) as u64);
+                }
+                v
+            } else {
+                let mut v = Vec::new();
+                for c in &settings.val_cycles {
+                    let id = names.iter().position(|n| n == c).ok_or_else(|| {
+                        PredictError::BadSettings {
+                            field: "val_cycles",
+                            reason: format!(
+                                "cycle \"{c}\" is not in the dataset (cycles: {names:?})"
+                            ),
+                        }
+                    })?;
+                    v.push(id as u64);
+                }
+                if v.len() == names.len() {
+                    return Err(PredictError::BadSettings {
                         field: "val_cycles",
-                        reason: format!("cycle \"{c}\" is not in the dataset (cycles: {names:?})"),
-                    }
-                })?;
-                v.push(id as u64);
-            }
-            if v.len() == names.len() {
-                return Err(PredictError::BadSettings {
-                    field: "val_cycles",
-                    reason: "every cycle is held out: nothing is left to train on".into(),
-                });
-            }
-            v
-        };
+                        reason: "every cycle is held out: nothing is left to train on".into(),
+                    });
+                }
+                v
+            };
         Ok(Self { names, val })
     }
 
@@ -128,7 +131,10 @@ impl CycleSplit {
 
     /// Names of the validation cycles.
     pub fn val_names(&self) -> Vec<String> {
-        self.val.iter().map(|&i| self.names[i as usize].clone()).collect()
+        self.val
+            .iter()
+            .map(|&i| self.names[i as usize].clone())
+            .collect()
     }
 }
 

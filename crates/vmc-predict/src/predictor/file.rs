@@ -143,10 +143,16 @@ fn read_header(text: &str) -> Result<ModelKind, PredictError> {
         .ok_or_else(|| not_a_model("the top level is not a JSON object".into()))?;
     match obj.get("format") {
         Some(serde_json::Value::String(f)) if f == FORMAT_NAME => {}
-        Some(f) => return Err(not_a_model(format!("`format` is {f}, expected \"{FORMAT_NAME}\""))),
+        Some(f) => {
+            return Err(not_a_model(format!(
+                "`format` is {f}, expected \"{FORMAT_NAME}\""
+            )))
+        }
         None => return Err(not_a_model("no `format` field".into())),
     }
-    let version = obj.get("version").ok_or_else(|| not_a_model("no `version` field".into()))?;
+    let version = obj
+        .get("version")
+        .ok_or_else(|| not_a_model("no `version` field".into()))?;
     match version.as_u64() {
         Some(FORMAT_VERSION) => {}
         Some(found) => {
@@ -155,9 +161,15 @@ fn read_header(text: &str) -> Result<ModelKind, PredictError> {
                 supported: FORMAT_VERSION,
             })
         }
-        None => return Err(not_a_model(format!("`version` is {version}, expected an integer"))),
+        None => {
+            return Err(not_a_model(format!(
+                "`version` is {version}, expected an integer"
+            )))
+        }
     }
-    let kind = obj.get("kind").ok_or_else(|| not_a_model("no `kind` field".into()))?;
+    let kind = obj
+        .get("kind")
+        .ok_or_else(|| not_a_model("no `kind` field".into()))?;
     kind.as_str().and_then(ModelKind::from_name).ok_or_else(|| {
         not_a_model(format!(
             "unknown model kind {kind} (expected \"hybrid\", \"volumetric\" or \"linear\")"
@@ -191,7 +203,11 @@ fn from_json<B: DeserializeOwned>(
             reason: "the model lists no sensors".into(),
         });
     }
-    Ok((f.sensors.into_iter().map(|s| s.name).collect(), f.geometry, f.model))
+    Ok((
+        f.sensors.into_iter().map(|s| s.name).collect(),
+        f.geometry,
+        f.model,
+    ))
 }
 
 fn read_file(path: &Path) -> Result<String, PredictError> {
@@ -219,7 +235,10 @@ pub(crate) fn check_linear_model(
         && m.n_out() == n_out
         && m.intercept().len() == n_out
         && m.slopes().len() == n_in * n_out
-        && m.intercept().iter().chain(m.slopes()).all(|v| v.is_finite());
+        && m.intercept()
+            .iter()
+            .chain(m.slopes())
+            .all(|v| v.is_finite());
     if ok {
         Ok(())
     } else {
@@ -312,6 +331,9 @@ impl VolumetricPredictor {
 
 /// A predictor of any kind, as loaded from a model file whose kind is not known in advance
 /// (the CLI's `--model FILE`). Dispatch is a `match`, so it stays static and inlinable.
+// The hybrid variant is larger (its split nets inline); there is one predictor per machine and it
+// is rarely moved, so a Box would only add an indirection on the query path.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub enum AnyPredictor {
     /// A hybrid model.
@@ -462,15 +484,22 @@ mod tests {
     fn a_file_round_trip_through_the_file_system_works() {
         let ds = td::dataset(&[4.0, 7.0], 2);
         let (mut p, _) = train_linear(&ds, &td::geometry(), &quick()).unwrap();
-        let path = std::env::temp_dir().join(format!("vmc-predict-model-{}.json", std::process::id()));
+        let path =
+            std::env::temp_dir().join(format!("vmc-predict-model-{}.json", std::process::id()));
         p.save_json(&path).unwrap();
         let mut back = LinearPredictor::load_json(&path).unwrap();
         let _ = std::fs::remove_file(&path);
         let t = td::temps_degc(5.0, 3600.0);
-        assert_eq!(p.predict_error_mm([1.0, 2.0, -3.0], &t), back.predict_error_mm([1.0, 2.0, -3.0], &t));
+        assert_eq!(
+            p.predict_error_mm([1.0, 2.0, -3.0], &t),
+            back.predict_error_mm([1.0, 2.0, -3.0], &t)
+        );
         let missing = Path::new("/nonexistent/dir/model.json");
         let err = LinearPredictor::load_json(missing).unwrap_err();
-        assert!(err.to_string().starts_with("/nonexistent/dir/model.json: "), "{err}");
+        assert!(
+            err.to_string().starts_with("/nonexistent/dir/model.json: "),
+            "{err}"
+        );
     }
 
     #[test]
@@ -478,7 +507,9 @@ mod tests {
         let model = all_kinds().remove(2);
         let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
         assert!(model.check_sensors(&names(&td::SENSORS)).is_ok());
-        let err = model.check_sensors(&names(&["S2", "S1", "S3", "Amb"])).unwrap_err();
+        let err = model
+            .check_sensors(&names(&["S2", "S1", "S3", "Amb"]))
+            .unwrap_err();
         assert_eq!(
             err.to_string(),
             "sensor mismatch: the model expects sensors [\"S1\", \"S2\", \"S3\", \"Amb\"] (in \
@@ -502,12 +533,16 @@ mod tests {
             "not a vmc-twin model file: `format` is \"something-else\", expected \"vmc-twin-model\""
         );
         assert_eq!(
-            HybridPredictor::from_json_str(&text).unwrap_err().to_string(),
+            HybridPredictor::from_json_str(&text)
+                .unwrap_err()
+                .to_string(),
             "model file holds a `linear` model, expected `hybrid`"
         );
         let unknown = text.replacen("\"kind\": \"linear\"", "\"kind\": \"quantum\"", 1);
         assert_eq!(
-            AnyPredictor::from_json_str(&unknown).unwrap_err().to_string(),
+            AnyPredictor::from_json_str(&unknown)
+                .unwrap_err()
+                .to_string(),
             "not a vmc-twin model file: unknown model kind \"quantum\" (expected \"hybrid\", \
              \"volumetric\" or \"linear\")"
         );
@@ -516,7 +551,10 @@ mod tests {
             AnyPredictor::from_json_str(&kelvin).unwrap_err().to_string(),
             "inconsistent model file: sensor `S1` has unit \"K\"; models read temperatures in \"degC\""
         );
-        assert!(AnyPredictor::from_json_str("{ not json").unwrap_err().to_string().starts_with("model file: "));
+        assert!(AnyPredictor::from_json_str("{ not json")
+            .unwrap_err()
+            .to_string()
+            .starts_with("model file: "));
     }
 
     #[test]
@@ -531,6 +569,9 @@ mod tests {
         );
         assert_ne!(cut, text, "the edit must apply");
         let err = AnyPredictor::from_json_str(&cut).unwrap_err().to_string();
-        assert!(err.starts_with("inconsistent model file: network `axis_x` maps 5 → 6 values"), "{err}");
+        assert!(
+            err.starts_with("inconsistent model file: network `axis_x` maps 5 → 6 values"),
+            "{err}"
+        );
     }
 }

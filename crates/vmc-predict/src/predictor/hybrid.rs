@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::dataset::{Dataset, Instrument};
+use crate::dataset::{Dataset, Instrument, Record};
 use crate::linreg::LinearModel;
 use crate::nn::Regressor;
 use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
@@ -193,65 +193,92 @@ pub fn train_hybrid(
 ) -> Result<(HybridPredictor, TrainSummary), PredictError> {
     let sel = SensorSelection::new(ds, settings)?;
     let split = CycleSplit::new(ds, settings)?;
-    let mut nets = Vec::new();
-    let mut axis_nets = Vec::with_capacity(3);
-    const NEEDED_FOR: [&str; 3] = ["the X-axis network", "the Y-axis network", "the Z-axis network"];
-    for k in 0..3 {
+    // Build every table before training anything, so data errors surface at once.
+    const NEEDED_FOR: [&str; 3] = [
+        "the X-axis network",
+        "the Y-axis network",
+        "the Z-axis network",
+    ];
+    let mut axis_tables = Vec::with_capacity(3);
+    for (k, needed_for) in NEEDED_FOR.iter().enumerate() {
         let instrument = Instrument::laser(k);
-        let recs = records_of(ds, instrument, NEEDED_FOR[k], settings.min_records)?;
-        let mut table = Table::new();
-        for r in recs {
-            let mut row = vec![r.pos_mm[k]];
-            sel.push_temps(r, &mut row);
-            table.inputs.push(row);
-            table.targets.push(required_values(r, &[0, 1, 2, 3, 4, 5], instrument)?);
-            table.groups.push(split.id(&r.cycle));
-        }
-        let (reg, summary) =
-            fit_mlp(AXIS_NETS[k], &VALUE_COLUMNS, &table, &split, settings, k as u64)?;
-        axis_nets.push(reg);
-        nets.push(summary);
+        let recs = records_of(ds, instrument, needed_for, settings.min_records)?;
+        axis_tables.push(table_of(
+            &recs,
+            &sel,
+            &split,
+            Some(k),
+            &[0, 1, 2, 3, 4, 5],
+            instrument,
+        )?);
     }
-
-    let recs = records_of(ds, Instrument::Spindle, "the spindle network", settings.min_records)?;
-    let mut table = Table::new();
-    for r in recs {
-        let mut row = Vec::with_capacity(sel.names.len());
-        sel.push_temps(r, &mut row);
-        table.inputs.push(row);
-        table.targets.push(required_values(r, &[0, 1, 2, 3, 4], Instrument::Spindle)?);
-        table.groups.push(split.id(&r.cycle));
-    }
-    let (spindle_net, summary) =
-        fit_mlp("spindle", &VALUE_COLUMNS[..5], &table, &split, settings, 3)?;
-    nets.push(summary);
-
+    let recs = records_of(
+        ds,
+        Instrument::Spindle,
+        "the spindle network",
+        settings.min_records,
+    )?;
+    let spindle_table = table_of(
+        &recs,
+        &sel,
+        &split,
+        None,
+        &[0, 1, 2, 3, 4],
+        Instrument::Spindle,
+    )?;
     let recs = records_of(
         ds,
         Instrument::Squareness,
         "the squareness regression",
         MIN_SQUARENESS_RECORDS,
     )?;
-    let mut table = Table::new();
-    for r in recs {
-        let mut row = Vec::with_capacity(sel.names.len());
-        sel.push_temps(r, &mut row);
-        table.inputs.push(row);
-        table.targets.push(required_values(r, &[3, 4, 5], Instrument::Squareness)?);
-        table.groups.push(split.id(&r.cycle));
+    let sq_table = table_of(
+        &recs,
+        &sel,
+        &split,
+        None,
+        &[3, 4, 5],
+        Instrument::Squareness,
+    )?;
+
+    let mut nets = Vec::new();
+    let mut axis_nets = Vec::with_capacity(3);
+    for (k, table) in axis_tables.iter().enumerate() {
+        let (reg, summary) = fit_mlp(
+            AXIS_NETS[k],
+            &VALUE_COLUMNS,
+            table,
+            &split,
+            settings,
+            k as u64,
+        )?;
+        axis_nets.push(reg);
+        nets.push(summary);
     }
+    let (spindle_net, summary) = fit_mlp(
+        "spindle",
+        &VALUE_COLUMNS[..5],
+        &spindle_table,
+        &split,
+        settings,
+        3,
+    )?;
+    nets.push(summary);
     let (squareness, summary) = fit_linear(
         "squareness",
         &SQUARENESS_OUTPUTS,
-        &table,
+        &sq_table,
         &split,
         settings.squareness_ridge,
     )?;
     nets.push(summary);
 
-    let [ax, ay, az]: [Regressor; 3] = axis_nets.try_into().map_err(|_| PredictError::Inconsistent {
-        reason: "expected three axis networks".into(),
-    })?;
+    let [ax, ay, az]: [Regressor; 3] =
+        axis_nets
+            .try_into()
+            .map_err(|_| PredictError::Inconsistent {
+                reason: "expected three axis networks".into(),
+            })?;
     let parts = HybridParts {
         axis_nets: [ax, ay, az],
         spindle_net,
@@ -267,15 +294,44 @@ pub fn train_hybrid(
     Ok((predictor, summary))
 }
 
+/// Rows `[position along axis `pos_axis` (if any), temperatures…] → values[cols]`.
+fn table_of(
+    recs: &[&Record],
+    sel: &SensorSelection,
+    split: &CycleSplit,
+    pos_axis: Option<usize>,
+    cols: &[usize],
+    instrument: Instrument,
+) -> Result<Table, PredictError> {
+    let mut table = Table::new();
+    for r in recs {
+        let mut row = Vec::with_capacity(sel.names.len() + 1);
+        if let Some(k) = pos_axis {
+            row.push(r.pos_mm[k]);
+        }
+        sel.push_temps(r, &mut row);
+        table.inputs.push(row);
+        table.targets.push(required_values(r, cols, instrument)?);
+        table.groups.push(split.id(&r.cycle));
+    }
+    Ok(table)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::testdata as td;
     use super::*;
-    use crate::dataset::Record;
 
+    /// The default-settings model on four synthetic cycles, trained once for all tests.
     fn trained() -> (HybridPredictor, TrainSummary) {
-        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
-        train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap()
+        static MODEL: std::sync::OnceLock<(HybridPredictor, TrainSummary)> =
+            std::sync::OnceLock::new();
+        MODEL
+            .get_or_init(|| {
+                let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+                train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap()
+            })
+            .clone()
     }
 
     /// RMS of the prediction error and of the true error (µm) on a held-out cycle, with the
@@ -295,7 +351,10 @@ mod tests {
         // True E is several µm RMS; the prediction must be within 0.5 µm RMS (instrument noise
         // is 0.1–0.2 µm) and remove ≥ 90 % of it.
         assert!(truth > 5.0, "truth RMS {truth} µm");
-        assert!(err < 0.5, "prediction RMS error {err} µm vs truth {truth} µm\n{summary:#?}");
+        assert!(
+            err < 0.5,
+            "prediction RMS error {err} µm vs truth {truth} µm\n{summary:#?}"
+        );
         assert!(err < 0.1 * truth);
         assert_eq!(summary.val_cycles, vec!["cycle3".to_string()]);
         assert_eq!(summary.nets.len(), 5);
@@ -312,8 +371,14 @@ mod tests {
         let (good, _) = held_out_rms(&mut p, |t| t.to_vec());
         let (zeroed, _) = held_out_rms(&mut p, |t| vec![20.0; t.len()]);
         let (shuffled, _) = held_out_rms(&mut p, |t| vec![t[2], t[0], t[3], t[1]]);
-        assert!(zeroed > 5.0 * good, "good {good} µm, ambient-only {zeroed} µm");
-        assert!(shuffled > 5.0 * good, "good {good} µm, shuffled {shuffled} µm");
+        assert!(
+            zeroed > 5.0 * good,
+            "good {good} µm, ambient-only {zeroed} µm"
+        );
+        assert!(
+            shuffled > 5.0 * good,
+            "good {good} µm, shuffled {shuffled} µm"
+        );
     }
 
     #[test]
@@ -324,9 +389,18 @@ mod tests {
         let sp = td::spindle(&temps);
         let sq = td::squareness(&temps);
         // δz_b is tens of µm here; 0.5 µm and 0.5 µrad tolerances (noise 0.2).
-        assert!((e.spindle.lin_mm[2] * 1e3 - sp[2]).abs() < 0.5, "{e:?} {sp:?}");
-        assert!((e.squareness.xy_rad * 1e6 - sq[2]).abs() < 0.5, "{e:?} {sq:?}");
-        assert!((e.squareness.yz_rad * 1e6 - sq[0]).abs() < 0.5, "{e:?} {sq:?}");
+        assert!(
+            (e.spindle.lin_mm[2] * 1e3 - sp[2]).abs() < 0.5,
+            "{e:?} {sp:?}"
+        );
+        assert!(
+            (e.squareness.xy_rad * 1e6 - sq[2]).abs() < 0.5,
+            "{e:?} {sq:?}"
+        );
+        assert!(
+            (e.squareness.yz_rad * 1e6 - sq[0]).abs() < 0.5,
+            "{e:?} {sq:?}"
+        );
     }
 
     #[test]
@@ -334,6 +408,7 @@ mod tests {
         let ds = td::dataset(&[4.0, 7.0, 5.5], 3);
         let s = Settings {
             hidden_candidates: vec![6],
+            max_epochs: 20,
             ..Settings::default()
         };
         let (a, _) = train_hybrid(&ds, &td::geometry(), &s).unwrap();
@@ -390,7 +465,11 @@ mod tests {
     #[test]
     fn an_empty_laser_cell_is_reported_with_its_record() {
         let mut ds = td::dataset(&[4.0, 7.0], 1);
-        if let Some(r) = ds.records.iter_mut().find(|r| r.instrument == Instrument::LaserZ) {
+        if let Some(r) = ds
+            .records
+            .iter_mut()
+            .find(|r| r.instrument == Instrument::LaserZ)
+        {
             r.values[4] = f64::NAN;
         }
         let err = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap_err();

@@ -91,7 +91,10 @@ impl LinearPredictor {
         let k = sensors.len();
         check_linear_model("linear", &parts.regression, n_features(k), 3)?;
         let sc = &parts.scaling;
-        let scales_ok = sc.pos_half_range_mm.iter().all(|h| h.is_finite() && *h > 0.0)
+        let scales_ok = sc
+            .pos_half_range_mm
+            .iter()
+            .all(|h| h.is_finite() && *h > 0.0)
             && sc.pos_centre_mm.iter().all(|c| c.is_finite())
             && sc.temp_ref_degc.len() == k
             && sc.temp_ref_degc.iter().all(|t| t.is_finite());
@@ -176,9 +179,14 @@ pub fn train_linear(
         }
         temps.clear();
         sel.push_temps(r, &mut temps);
-        temp_ref_degc.iter_mut().zip(&temps).for_each(|(m, t)| *m += t);
+        temp_ref_degc
+            .iter_mut()
+            .zip(&temps)
+            .for_each(|(m, t)| *m += t);
     }
-    temp_ref_degc.iter_mut().for_each(|m| *m /= recs.len() as f64);
+    temp_ref_degc
+        .iter_mut()
+        .for_each(|m| *m /= recs.len() as f64);
     let scaling = FeatureScaling {
         pos_centre_mm: std::array::from_fn(|i| 0.5 * (lo[i] + hi[i])),
         pos_half_range_mm: std::array::from_fn(|i| {
@@ -198,7 +206,9 @@ pub fn train_linear(
         let mut f = vec![0.0; n_features(k)];
         features_into(&scaling, r.pos_mm, &temps, &mut f);
         table.inputs.push(f);
-        table.targets.push(required_values(r, &[0, 1, 2], Instrument::Volumetric)?);
+        table
+            .targets
+            .push(required_values(r, &[0, 1, 2], Instrument::Volumetric)?);
         table.groups.push(split.id(&r.cycle));
     }
     let (regression, summary) =
@@ -235,7 +245,10 @@ mod tests {
         let (err, truth) = td::rms_um(&pairs);
         // The truth has sin/cos profiles and products of temperatures the features cannot
         // express; a quadratic-in-position model must still remove well over half of it.
-        assert!(err < 0.5 * truth, "{err} µm vs truth {truth} µm\n{summary:#?}");
+        assert!(
+            err < 0.5 * truth,
+            "{err} µm vs truth {truth} µm\n{summary:#?}"
+        );
         assert_eq!(summary.nets[0].hidden_units, None);
     }
 

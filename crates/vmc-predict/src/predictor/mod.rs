@@ -69,6 +69,18 @@ pub trait ErrorPredictor {
     fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3];
 }
 
+/// A mutable borrow predicts like the predictor itself (e.g. `Compensator::new(&mut model)`).
+impl<P: ErrorPredictor + ?Sized> ErrorPredictor for &mut P {
+    fn sensor_names(&self) -> &[String] {
+        (**self).sensor_names()
+    }
+
+    #[inline]
+    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+        (**self).predict_error_mm(q_mm, temps_degc)
+    }
+}
+
 /// Errors of training, loading and checking predictors.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum PredictError {
@@ -112,7 +124,9 @@ pub enum PredictError {
         found: Vec<String>,
     },
     /// A record lacks a value the model needs (empty cell).
-    #[error("`{instrument}` record of cycle \"{cycle}\" at t = {time_s} s has no `{column}` value")]
+    #[error(
+        "`{instrument}` record of cycle \"{cycle}\" at t = {time_s} s has no `{column}` value"
+    )]
     MissingValue {
         /// Instrument name.
         instrument: &'static str,

@@ -57,7 +57,14 @@ pub fn axis_errors(k: usize, s_mm: f64, temps: &[f64]) -> [f64; 6] {
     let dt = [temps[0] - 20.0, temps[1] - 20.0, temps[2] - 20.0];
     let (lo, hi) = TRAVEL_MM[k];
     let s = (s_mm - lo) / (hi - lo);
-    let shapes = [s * s, (PI * s).sin(), s * (1.0 - s), (2.0 * s).cos(), s - 0.5, -s * s];
+    let shapes = [
+        s * s,
+        (PI * s).sin(),
+        s * (1.0 - s),
+        (2.0 * s).cos(),
+        s - 0.5,
+        -s * s,
+    ];
     let mut v = [0.0; 6];
     for j in 0..6 {
         let amp = 2.0 + ((k * 6 + j) % 4) as f64;
@@ -129,7 +136,8 @@ pub fn random_q(rng: &mut StdRng) -> [f64; 3] {
 pub fn dataset(amps_degc: &[f64], seed: u64) -> Dataset {
     let mut rng_state = StdRng::seed_from_u64(seed);
     let rng = &mut rng_state;
-    let noise = |rng: &mut StdRng, sigma: f64| Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng));
+    let noise =
+        |rng: &mut StdRng, sigma: f64| Normal::new(0.0, sigma).map_or(0.0, |n| n.sample(rng));
     let mut records = Vec::new();
     for (c, &amp) in amps_degc.iter().enumerate() {
         let cycle = format!("cycle{c}");

@@ -120,7 +120,9 @@ pub fn train_volumetric(
         let mut row = r.pos_mm.to_vec();
         sel.push_temps(r, &mut row);
         table.inputs.push(row);
-        table.targets.push(required_values(r, &[0, 1, 2], Instrument::Volumetric)?);
+        table
+            .targets
+            .push(required_values(r, &[0, 1, 2], Instrument::Volumetric)?);
         table.groups.push(split.id(&r.cycle));
     }
     let (net, summary) = fit_mlp("volumetric", &E_OUTPUTS, &table, &split, settings, 10)?;
@@ -144,15 +146,20 @@ mod tests {
     #[test]
     fn volumetric_mlp_trains_and_beats_zero_prediction_on_a_held_out_cycle() {
         let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
-        let (mut p, summary) = train_volumetric(&ds, &td::geometry(), &Settings::default()).unwrap();
+        let (mut p, summary) =
+            train_volumetric(&ds, &td::geometry(), &Settings::default()).unwrap();
         let pairs: Vec<_> = td::held_out(6.0, 5)
             .into_iter()
             .map(|(q, t, e)| (p.predict_error_mm(q, &t), e))
             .collect();
         let (err, truth) = td::rms_um(&pairs);
-        // The direct map is the weaker baseline (the study: ~12 % vs ~5 %); it must still
-        // remove most of a several-µm error.
-        assert!(err < 0.5 * truth, "{err} µm vs truth {truth} µm\n{summary:#?}");
+        // On this smooth synthetic truth with dense volumetric records the direct map does
+        // well (the study found it weaker on a real machine: ~12 % vs ~5 %); here it must
+        // at least remove most of a 13 µm RMS error.
+        assert!(
+            err < 0.5 * truth,
+            "{err} µm vs truth {truth} µm\n{summary:#?}"
+        );
         assert_eq!(summary.nets[0].outputs, vec!["ex_um", "ey_um", "ez_um"]);
     }
 }
