@@ -20,9 +20,9 @@
 
 use crate::predictor::{check_sensor_names, ErrorPredictor, PredictError};
 
-/// Convergence tolerance of the fixed-point step, mm [1e-7 mm = 0.1 nm].
+/// Convergence tolerance of the fixed-point step, mm (default: 1e-7 mm = 0.1 nm).
 pub const DEFAULT_TOL_MM: f64 = 1e-7;
-/// Maximum predictor evaluations per solve [5].
+/// Maximum predictor evaluations per solve (default: 5).
 pub const DEFAULT_MAX_ITERATIONS: usize = 5;
 
 /// How the last solve went.
