@@ -20,9 +20,9 @@
 
 use crate::predictor::{check_sensor_names, ErrorPredictor, PredictError};
 
-/// Convergence tolerance of the fixed-point step, mm [1e-7 mm = 0.1 nm].
+/// Convergence tolerance of the fixed-point step, mm (default: 1e-7 mm = 0.1 nm).
 pub const DEFAULT_TOL_MM: f64 = 1e-7;
-/// Maximum predictor evaluations per solve [5].
+/// Maximum predictor evaluations per solve (default: 5).
 pub const DEFAULT_MAX_ITERATIONS: usize = 5;
 
 /// How the last solve went.
@@ -303,11 +303,53 @@ mod tests {
         use crate::predictor::testdata as td;
         let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
         let t0 = std::time::Instant::now();
-        let (h, _) = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap();
+        let (h, summary) = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap();
         println!("hybrid training: {:.2} s", t0.elapsed().as_secs_f64());
-        let mut c = Compensator::new(h);
+        for n in &summary.nets {
+            println!(
+                "  {} h={:?} epochs={:?} {:?} train {:.3?} val {:.3?}",
+                n.name, n.hidden_units, n.epochs, n.stop_reason, n.train_rmse, n.val_rmse
+            );
+        }
+        let t0 = std::time::Instant::now();
+        let (v, vs) =
+            crate::predictor::train_volumetric(&ds, &td::geometry(), &Settings::default()).unwrap();
+        println!(
+            "volumetric training: {:.2} s {:?}",
+            t0.elapsed().as_secs_f64(),
+            vs.nets[0].val_rmse
+        );
+        let t0 = std::time::Instant::now();
+        let (l, _) = train_linear(&ds, &td::geometry(), &Settings::default()).unwrap();
+        println!("linear training: {:.3} s", t0.elapsed().as_secs_f64());
+        for mut m in [
+            AnyPredictor::Hybrid(h.clone()),
+            AnyPredictor::Volumetric(v),
+            AnyPredictor::Linear(l),
+        ] {
+            let pairs: Vec<_> = td::held_out(6.0, 5)
+                .into_iter()
+                .map(|(q, t, e)| (m.predict_error_mm(q, &t), e))
+                .collect();
+            let (err, truth) = td::rms_um(&pairs);
+            println!(
+                "{}: held-out RMS error {err:.3} µm of {truth:.3} µm",
+                m.kind()
+            );
+        }
         let temps = td::temps_degc(5.0, 1000.0);
         let n = 1_000_000;
+        let mut direct = h.clone();
+        let t0 = std::time::Instant::now();
+        for i in 0..n {
+            let q = [(i % 560) as f64, (i % 400) as f64, -((i % 450) as f64)];
+            std::hint::black_box(direct.predict_error_mm(q, &temps));
+        }
+        println!(
+            "hybrid query: {:.0} ns",
+            t0.elapsed().as_secs_f64() / n as f64 * 1e9
+        );
+        let mut c = Compensator::new(h);
         let t0 = std::time::Instant::now();
         let mut evals = 0;
         for i in 0..n {

@@ -165,9 +165,11 @@ impl Table {
             source: crate::nn::NnError::Data(e),
         };
         let all = Samples::from_rows(&self.inputs, &self.targets).map_err(err)?;
-        let (tr, va) = all.split_by_groups(&self.groups, &split.val).map_err(err)?;
-        if !tr.is_empty() && !va.is_empty() {
-            return Ok((tr, va, SplitKind::ByCycle));
+        // `split_by_groups` refuses a split with an empty side; that is the fallback case.
+        if let Ok((tr, va)) = all.split_by_groups(&self.groups, &split.val) {
+            if !tr.is_empty() && !va.is_empty() {
+                return Ok((tr, va, SplitKind::ByCycle));
+            }
         }
         let (tr, va) = all.split_blocks(5, 5).map_err(err)?;
         Ok((tr, va, SplitKind::Blocks))
@@ -342,4 +344,79 @@ pub(crate) fn fit_linear(
         candidates: Vec::new(),
     };
     Ok((lin, summary))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testdata as td;
+    use super::*;
+
+    fn table_for(ds: &Dataset, split: &CycleSplit) -> Table {
+        let mut t = Table::new();
+        for r in ds.of(Instrument::Spindle) {
+            // Input: the cycle id itself, so the split can be checked row by row.
+            t.inputs.push(vec![split.id(&r.cycle) as f64]);
+            t.targets.push(vec![r.time_s]);
+            t.groups.push(split.id(&r.cycle));
+        }
+        t
+    }
+
+    #[test]
+    fn validation_takes_whole_cycles_and_nothing_else() {
+        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0, 6.0, 5.0, 4.5, 3.5], 1);
+        let split = CycleSplit::new(&ds, &Settings::default()).unwrap();
+        // Every 4th cycle in file order: cycle3 and cycle7.
+        assert_eq!(split.val_names(), vec!["cycle3", "cycle7"]);
+        let (tr, va, kind) = table_for(&ds, &split).split(&split, "t").unwrap();
+        assert_eq!(kind, SplitKind::ByCycle);
+        assert_eq!(va.len(), 2 * 13);
+        assert!((0..va.len()).all(|i| [3.0, 7.0].contains(&va.input(i)[0])));
+        assert!((0..tr.len()).all(|i| ![3.0, 7.0].contains(&tr.input(i)[0])));
+    }
+
+    #[test]
+    fn explicit_validation_cycles_are_checked() {
+        let ds = td::dataset(&[4.0, 7.0], 1);
+        let s = Settings {
+            val_cycles: vec!["cycle0".into()],
+            ..Settings::default()
+        };
+        assert_eq!(CycleSplit::new(&ds, &s).unwrap().val, vec![0]);
+        let s = Settings {
+            val_cycles: vec!["warmup".into()],
+            ..Settings::default()
+        };
+        let err = CycleSplit::new(&ds, &s).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "invalid setting `val_cycles`: cycle \"warmup\" is not in the dataset (cycles: \
+             [\"cycle0\", \"cycle1\"])"
+        );
+        let s = Settings {
+            val_cycles: vec!["cycle0".into(), "cycle1".into()],
+            ..Settings::default()
+        };
+        assert!(CycleSplit::new(&ds, &s).is_err());
+    }
+
+    #[test]
+    fn a_single_cycle_falls_back_to_contiguous_blocks() {
+        let ds = td::dataset(&[4.0], 1);
+        let split = CycleSplit::new(&ds, &Settings::default()).unwrap();
+        assert!(split.val.is_empty());
+        let (tr, va, kind) = table_for(&ds, &split).split(&split, "t").unwrap();
+        assert_eq!(kind, SplitKind::Blocks);
+        // The last fifth in time order (13 rounds → rows 11 and 12 at 13 200 s and 14 400 s).
+        let times: Vec<f64> = (0..va.len()).map(|i| va.target(i)[0]).collect();
+        assert_eq!(times, vec![13200.0, 14400.0]);
+        assert_eq!(tr.len(), 11);
+    }
+
+    #[test]
+    fn derived_seeds_differ_per_network_and_are_stable() {
+        assert_ne!(mix_seed(0, 0), mix_seed(0, 1));
+        assert_ne!(mix_seed(0, 1), mix_seed(1, 1));
+        assert_eq!(mix_seed(7, 3), mix_seed(7, 3));
+    }
 }

@@ -5,8 +5,9 @@
 //! sum into position columns `P` and temperature columns `T`:
 //! `a_j = tanh(c_j + Σ_{i∈P} W_ji z_i)` with `c_j = b_j + Σ_{i∈T} W_ji z_i`, and `c` changes only
 //! when the readings change. The output is `y_k = (b2_k + Σ_j V_kj a_j)·std_k + mean_k`.
-//! The result equals [`Regressor::predict_into`] up to the order of floating-point additions
-//! (relative differences ~1e-15).
+//! The result equals [`Regressor::predict_into`] up to the order of floating-point additions and
+//! the tanh evaluation (see `fast_tanh`): differences ~1e-15 relative to the output scale.
+//! Only nets with at most 3 position inputs are supported (axis nets 1, volumetric 3).
 
 use crate::nn::Regressor;
 
@@ -44,7 +45,7 @@ impl SplitNet {
     /// Builds the evaluator for a net whose first `n_pos` inputs are positions.
     pub fn new(reg: &Regressor, n_pos: usize, net: &str) -> Result<Self, PredictError> {
         let sizes = reg.mlp().sizes();
-        if sizes.len() != 3 || sizes[0] < n_pos {
+        if sizes.len() != 3 || sizes[0] < n_pos || n_pos > 3 {
             return Err(PredictError::Inconsistent {
                 reason: format!(
                     "network `{net}` has layer sizes {sizes:?}; expected one hidden layer and \
@@ -107,17 +108,22 @@ impl SplitNet {
         }
     }
 
-    /// Evaluates at positions `pos` (length `n_pos`) with the cached readings; `out.len() == n_out`.
+    /// Evaluates at positions `pos` (length `n_pos`, at most 3) with the cached readings;
+    /// `out.len() == n_out`.
     #[inline]
     pub fn eval(&mut self, pos: &[f64], out: &mut [f64]) {
-        let n_pos = self.n_pos;
+        let n_pos = self.n_pos.min(3);
+        let mut z = [0.0; 3];
+        for i in 0..n_pos {
+            z[i] = (pos[i] - self.pos_mean[i]) / self.pos_std[i];
+        }
         for j in 0..self.n_hidden {
-            let mut s = self.c[j];
-            let row = &self.w_pos[j * n_pos..(j + 1) * n_pos];
-            for i in 0..n_pos {
-                s += row[i] * ((pos[i] - self.pos_mean[i]) / self.pos_std[i]);
-            }
-            self.a[j] = s.tanh();
+            let row = &self.w_pos[j * self.n_pos..(j + 1) * self.n_pos];
+            let s = row
+                .iter()
+                .zip(&z)
+                .fold(self.c[j], |acc, (w, zi)| acc + w * zi);
+            self.a[j] = fast_tanh(s);
         }
         for (k, o) in out.iter_mut().enumerate().take(self.n_out) {
             let row = &self.w2[k * self.n_hidden..(k + 1) * self.n_hidden];
@@ -128,6 +134,15 @@ impl SplitNet {
             *o = y * self.out_std[k] + self.out_mean[k];
         }
     }
+}
+
+/// `tanh(x) = 1 − 2/(e^{2x} + 1)`: one `exp` instead of libm's `tanh`, half the cost
+/// (measured ~11 ns vs ~22 ns here), absolute error ≤ ~3e-16 against `f64::tanh`, exact
+/// limits ±1 for large |x| (`exp` overflows to ∞ or underflows to 0). The absolute error is what
+/// matters: the output layer sums weighted activations.
+#[inline(always)]
+fn fast_tanh(x: f64) -> f64 {
+    1.0 - 2.0 / ((2.0 * x).exp() + 1.0)
 }
 
 #[cfg(test)]
@@ -163,6 +178,17 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn fast_tanh_matches_std_tanh_to_a_few_ulp_of_one() {
+        for i in -4000..=4000 {
+            let x = i as f64 * 0.005;
+            assert!((fast_tanh(x) - x.tanh()).abs() < 1e-15, "{x}");
+        }
+        assert_eq!(fast_tanh(1e3), 1.0);
+        assert_eq!(fast_tanh(-1e3), -1.0);
+        assert!(fast_tanh(f64::NAN).is_nan());
     }
 
     #[test]

@@ -331,6 +331,9 @@ impl VolumetricPredictor {
 
 /// A predictor of any kind, as loaded from a model file whose kind is not known in advance
 /// (the CLI's `--model FILE`). Dispatch is a `match`, so it stays static and inlinable.
+// The hybrid variant is larger (its split nets inline); there is one predictor per machine and it
+// is rarely moved, so a Box would only add an indirection on the query path.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub enum AnyPredictor {
     /// A hybrid model.

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::dataset::{Dataset, Instrument};
+use crate::dataset::{Dataset, Instrument, Record};
 use crate::linreg::LinearModel;
 use crate::nn::Regressor;
 use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
@@ -193,30 +193,61 @@ pub fn train_hybrid(
 ) -> Result<(HybridPredictor, TrainSummary), PredictError> {
     let sel = SensorSelection::new(ds, settings)?;
     let split = CycleSplit::new(ds, settings)?;
-    let mut nets = Vec::new();
-    let mut axis_nets = Vec::with_capacity(3);
+    // Build every table before training anything, so data errors surface at once.
     const NEEDED_FOR: [&str; 3] = [
         "the X-axis network",
         "the Y-axis network",
         "the Z-axis network",
     ];
-    for k in 0..3 {
+    let mut axis_tables = Vec::with_capacity(3);
+    for (k, needed_for) in NEEDED_FOR.iter().enumerate() {
         let instrument = Instrument::laser(k);
-        let recs = records_of(ds, instrument, NEEDED_FOR[k], settings.min_records)?;
-        let mut table = Table::new();
-        for r in recs {
-            let mut row = vec![r.pos_mm[k]];
-            sel.push_temps(r, &mut row);
-            table.inputs.push(row);
-            table
-                .targets
-                .push(required_values(r, &[0, 1, 2, 3, 4, 5], instrument)?);
-            table.groups.push(split.id(&r.cycle));
-        }
+        let recs = records_of(ds, instrument, needed_for, settings.min_records)?;
+        axis_tables.push(table_of(
+            &recs,
+            &sel,
+            &split,
+            Some(k),
+            &[0, 1, 2, 3, 4, 5],
+            instrument,
+        )?);
+    }
+    let recs = records_of(
+        ds,
+        Instrument::Spindle,
+        "the spindle network",
+        settings.min_records,
+    )?;
+    let spindle_table = table_of(
+        &recs,
+        &sel,
+        &split,
+        None,
+        &[0, 1, 2, 3, 4],
+        Instrument::Spindle,
+    )?;
+    let recs = records_of(
+        ds,
+        Instrument::Squareness,
+        "the squareness regression",
+        MIN_SQUARENESS_RECORDS,
+    )?;
+    let sq_table = table_of(
+        &recs,
+        &sel,
+        &split,
+        None,
+        &[3, 4, 5],
+        Instrument::Squareness,
+    )?;
+
+    let mut nets = Vec::new();
+    let mut axis_nets = Vec::with_capacity(3);
+    for (k, table) in axis_tables.iter().enumerate() {
         let (reg, summary) = fit_mlp(
             AXIS_NETS[k],
             &VALUE_COLUMNS,
-            &table,
+            table,
             &split,
             settings,
             k as u64,
@@ -224,47 +255,19 @@ pub fn train_hybrid(
         axis_nets.push(reg);
         nets.push(summary);
     }
-
-    let recs = records_of(
-        ds,
-        Instrument::Spindle,
-        "the spindle network",
-        settings.min_records,
+    let (spindle_net, summary) = fit_mlp(
+        "spindle",
+        &VALUE_COLUMNS[..5],
+        &spindle_table,
+        &split,
+        settings,
+        3,
     )?;
-    let mut table = Table::new();
-    for r in recs {
-        let mut row = Vec::with_capacity(sel.names.len());
-        sel.push_temps(r, &mut row);
-        table.inputs.push(row);
-        table
-            .targets
-            .push(required_values(r, &[0, 1, 2, 3, 4], Instrument::Spindle)?);
-        table.groups.push(split.id(&r.cycle));
-    }
-    let (spindle_net, summary) =
-        fit_mlp("spindle", &VALUE_COLUMNS[..5], &table, &split, settings, 3)?;
     nets.push(summary);
-
-    let recs = records_of(
-        ds,
-        Instrument::Squareness,
-        "the squareness regression",
-        MIN_SQUARENESS_RECORDS,
-    )?;
-    let mut table = Table::new();
-    for r in recs {
-        let mut row = Vec::with_capacity(sel.names.len());
-        sel.push_temps(r, &mut row);
-        table.inputs.push(row);
-        table
-            .targets
-            .push(required_values(r, &[3, 4, 5], Instrument::Squareness)?);
-        table.groups.push(split.id(&r.cycle));
-    }
     let (squareness, summary) = fit_linear(
         "squareness",
         &SQUARENESS_OUTPUTS,
-        &table,
+        &sq_table,
         &split,
         settings.squareness_ridge,
     )?;
@@ -291,15 +294,44 @@ pub fn train_hybrid(
     Ok((predictor, summary))
 }
 
+/// Rows `[position along axis `pos_axis` (if any), temperatures…] → values[cols]`.
+fn table_of(
+    recs: &[&Record],
+    sel: &SensorSelection,
+    split: &CycleSplit,
+    pos_axis: Option<usize>,
+    cols: &[usize],
+    instrument: Instrument,
+) -> Result<Table, PredictError> {
+    let mut table = Table::new();
+    for r in recs {
+        let mut row = Vec::with_capacity(sel.names.len() + 1);
+        if let Some(k) = pos_axis {
+            row.push(r.pos_mm[k]);
+        }
+        sel.push_temps(r, &mut row);
+        table.inputs.push(row);
+        table.targets.push(required_values(r, cols, instrument)?);
+        table.groups.push(split.id(&r.cycle));
+    }
+    Ok(table)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::testdata as td;
     use super::*;
-    use crate::dataset::Record;
 
+    /// The default-settings model on four synthetic cycles, trained once for all tests.
     fn trained() -> (HybridPredictor, TrainSummary) {
-        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
-        train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap()
+        static MODEL: std::sync::OnceLock<(HybridPredictor, TrainSummary)> =
+            std::sync::OnceLock::new();
+        MODEL
+            .get_or_init(|| {
+                let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+                train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap()
+            })
+            .clone()
     }
 
     /// RMS of the prediction error and of the true error (µm) on a held-out cycle, with the
@@ -376,6 +408,7 @@ mod tests {
         let ds = td::dataset(&[4.0, 7.0, 5.5], 3);
         let s = Settings {
             hidden_candidates: vec![6],
+            max_epochs: 20,
             ..Settings::default()
         };
         let (a, _) = train_hybrid(&ds, &td::geometry(), &s).unwrap();

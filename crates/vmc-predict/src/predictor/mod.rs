@@ -30,7 +30,7 @@
 //! compensation's fixed-point iterations reuse them); a query then costs the position columns,
 //! the tanh of each hidden unit and the output layers. Nothing is allocated on the query path.
 //!
-//! Models are saved as versioned JSON ([`file`]).
+//! Models are saved as versioned JSON ([`mod@file`]).
 
 mod data;
 mod fastnet;
@@ -67,6 +67,18 @@ pub trait ErrorPredictor {
     /// assertion: the sensor set is validated once when the model is attached to a machine,
     /// see [`check_sensor_names`]).
     fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3];
+}
+
+/// A mutable borrow predicts like the predictor itself (e.g. `Compensator::new(&mut model)`).
+impl<P: ErrorPredictor + ?Sized> ErrorPredictor for &mut P {
+    fn sensor_names(&self) -> &[String] {
+        (**self).sensor_names()
+    }
+
+    #[inline]
+    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+        (**self).predict_error_mm(q_mm, temps_degc)
+    }
 }
 
 /// Errors of training, loading and checking predictors.
@@ -207,30 +219,30 @@ pub enum PredictError {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Settings {
-    /// Master seed; every network's initialisation seed is derived from it [0].
+    /// Master seed; every network's initialisation seed is derived from it (default: 0).
     pub seed: u64,
-    /// Hidden-layer widths tried for each MLP; the best on validation is kept [6, 10].
+    /// Hidden-layer widths tried for each MLP; the best on validation is kept (default: 6, 10).
     /// Why these: with ~12 sensors, 6 tanh units already fit smooth thermal drifts; more
     /// than ~12 over-fits four-hour cycles and slows the 1 MHz query.
     pub hidden_candidates: Vec<usize>,
-    /// Maximum Levenberg–Marquardt iterations per net [150].
+    /// Maximum Levenberg–Marquardt iterations per net (default: 150).
     pub max_epochs: usize,
-    /// Early stopping: epochs without validation improvement [8].
+    /// Early stopping: epochs without validation improvement (default: 8).
     pub patience: usize,
-    /// Independent initialisations per candidate [1].
+    /// Independent initialisations per candidate (default: 1).
     pub restarts: usize,
     /// Validation cycles when [`Settings::val_cycles`] is empty: every `round(1/val_fraction)`-th
-    /// cycle in file order (at least one when there are ≥ 2 cycles) [0.25].
+    /// cycle in file order (at least one when there are ≥ 2 cycles) (default: 0.25).
     pub val_fraction: f64,
-    /// Explicit validation cycles (names of the `cycle` column) [empty = automatic].
+    /// Explicit validation cycles (names of the `cycle` column) (default: empty = automatic).
     pub val_cycles: Vec<String>,
-    /// Sensors to use, in this order [empty = all dataset sensors in column order].
+    /// Sensors to use, in this order (default: empty = all dataset sensors in column order).
     pub sensors: Vec<String>,
-    /// Minimum records per network (each axis, spindle, volumetric) [20].
+    /// Minimum records per network (each axis, spindle, volumetric) (default: 20).
     pub min_records: usize,
-    /// Ridge λ (dimensionless, on normalised slopes) of the squareness regression [1e-3].
+    /// Ridge λ (dimensionless, on normalised slopes) of the squareness regression (default: 1e-3).
     pub squareness_ridge: f64,
-    /// Ridge λ of the linear baseline [1e-6]: just enough to survive collinear features.
+    /// Ridge λ of the linear baseline (default: 1e-6): just enough to survive collinear features.
     pub linear_ridge: f64,
 }
 
