@@ -163,7 +163,14 @@ impl Instruments {
     /// The 5-probe spindle test at `q_mm`: δx, δy, δz (µm), εx, εy (µrad), read now. As in
     /// ISO 230-3 the probes read a test mandrel while the spindle runs, so the reading takes no
     /// machine time and does not interrupt the duty.
-    pub fn spindle_test(&mut self, twin: &Twin, q_mm: [f64; 3], cycle: &str, t0_s: f64, out: &mut Vec<Record>) {
+    pub fn spindle_test(
+        &mut self,
+        twin: &Twin,
+        q_mm: [f64; 3],
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) {
         let d = twin.elementary_errors(q_mm).spindle;
         let p = self.spec.probe_noise_um;
         // Tilts come from two radial probes 100 mm apart: σ_tilt = √2·σ_probe / 100 mm.

@@ -195,12 +195,22 @@ fn run(args: RunArgs) -> Result<()> {
         (Some(path), true) => {
             use vmc_twin::predict::controller::Compensator;
             use vmc_twin::predict::predictor::AnyPredictor;
-            let model = AnyPredictor::load_json(path).with_context(|| format!("{}", path.display()))?;
+            let model =
+                AnyPredictor::load_json(path).with_context(|| format!("{}", path.display()))?;
             let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
-            let ctrl = Compensator::for_machine(model, &names).with_context(|| format!("{}: model does not fit machine {}", path.display(), machine.machine.name))?;
+            let ctrl = Compensator::for_machine(model, &names).with_context(|| {
+                format!(
+                    "{}: model does not fit machine {}",
+                    path.display(),
+                    machine.machine.name
+                )
+            })?;
             Some(evaluation::LoopController(ctrl))
         }
-        (Some(path), false) => anyhow::bail!("{}: a model was given without --compensate; add --compensate to put it in the loop", path.display()),
+        (Some(path), false) => anyhow::bail!(
+            "{}: a model was given without --compensate; add --compensate to put it in the loop",
+            path.display()
+        ),
         _ => None,
     };
     let mut twin = Twin::new(&machine, args.seed)?;

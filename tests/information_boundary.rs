@@ -1,0 +1,76 @@
+//! The information boundary of DESIGN §3, checked: the knowledge side (`vmc-predict`: predictors,
+//! controller, synthesis, datasets) cannot reach the twin's internals because it does not depend
+//! on the twin crate — and cannot, since the twin crate depends on it (Cargo forbids cycles).
+//! This test fails if someone adds such a dependency or names the twin in its sources.
+
+use std::path::Path;
+
+fn manifest(path: &Path) -> toml::Table {
+    let text = std::fs::read_to_string(path).unwrap();
+    toml::from_str(&text).unwrap()
+}
+
+fn dependency_names(t: &toml::Table) -> Vec<String> {
+    let mut names = Vec::new();
+    for section in ["dependencies", "dev-dependencies", "build-dependencies"] {
+        if let Some(deps) = t.get(section).and_then(|d| d.as_table()) {
+            names.extend(deps.keys().cloned());
+        }
+    }
+    names
+}
+
+#[test]
+fn the_knowledge_crate_does_not_depend_on_the_twin() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let predict = manifest(&root.join("crates/vmc-predict/Cargo.toml"));
+    let deps = dependency_names(&predict);
+    assert!(!deps.is_empty());
+    for d in &deps {
+        assert!(
+            !d.contains("vmc-twin") && !d.contains("vmc_twin"),
+            "vmc-predict depends on {d}"
+        );
+    }
+    // And the twin depends on the knowledge crate (the only allowed direction).
+    let twin = manifest(&root.join("Cargo.toml"));
+    assert!(dependency_names(&twin).iter().any(|d| d == "vmc-predict"));
+}
+
+#[test]
+fn no_knowledge_side_source_names_the_twin() {
+    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push(p);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/vmc-predict/src"),
+        &mut files,
+    );
+    assert!(files.len() > 5);
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        // Code lines only: documentation may mention the twin to explain the boundary.
+        for (n, line) in text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim_start().starts_with("//"))
+        {
+            for forbidden in ["vmc_twin", "extern crate"] {
+                assert!(
+                    !line.contains(forbidden),
+                    "{}:{} uses `{forbidden}`",
+                    f.display(),
+                    n + 1
+                );
+            }
+        }
+    }
+}
