@@ -20,13 +20,14 @@ use std::path::{Path, PathBuf};
 
 use vmc_twin::interp::{run_program, CanonKind, CanonMove, GcodeError, InterpConfig, Plane};
 
+/// The corpus: `$VMC_LINUXCNC_CORPUS` if set, else the copy vendored in `tests/data/linuxcnc`
+/// (taken unchanged from `../shared/gcode-corpus/linuxcnc`, see its SOURCE.md).
 fn corpus_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/gcode-corpus/linuxcnc");
-    assert!(
-        dir.is_dir(),
-        "LinuxCNC corpus not found at {}",
-        dir.display()
-    );
+    let dir = match std::env::var_os("VMC_LINUXCNC_CORPUS") {
+        Some(d) => PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/linuxcnc"),
+    };
+    assert!(dir.is_dir(), "LinuxCNC corpus not found at {}", dir.display());
     dir
 }
 
