@@ -11,6 +11,7 @@
 //! the error the controller compensated for, `p − q` (= E_pred(q) at the fixed point), over the
 //! three components pooled. MAPE is mean|e| / mean|y| (robust to small |y|).
 
+use rayon::prelude::*;
 use serde::Serialize;
 use thiserror::Error;
 
@@ -181,8 +182,10 @@ pub fn diagonal_plans(spec: &MachineSpec) -> Result<Vec<(&'static str, Plan)>, E
         .collect()
 }
 
-/// Evaluates one compensator factory on every diagonal and state for one seed.
-pub fn evaluate_predictor<P: ErrorPredictor + Clone>(
+/// Evaluates one predictor on every diagonal and state for one seed. Runs are independent and
+/// execute in parallel (rayon); each has its own seeded twin, so the result is identical to a
+/// single-threaded run and comes back in (state, diagonal) order.
+pub fn evaluate_predictor<P: ErrorPredictor + Clone + Send + Sync>(
     spec: &MachineSpec,
     seed: u64,
     name: &str,
@@ -191,20 +194,74 @@ pub fn evaluate_predictor<P: ErrorPredictor + Clone>(
     plans: &[(&str, Plan)],
 ) -> Result<Vec<RunReport>, EvalError> {
     let sensor_names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
-    let mut out = Vec::new();
-    for (si, state) in states.iter().enumerate() {
-        for (di, (diag, plan)) in plans.iter().enumerate() {
+    let jobs: Vec<(usize, usize)> = (0..states.len())
+        .flat_map(|si| (0..plans.len()).map(move |di| (si, di)))
+        .collect();
+    let results: Vec<Result<Option<RunReport>, EvalError>> = jobs
+        .par_iter()
+        .map(|&(si, di)| {
+            let (state, (diag, plan)) = (&states[si], &plans[di]);
             let ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
             let mut ctrl = LoopController(ctrl);
             // Evaluation noise: never the calibration's streams (those use 1000 + k).
             let noise = sub_seed(seed, 5000 + (si * 100 + di) as u64);
             let points = campaign::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
-            if let Some(r) = run_report(name, diag, &state.name, seed, &points) {
-                out.push(r);
-            }
-        }
+            Ok(run_report(name, diag, &state.name, seed, &points))
+        })
+        .collect();
+    let mut out = Vec::with_capacity(results.len());
+    for r in results {
+        out.extend(r?);
     }
     Ok(out)
+}
+
+/// Calibration, training and evaluation for one machine seed.
+struct SeedResult {
+    training: Vec<(u64, TrainSummary)>,
+    runs: Vec<RunReport>,
+    models: TrainedModels,
+}
+
+fn campaign_for_seed(
+    spec: &MachineSpec,
+    seed: u64,
+    settings: &Settings,
+    cal_cycles: &[ThermalCycle],
+    plans: &[(&str, Plan)],
+) -> Result<SeedResult, EvalError> {
+    let geometry = spec.geometry();
+    let data = campaign::calibrate(spec, cal_cycles, &CampaignConfig::new(seed))?;
+    let s = Settings {
+        seed,
+        ..settings.clone()
+    };
+    let (hybrid, hs) = predictor::train_hybrid(&data, &geometry, &s)?;
+    let (volumetric, vs) = predictor::train_volumetric(&data, &geometry, &s)?;
+    let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
+    let states = campaign::evaluation_states(seed);
+    let mut runs = evaluate_predictor(spec, seed, "hybrid", &hybrid, &states, plans)?;
+    runs.extend(evaluate_predictor(
+        spec,
+        seed,
+        "volumetric",
+        &volumetric,
+        &states,
+        plans,
+    )?);
+    runs.extend(evaluate_predictor(
+        spec, seed, "linear", &linear, &states, plans,
+    )?);
+    Ok(SeedResult {
+        training: vec![(seed, hs), (seed, vs), (seed, ls)],
+        runs,
+        models: TrainedModels {
+            seed,
+            hybrid,
+            volumetric,
+            linear,
+        },
+    })
 }
 
 /// Runs the full campaign for `seeds`: calibrate, train the three predictors, evaluate.
@@ -215,7 +272,6 @@ pub fn run_campaign(
 ) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
     let cal_cycles = ThermalCycle::calibration_set();
     let plans = diagonal_plans(spec)?;
-    let geometry = spec.geometry();
     let mut report = CampaignReport {
         machine: spec.machine.name.clone(),
         calibration_cycles: cal_cycles.iter().map(|c| c.name.clone()).collect(),
@@ -223,40 +279,27 @@ pub fn run_campaign(
         training: Vec::new(),
         runs: Vec::new(),
     };
+    // Seeds are independent: run them in parallel, collect in seed order.
+    let per_seed: Vec<Result<SeedResult, EvalError>> = seeds
+        .par_iter()
+        .map(|&seed| campaign_for_seed(spec, seed, settings, &cal_cycles, &plans))
+        .collect();
     let mut models = Vec::new();
-    for &seed in seeds {
-        let data = campaign::calibrate(spec, &cal_cycles, &CampaignConfig::new(seed))?;
-        let s = Settings {
-            seed,
-            ..settings.clone()
-        };
-        let (hybrid, hs) = predictor::train_hybrid(&data, &geometry, &s)?;
-        let (volumetric, vs) = predictor::train_volumetric(&data, &geometry, &s)?;
-        let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
-        report.training.extend([(seed, hs), (seed, vs), (seed, ls)]);
-        let states = campaign::evaluation_states(seed);
-        report.evaluation_states = states.iter().map(|s| s.name.clone()).collect();
-        report.runs.extend(evaluate_predictor(
-            spec, seed, "hybrid", &hybrid, &states, &plans,
-        )?);
-        report.runs.extend(evaluate_predictor(
-            spec,
-            seed,
-            "volumetric",
-            &volumetric,
-            &states,
-            &plans,
-        )?);
-        report.runs.extend(evaluate_predictor(
-            spec, seed, "linear", &linear, &states, &plans,
-        )?);
-        models.push(TrainedModels {
-            seed,
-            hybrid,
-            volumetric,
-            linear,
-        });
+    for r in per_seed {
+        let r = r?;
+        report.training.extend(r.training);
+        report.runs.extend(r.runs);
+        models.push(r.models);
     }
+    report.evaluation_states = seeds
+        .first()
+        .map(|&s| {
+            campaign::evaluation_states(s)
+                .iter()
+                .map(|s| s.name.clone())
+                .collect()
+        })
+        .unwrap_or_default();
     Ok((report, models))
 }
 

@@ -27,7 +27,11 @@ fn corpus_dir() -> PathBuf {
         Some(d) => PathBuf::from(d),
         None => Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/linuxcnc"),
     };
-    assert!(dir.is_dir(), "LinuxCNC corpus not found at {}", dir.display());
+    assert!(
+        dir.is_dir(),
+        "LinuxCNC corpus not found at {}",
+        dir.display()
+    );
     dir
 }
 
