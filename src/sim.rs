@@ -94,6 +94,19 @@ pub struct NullObserver;
 
 impl Observer for NullObserver {}
 
+/// An observer that only counts points (benchmarks, long runs).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct CountPoints {
+    /// Points seen.
+    pub points: usize,
+}
+
+impl Observer for CountPoints {
+    fn on_point(&mut self, _point: &PointRecord, _readings: &SensorReadings) {
+        self.points += 1;
+    }
+}
+
 /// An observer that keeps every point.
 #[derive(Debug, Default, Clone)]
 pub struct CollectPoints {

@@ -1,0 +1,132 @@
+//! Benchmarks of the control loop and the simulation (DESIGN §13, issue 5/6).
+//!
+//! `cargo bench --bench loop` — figures are recorded in the README ("Speed").
+//!
+//! - `compensation_query`: one compensation of the hybrid predictor (fixed-point solve of
+//!   q = p − E_pred(q, T): all networks + first-order synthesis), from held sensor readings and a
+//!   commanded position that moves as along a diagonal.
+//! - `thermal_8h`: 8 h of machine time of the thermal network alone (1 s steps) under a duty.
+//! - `machine_8h_with_diagonals`: 8 h of machine time with an XY diagonal test every 30 min,
+//!   motion sampled at the 1 ms interpolation cycle (error evaluated at every sample).
+//! - `campaign_one_seed`: calibration + training of the three predictors + 147 held-out runs.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::hint::black_box;
+
+use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::machine::MachineSpec;
+use vmc_twin::predict::controller::Compensator;
+use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::program;
+use vmc_twin::sim::{self, SampleMode, SimConfig};
+use vmc_twin::thermal::Activity;
+use vmc_twin::twin::Twin;
+
+fn compensation_query(c: &mut Criterion) {
+    let spec = MachineSpec::reference();
+    let data = campaign::calibrate(
+        &spec,
+        &ThermalCycle::calibration_set(),
+        &CampaignConfig::new(1),
+    )
+    .unwrap();
+    let (model, _) = predictor::train_hybrid(
+        &data,
+        &spec.geometry(),
+        &Settings {
+            seed: 1,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
+    let mut comp = Compensator::for_machine(model, &names).unwrap();
+    let temps: Vec<f64> = (0..names.len()).map(|i| 22.0 + 0.25 * i as f64).collect();
+    let mut k = 0u64;
+    c.bench_function("compensation_query", |b| {
+        b.iter(|| {
+            k = k.wrapping_add(1);
+            let s = (k % 1000) as f64 * 0.5;
+            black_box(comp.axis_command_mm(
+                black_box([10.0 + s, 60.0 + 0.5 * s, -225.0]),
+                black_box(&temps),
+            ))
+        })
+    });
+}
+
+fn thermal_8h(c: &mut Criterion) {
+    let spec = MachineSpec::reference();
+    let duty = Activity {
+        spindle_rpm: 8000.0,
+        axis_pos_mm: [280.0, 200.0, -225.0],
+        axis_speed_mm_per_min: [3000.0, 2000.0, 1000.0],
+        coolant: false,
+    };
+    c.bench_function("thermal_8h", |b| {
+        b.iter(|| {
+            let mut twin = Twin::new(&spec, 1).unwrap();
+            twin.advance(8.0 * 3600.0, &duty).unwrap();
+            black_box(twin.sensor_readings())
+        })
+    });
+}
+
+fn machine_8h_with_diagonals(c: &mut Criterion) {
+    let spec = MachineSpec::reference();
+    let plan = program::plan_source(
+        include_str!("../trajectories/diag_xy.ngc"),
+        "diag_xy.ngc",
+        &spec,
+        spec.axes.home_mm,
+    )
+    .unwrap();
+    let cycle = &ThermalCycle::calibration_set()[2];
+    let cfg = SimConfig {
+        sample_mode: SampleMode::EveryCycle,
+        ..SimConfig::default()
+    };
+    let mut g = c.benchmark_group("machine_8h_with_diagonals");
+    g.sample_size(10);
+    g.bench_function("xy_every_30min_1ms", |b| {
+        b.iter(|| {
+            let mut twin = Twin::new(&spec, 1).unwrap();
+            let mut n = 0usize;
+            for k in 0..16 {
+                campaign::drive(&mut twin, cycle, 0.0, k as f64 * 1800.0, 1.0).unwrap();
+                let mut count = sim::CountPoints::default();
+                sim::execute(&mut twin, &plan, &cfg, None, &mut count).unwrap();
+                n += count.points;
+            }
+            black_box(n)
+        })
+    });
+    g.finish();
+}
+
+fn campaign_one_seed(c: &mut Criterion) {
+    let spec = MachineSpec::reference();
+    let mut g = c.benchmark_group("campaign");
+    g.sample_size(10);
+    g.bench_function("one_seed", |b| {
+        b.iter(|| {
+            black_box(
+                vmc_twin::evaluation::run_campaign(&spec, &[1], &Settings::default())
+                    .unwrap()
+                    .0
+                    .runs
+                    .len(),
+            )
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    compensation_query,
+    thermal_8h,
+    machine_8h_with_diagonals,
+    campaign_one_seed
+);
+criterion_main!(benches);
