@@ -222,7 +222,6 @@ fn run(args: RunArgs) -> Result<()> {
         } else {
             SampleMode::Dwells
         },
-        ..SimConfig::default()
     };
     let warm_cfg = SimConfig {
         sample_mode: SampleMode::Dwells,

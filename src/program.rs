@@ -63,7 +63,6 @@ pub fn plan_source(
     let cfg = InterpConfig {
         start_mm,
         work_offsets_mm: machine.axes.work_offsets_mm,
-        ..InterpConfig::default()
     };
     let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
         file: file.to_string(),

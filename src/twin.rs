@@ -151,12 +151,7 @@ impl Twin {
         q_mm: [f64; 3],
         approach_mm: [f64; 3],
     ) -> Vector3<f64> {
-        let mut e = self.elementary_errors(q_mm);
-        for a in 0..3 {
-            e.axes[a].lin_mm[a] += approach_mm[a];
-        }
-        let err = kinematics::full_error_mm(&self.geometry, q_mm, &e);
-        Vector3::from(q_mm) + err - Vector3::from(p_mm)
+        self.tool_error_with_temps_mm(p_mm, q_mm, approach_mm, self.thermal.temps_degc())
     }
 
     /// Truth, for reports: the same error as [`Twin::tool_error_mm`] but with every thermal node
@@ -169,9 +164,19 @@ impl Twin {
         approach_mm: [f64; 3],
     ) -> Vector3<f64> {
         let cold = vec![self.field.ref_temp_degc(); self.thermal.temps_degc().len()];
-        let mut e = self.field.elementary(q_mm, &cold);
-        for a in 0..3 {
-            e.axes[a].lin_mm[a] += approach_mm[a];
+        self.tool_error_with_temps_mm(p_mm, q_mm, approach_mm, &cold)
+    }
+
+    fn tool_error_with_temps_mm(
+        &self,
+        p_mm: [f64; 3],
+        q_mm: [f64; 3],
+        approach_mm: [f64; 3],
+        temps_degc: &[f64],
+    ) -> Vector3<f64> {
+        let mut e = self.field.elementary(q_mm, temps_degc);
+        for (a, extra_mm) in approach_mm.iter().enumerate() {
+            e.axes[a].lin_mm[a] += extra_mm;
         }
         let err = kinematics::full_error_mm(&self.geometry, q_mm, &e);
         Vector3::from(q_mm) + err - Vector3::from(p_mm)
