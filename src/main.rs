@@ -222,6 +222,8 @@ fn run(args: RunArgs) -> Result<()> {
         } else {
             SampleMode::Dwells
         },
+        // The run report splits each error into cold geometry and thermal part.
+        report_thermal_part: true,
     };
     let warm_cfg = SimConfig {
         sample_mode: SampleMode::Dwells,

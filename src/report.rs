@@ -82,8 +82,9 @@ pub struct RunSummary {
     pub mean_sensor_temp_degc: f64,
     /// Uncompensated error statistics.
     pub before: ErrorStats,
-    /// Of which the thermal part (error minus the cold-geometry error at the same points).
-    pub thermal_part: ErrorStats,
+    /// Of which the thermal part (error minus the cold-geometry error at the same points), when
+    /// it was computed.
+    pub thermal_part: Option<ErrorStats>,
     /// Compensated error statistics, if compensation ran.
     pub after: Option<ErrorStats>,
     /// 1 − RMS(|E| after)/RMS(|E| before), if compensation ran.
@@ -100,7 +101,7 @@ impl RunLog {
         warmup: &[String],
     ) -> Option<RunSummary> {
         let before: Vec<[f64; 3]> = self.points.iter().map(|p| p.error_before_um).collect();
-        let thermal: Vec<[f64; 3]> = self.points.iter().map(|p| p.thermal_part_um).collect();
+        let thermal: Vec<[f64; 3]> = self.points.iter().filter_map(|p| p.thermal_part_um).collect();
         let after: Vec<[f64; 3]> = self
             .points
             .iter()
@@ -121,7 +122,7 @@ impl RunLog {
             ],
             mean_sensor_temp_degc: first.iter().sum::<f64>() / first.len().max(1) as f64,
             before: b,
-            thermal_part: error_stats(&thermal)?,
+            thermal_part: error_stats(&thermal),
             after: a,
             reduction: a.map(|a| 1.0 - a.rms_um[3] / b.rms_um[3]),
         })
@@ -155,7 +156,7 @@ impl RunLog {
         writeln!(out)?;
         for p in &self.points {
             let e = p.error_before_um;
-            let t = p.thermal_part_um;
+            let t = p.thermal_part_um.unwrap_or([f64::NAN; 3]);
             write!(
                 out,
                 "{:>4} {:>9.1} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
@@ -201,7 +202,7 @@ impl RunLog {
         s.push('\n');
         for (p, temps) in self.points.iter().zip(&self.sensor_degc) {
             let e = p.error_before_um;
-            let t = p.thermal_part_um;
+            let t = p.thermal_part_um.unwrap_or([f64::NAN; 3]);
             s.push_str(&format!(
                 "{:.3},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
                 p.time_s,
@@ -261,7 +262,9 @@ pub fn write_summary(s: &RunSummary, out: &mut dyn Write) -> std::io::Result<()>
         s.points, s.time_span_s[0], s.time_span_s[1], s.mean_sensor_temp_degc
     )?;
     row(out, "error", &s.before)?;
-    row(out, "  of which thermal", &s.thermal_part)?;
+    if let Some(t) = &s.thermal_part {
+        row(out, "  of which thermal", t)?;
+    }
     if let Some(a) = &s.after {
         row(out, "compensated error", a)?;
     }

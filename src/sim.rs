@@ -37,6 +37,9 @@ pub struct SimConfig {
     pub interp_cycle_s: f64,
     /// Where to measure.
     pub sample_mode: SampleMode,
+    /// Also compute each point's thermal part (error minus the cold-geometry error), for
+    /// reports; costs a second error evaluation per point (default false).
+    pub report_thermal_part: bool,
 }
 
 impl Default for SimConfig {
@@ -45,6 +48,7 @@ impl Default for SimConfig {
             thermal_step_s: 1.0,
             interp_cycle_s: 0.001,
             sample_mode: SampleMode::Dwells,
+            report_thermal_part: false,
         }
     }
 }
@@ -70,8 +74,9 @@ pub struct PointRecord {
     /// True error without compensation, µm.
     pub error_before_um: [f64; 3],
     /// Thermal part of the uncompensated error (error now minus the same point with the machine
-    /// at its reference temperature), µm. Truth, for reports only.
-    pub thermal_part_um: [f64; 3],
+    /// at its reference temperature), µm, when [`SimConfig::report_thermal_part`] is set. Truth,
+    /// for reports only.
+    pub thermal_part_um: Option<[f64; 3]>,
     /// Axis command issued by the compensator, mm (None without compensation).
     pub compensated_command_mm: Option<[f64; 3]>,
     /// True error with compensation, µm (None without compensation).
@@ -178,6 +183,7 @@ pub fn execute(
                     seg.line,
                     p,
                     true,
+                    cfg.report_thermal_part,
                 );
                 index += 1;
             }
@@ -197,6 +203,7 @@ pub fn execute(
                         seg.line,
                         p,
                         false,
+                        cfg.report_thermal_part,
                     );
                     index += 1;
                 }
@@ -275,10 +282,14 @@ fn measure(
     line: usize,
     p_mm: [f64; 3],
     at_dwell: bool,
+    report_thermal_part: bool,
 ) {
     let approach = twin.draw_approach_mm();
     let before = twin.tool_error_mm(p_mm, p_mm, approach);
-    let cold = twin.tool_error_at_ref_temp_mm(p_mm, p_mm, approach);
+    let thermal_part_um = report_thermal_part.then(|| {
+        let cold = twin.tool_error_at_ref_temp_mm(p_mm, p_mm, approach);
+        [0, 1, 2].map(|a| (before[a] - cold[a]) * 1e3)
+    });
     let (q, after) = match compensator {
         Some(c) => {
             let q = c.axis_command_mm(p_mm, readings);
@@ -292,7 +303,7 @@ fn measure(
         line,
         commanded_mm: p_mm,
         error_before_um: [before.x * 1e3, before.y * 1e3, before.z * 1e3],
-        thermal_part_um: [0, 1, 2].map(|a| (before[a] - cold[a]) * 1e3),
+        thermal_part_um,
         compensated_command_mm: q,
         error_after_um: after.map(|e| [e.x * 1e3, e.y * 1e3, e.z * 1e3]),
         at_dwell,
