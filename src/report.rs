@@ -101,7 +101,11 @@ impl RunLog {
         warmup: &[String],
     ) -> Option<RunSummary> {
         let before: Vec<[f64; 3]> = self.points.iter().map(|p| p.error_before_um).collect();
-        let thermal: Vec<[f64; 3]> = self.points.iter().filter_map(|p| p.thermal_part_um).collect();
+        let thermal: Vec<[f64; 3]> = self
+            .points
+            .iter()
+            .filter_map(|p| p.thermal_part_um)
+            .collect();
         let after: Vec<[f64; 3]> = self
             .points
             .iter()
