@@ -16,6 +16,7 @@ pub mod interp;
 pub mod kinematics;
 pub mod machine;
 pub mod motion;
+pub mod placement;
 pub mod program;
 pub mod report;
 pub mod sensors;

@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand};
 use vmc_twin::campaign;
 use vmc_twin::evaluation;
 use vmc_twin::machine::MachineSpec;
+use vmc_twin::placement;
 use vmc_twin::program;
 use vmc_twin::report::{self, RunLog};
 use vmc_twin::sim::{self, SampleMode, SimConfig};
@@ -40,6 +41,45 @@ enum Command {
     Campaign(CampaignArgs),
     /// Train a predictor on a calibration dataset (CSV) and write the model (JSON).
     Train(TrainArgs),
+    /// Choose K temperature sensor locations among every thermal node (read as a sensor would),
+    /// print the ranking with its evidence, compare compensation with the selected, default,
+    /// random and all locations on held-out runs, and write the sensor set (TOML).
+    SelectSensors(SelectArgs),
+}
+
+#[derive(clap::Args)]
+struct SelectArgs {
+    /// Candidate locations: `all` (every thermal node + ambient) or a comma-separated list of
+    /// node names (ambient is always a candidate: it is the cold reference).
+    #[arg(long, default_value = "all")]
+    candidates: String,
+    /// Sensors to select besides ambient.
+    #[arg(long, default_value_t = 11)]
+    count: usize,
+    /// Machine description (TOML); default: the embedded reference machine.
+    #[arg(long)]
+    machine: Option<PathBuf>,
+    /// Machine realisation of the selection campaign.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Machine seeds of the comparison on held-out runs (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [1u64])]
+    compare_seeds: Vec<u64>,
+    /// Random sets of K locations in the comparison.
+    #[arg(long, default_value_t = 3)]
+    random_draws: usize,
+    /// Only select; skip the comparison.
+    #[arg(long)]
+    no_compare: bool,
+    /// Output sensor set (TOML `[[sensors]]`, usable with `--sensors` or in a machine file).
+    #[arg(short = 'o', long, default_value = "sensors.toml")]
+    out: PathBuf,
+    /// Also write the study as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Overwrite existing output files.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(clap::Args)]
@@ -47,6 +87,9 @@ struct CampaignArgs {
     /// Machine description (TOML); default: the embedded reference machine.
     #[arg(long)]
     machine: Option<PathBuf>,
+    /// Sensor set (TOML `[[sensors]]`, e.g. from `select-sensors`) replacing the machine's own.
+    #[arg(long)]
+    sensors: Option<PathBuf>,
     /// Machine realisations to calibrate and evaluate (comma-separated).
     #[arg(long, value_delimiter = ',', default_values_t = [1u64, 2, 3])]
     seeds: Vec<u64>,
@@ -69,6 +112,9 @@ struct TrainArgs {
     /// Machine description for the nominal geometry and sensor check; default: reference.
     #[arg(long)]
     machine: Option<PathBuf>,
+    /// Sensor set (TOML `[[sensors]]`, e.g. from `select-sensors`) replacing the machine's own.
+    #[arg(long)]
+    sensors: Option<PathBuf>,
     /// Seed of the network initialisation.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -85,6 +131,9 @@ struct CalibrateArgs {
     /// Machine description (TOML); default: the embedded reference machine.
     #[arg(long)]
     machine: Option<PathBuf>,
+    /// Sensor set (TOML `[[sensors]]`, e.g. from `select-sensors`) replacing the machine's own.
+    #[arg(long)]
+    sensors: Option<PathBuf>,
     /// Machine realisation (seed of its random error parts).
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -106,6 +155,9 @@ struct RunArgs {
     /// Machine description (TOML); default: the embedded reference machine.
     #[arg(long)]
     machine: Option<PathBuf>,
+    /// Sensor set (TOML `[[sensors]]`, e.g. from `select-sensors`) replacing the machine's own.
+    #[arg(long)]
+    sensors: Option<PathBuf>,
     /// Seed of the machine's random error parts and noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -142,6 +194,7 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate(args),
         Command::Campaign(args) => run_campaign(args),
         Command::Train(args) => train(args),
+        Command::SelectSensors(args) => select_sensors(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -152,15 +205,25 @@ fn main() -> ExitCode {
     }
 }
 
-fn load_machine(path: Option<&Path>) -> Result<MachineSpec> {
-    Ok(match path {
+fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<MachineSpec> {
+    let spec = match path {
         Some(p) => MachineSpec::load(p)?,
         None => MachineSpec::reference(),
-    })
+    };
+    let Some(file) = sensors else {
+        return Ok(spec);
+    };
+    let name = file.display().to_string();
+    let text = std::fs::read_to_string(file)
+        .with_context(|| format!("{name}: cannot read sensor set"))?;
+    let set = placement::SensorSet::from_toml_str(&text, &name)?;
+    let spec = placement::with_sensors(&spec, set.sensors)
+        .with_context(|| format!("{name}: sensor set does not fit machine {}", spec.machine.name))?;
+    Ok(spec)
 }
 
 fn run(args: RunArgs) -> Result<()> {
-    let machine = load_machine(args.machine.as_deref())?;
+    let machine = load_machine(args.machine.as_deref(), args.sensors.as_deref())?;
     if !(args.interp_cycle_ms > 0.0 && args.interp_cycle_ms.is_finite()) {
         anyhow::bail!(
             "--interp-cycle-ms must be > 0, got {}",
@@ -290,7 +353,7 @@ fn run(args: RunArgs) -> Result<()> {
 }
 
 fn calibrate(args: CalibrateArgs) -> Result<()> {
-    let machine = load_machine(args.machine.as_deref())?;
+    let machine = load_machine(args.machine.as_deref(), args.sensors.as_deref())?;
     if !(args.measure_every_min > 0.0 && args.measure_every_min.is_finite()) {
         anyhow::bail!(
             "--measure-every-min must be > 0, got {}",
@@ -317,7 +380,7 @@ fn calibrate(args: CalibrateArgs) -> Result<()> {
 }
 
 fn run_campaign(args: CampaignArgs) -> Result<()> {
-    let machine = load_machine(args.machine.as_deref())?;
+    let machine = load_machine(args.machine.as_deref(), args.sensors.as_deref())?;
     if args.seeds.is_empty() {
         anyhow::bail!("--seeds needs at least one seed");
     }
@@ -371,7 +434,7 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
 fn train(args: TrainArgs) -> Result<()> {
     use vmc_twin::predict::dataset::Dataset;
     use vmc_twin::predict::predictor::{self, Settings};
-    let machine = load_machine(args.machine.as_deref())?;
+    let machine = load_machine(args.machine.as_deref(), args.sensors.as_deref())?;
     report::check_writable(&args.out, args.force)?;
     let name = args.data.display().to_string();
     let text = std::fs::read_to_string(&args.data)
@@ -423,5 +486,82 @@ fn train(args: TrainArgs) -> Result<()> {
         );
     }
     println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn select_sensors(args: SelectArgs) -> Result<()> {
+    let machine = load_machine(args.machine.as_deref(), None)?;
+    let only: Option<Vec<String>> = if args.candidates == "all" {
+        None
+    } else {
+        let wanted: Vec<String> = args
+            .candidates
+            .split(',')
+            .map(|w| w.trim().to_string())
+            .collect();
+        for w in &wanted {
+            if w != "ambient" && !machine.thermal.nodes.iter().any(|n| &n.name == w) {
+                let nodes: Vec<&str> = machine.thermal.nodes.iter().map(|n| n.name.as_str()).collect();
+                anyhow::bail!(
+                    "--candidates: `{w}` is not a thermal node of {}; use `all` or some of: {}",
+                    machine.machine.name,
+                    nodes.join(", ")
+                );
+            }
+        }
+        Some(wanted)
+    };
+    select_and_write(&machine, &placement_config(&args), &args, only.as_deref())
+}
+
+fn placement_config(args: &SelectArgs) -> placement::PlacementConfig {
+    let mut cfg = placement::PlacementConfig {
+        seed: args.seed,
+        compare_seeds: if args.no_compare {
+            Vec::new()
+        } else {
+            args.compare_seeds.clone()
+        },
+        random_draws: args.random_draws,
+        ..Default::default()
+    };
+    cfg.selection.count = args.count;
+    cfg
+}
+
+fn select_and_write(
+    machine: &MachineSpec,
+    cfg: &placement::PlacementConfig,
+    args: &SelectArgs,
+    only: Option<&[String]>,
+) -> Result<()> {
+    if args.count == 0 {
+        anyhow::bail!("--count must be at least 1");
+    }
+    report::check_writable(&args.out, args.force)?;
+    if let Some(j) = &args.json {
+        report::check_writable(j, args.force)?;
+    }
+    let rep = placement::study_among(machine, cfg, only)?;
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    placement::write_report(&rep, machine, cfg, &mut out)?;
+    let set = placement::SensorSet {
+        sensors: rep.selected_sensors.clone(),
+    };
+    let header = format!(
+        "Sensor set chosen by `vmc-twin select-sensors --count {}` on {} (seed {}).\n\
+         Use it with `--sensors {}` (run, calibrate, train, campaign) or paste it into a machine file.",
+        args.count,
+        machine.machine.name,
+        args.seed,
+        args.out.display()
+    );
+    report::write_atomic(&args.out, set.to_toml(&header).as_bytes(), args.force)?;
+    writeln!(out, "wrote {}", args.out.display())?;
+    if let Some(j) = &args.json {
+        report::write_atomic(j, placement::report_json(&rep)?.as_bytes(), args.force)?;
+        writeln!(out, "wrote {}", j.display())?;
+    }
     Ok(())
 }

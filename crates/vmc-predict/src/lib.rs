@@ -10,4 +10,5 @@ pub mod linreg;
 pub mod metrics;
 pub mod nn;
 pub mod predictor;
+pub mod selection;
 pub mod synthesis;

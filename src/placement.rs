@@ -1,0 +1,616 @@
+//! Where to put the thermometers (DESIGN §1, §5–§7; issue 4/6 part A).
+//!
+//! The study chose 11 of many candidate locations from a thermo-mechanical simulation campaign.
+//! This module does the same on the twin, in three steps:
+//! 1. **Candidates**: every thermal-network node, plus ambient, read *as a sensor would* — the
+//!    machine's own thermistor model (noise σ, lag τ, 0.0625 °C quantisation, taken from its
+//!    first non-ambient sensor) — never the node temperatures themselves.
+//! 2. **Selection data**: the virtual calibration campaign (laser sweeps, squareness, 5-probe
+//!    spindle test; [`crate::campaign::calibrate`]) over *varied* scenarios: the typical
+//!    calibration cycles (constant and progressive duty, axis-heavy, slow ambient drift) plus
+//!    selection-only cycles with random duty and ambient steps, drawn from their own seed stream.
+//!    None of the held-out evaluation states is among them.
+//! 3. **Procedure**: correlation clustering + greedy forward selection on the leave-one-cycle-out
+//!    error of a linear model ([`crate::predict::selection`], where the procedure is stated).
+//!
+//! The comparison then calibrates the hybrid predictor on the typical cycles with each sensor
+//! set — the selected K, the study's default locations, K random locations (several seeded
+//! draws), all candidates — and runs every diagonal under the held-out states with compensation,
+//! on machine seeds of the user's choice (the selection itself uses one seed).
+
+use rand::rngs::StdRng;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::campaign::{self, CampaignConfig, ThermalCycle};
+use crate::evaluation::{self, EvalError, RunReport};
+use crate::machine::{MachineError, MachineSpec};
+use crate::predict::dataset::Dataset;
+use crate::predict::predictor::{self, Settings};
+use crate::predict::selection::{self, Selection, SelectionConfig, SelectionError};
+use crate::sensors::SensorSpec;
+use crate::thermal::{AmbientProfile, AMBIENT_NODE};
+use crate::twin::sub_seed;
+
+/// Settings of the placement study.
+#[derive(Debug, Clone)]
+pub struct PlacementConfig {
+    /// Machine seed of the selection campaign (default 1).
+    pub seed: u64,
+    /// The selection procedure's settings (K = `selection.count`, default 11).
+    pub selection: SelectionConfig,
+    /// Machine seeds of the comparison (default `[1]`; empty = no comparison).
+    pub compare_seeds: Vec<u64>,
+    /// Random sets of K drawn for the comparison (default 3).
+    pub random_draws: usize,
+    /// Predictor training settings (default: [`Settings::default`]).
+    pub settings: Settings,
+}
+
+impl Default for PlacementConfig {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            selection: SelectionConfig::default(),
+            compare_seeds: vec![1],
+            random_draws: 3,
+            settings: Settings::default(),
+        }
+    }
+}
+
+/// Why the study failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PlacementError {
+    /// Campaign, training or evaluation.
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    /// The selection procedure.
+    #[error(transparent)]
+    Selection(#[from] SelectionError),
+    /// A sensor set does not fit the machine.
+    #[error(transparent)]
+    Machine(#[from] MachineError),
+    /// The machine has no sensor to copy the thermistor model from.
+    #[error("the machine file has no sensor on a thermal node to take the thermistor model (noise, lag, resolution) from")]
+    NoTemplate,
+}
+
+/// The sensor that reads `node` with the template's thermistor model; named after the node.
+fn sensor_on(template: &SensorSpec, node: &str) -> SensorSpec {
+    SensorSpec {
+        name: node.to_string(),
+        node: node.to_string(),
+        ..template.clone()
+    }
+}
+
+/// Every node of the machine's thermal network, plus ambient, as a candidate sensor.
+///
+/// # Errors
+/// [`PlacementError::NoTemplate`] when no sensor of the machine sits on a node.
+pub fn candidate_sensors(spec: &MachineSpec) -> Result<Vec<SensorSpec>, PlacementError> {
+    let template = spec
+        .sensors
+        .iter()
+        .find(|s| s.node != AMBIENT_NODE)
+        .ok_or(PlacementError::NoTemplate)?;
+    let ambient = spec
+        .sensors
+        .iter()
+        .find(|s| s.node == AMBIENT_NODE)
+        .unwrap_or(template);
+    Ok(std::iter::once(sensor_on(ambient, AMBIENT_NODE))
+        .chain(spec.thermal.nodes.iter().map(|n| sensor_on(template, &n.name)))
+        .collect())
+}
+
+/// `spec` with `sensors` in place of its own, validated.
+///
+/// # Errors
+/// [`MachineError`] naming the bad sensor field.
+pub fn with_sensors(spec: &MachineSpec, sensors: Vec<SensorSpec>) -> Result<MachineSpec, MachineError> {
+    let mut s = spec.clone();
+    s.sensors = sensors;
+    s.validate("sensor set")?;
+    Ok(s)
+}
+
+/// The study's default locations, as candidate names (the node each default sensor reads).
+pub fn default_locations(spec: &MachineSpec) -> Vec<String> {
+    let mut v: Vec<String> = vec![AMBIENT_NODE.into()];
+    for s in &spec.sensors {
+        if !v.contains(&s.node) {
+            v.push(s.node.clone());
+        }
+    }
+    v
+}
+
+/// Scenarios of the selection campaign: the typical calibration cycles plus selection-only
+/// cycles (random duty, ambient steps) drawn from `seed`'s own stream (not the evaluation's).
+pub fn selection_cycles(seed: u64) -> Vec<ThermalCycle> {
+    let mut v = ThermalCycle::calibration_set();
+    let mut state = sub_seed(seed, 9001);
+    let mut next = || {
+        state = sub_seed(state, 1);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let phases = (0..8)
+        .map(|_| {
+            let rpm = 1000.0 + (next() * 9.0).floor() * 1000.0;
+            let duty = next();
+            campaign::Phase {
+                duration_s: 1800.0,
+                spindle_rpm: rpm,
+                axis_speed_mm_per_min: [5000.0 * duty, 4000.0 * duty, 2500.0 * duty],
+            }
+        })
+        .chain(std::iter::once(campaign::Phase {
+            duration_s: 3.0 * 3600.0,
+            spindle_rpm: 0.0,
+            axis_speed_mm_per_min: [0.0; 3],
+        }))
+        .collect();
+    v.push(ThermalCycle {
+        name: "sel_random_duty".into(),
+        ambient: AmbientProfile::Constant { temp_degc: 20.0 },
+        phases,
+    });
+    v.push(ThermalCycle {
+        name: "sel_ambient_steps".into(),
+        ambient: AmbientProfile::Table {
+            points: vec![
+                [0.0, 20.0],
+                [2.0 * 3600.0, 20.0],
+                [2.5 * 3600.0, 22.0],
+                [5.0 * 3600.0, 22.0],
+                [5.5 * 3600.0, 19.0],
+                [8.0 * 3600.0, 19.0],
+            ],
+        },
+        phases: vec![
+            campaign::Phase {
+                duration_s: 4.0 * 3600.0,
+                spindle_rpm: 5000.0,
+                axis_speed_mm_per_min: [3000.0, 2000.0, 1000.0],
+            },
+            campaign::Phase {
+                duration_s: 4.0 * 3600.0,
+                spindle_rpm: 0.0,
+                axis_speed_mm_per_min: [0.0; 3],
+            },
+        ],
+    });
+    v
+}
+
+/// Compensation quality of one sensor set on the held-out runs.
+#[derive(Debug, Clone, Serialize)]
+pub struct SetResult {
+    /// `selected`, `study default`, `random #i`, `all candidates`.
+    pub label: String,
+    /// The sensors (candidate names, reference first).
+    pub sensors: Vec<String>,
+    /// Held-out runs (diagonals × states × seeds).
+    pub runs: usize,
+    /// Median of 1 − RMS|E| after / before over the runs.
+    pub median_reduction: f64,
+    /// Worst run's reduction.
+    pub worst_reduction: f64,
+    /// Largest residual |E| at any point, µm.
+    pub max_residual_um: f64,
+    /// Mean over runs of RMS|E| after compensation, µm.
+    pub mean_rms_after_um: f64,
+}
+
+/// The whole study.
+#[derive(Debug, Clone)]
+pub struct PlacementReport {
+    /// Names of the selection scenarios.
+    pub scenarios: Vec<String>,
+    /// The selection with its evidence.
+    pub selection: Selection,
+    /// The sensor specs of the selected set (reference first), ready for a machine file.
+    pub selected_sensors: Vec<SensorSpec>,
+    /// The comparison (empty without compare seeds).
+    pub comparison: Vec<SetResult>,
+}
+
+/// Runs the placement study on `spec` (see the module doc).
+///
+/// # Errors
+/// [`PlacementError`] from the campaign, selection or evaluation.
+pub fn study(spec: &MachineSpec, cfg: &PlacementConfig) -> Result<PlacementReport, PlacementError> {
+    study_among(spec, cfg, None)
+}
+
+/// [`study`] restricted to the candidate nodes `only` (ambient always stays a candidate).
+///
+/// # Errors
+/// As [`study`].
+pub fn study_among(
+    spec: &MachineSpec,
+    cfg: &PlacementConfig,
+    only: Option<&[String]>,
+) -> Result<PlacementReport, PlacementError> {
+    let mut candidates = candidate_sensors(spec)?;
+    if let Some(only) = only {
+        candidates.retain(|c| c.node == AMBIENT_NODE || only.contains(&c.node));
+    }
+    let cand_spec = with_sensors(spec, candidates.clone())?;
+    let scenarios = selection_cycles(cfg.seed);
+    let data = campaign::calibrate(&cand_spec, &scenarios, &CampaignConfig::new(cfg.seed))
+        .map_err(EvalError::from)?;
+    let selection = selection::select_sensors(&data, &cfg.selection)?;
+    let names = selection.sensor_names();
+    let selected_sensors: Vec<SensorSpec> = names
+        .iter()
+        .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
+        .collect();
+
+    let mut sets: Vec<(String, Vec<String>)> = vec![
+        ("selected".into(), names.clone()),
+        ("study default".into(), default_locations(spec)),
+    ];
+    let pool: Vec<String> = candidates
+        .iter()
+        .map(|c| c.name.clone())
+        .filter(|n| !cfg.selection.reference.contains(n))
+        .collect();
+    let mut rng = StdRng::seed_from_u64(sub_seed(cfg.seed, 9100));
+    for i in 0..cfg.random_draws {
+        let mut p = pool.clone();
+        p.shuffle(&mut rng);
+        let set: Vec<String> = cfg
+            .selection
+            .reference
+            .iter()
+            .cloned()
+            .chain(p.into_iter().take(cfg.selection.count))
+            .collect();
+        sets.push((format!("random #{}", i + 1), set));
+    }
+    sets.push((
+        "all candidates".into(),
+        candidates.iter().map(|c| c.name.clone()).collect(),
+    ));
+
+    let comparison = if cfg.compare_seeds.is_empty() {
+        Vec::new()
+    } else {
+        compare(&cand_spec, &candidates, &sets, cfg, &data)?
+    };
+    Ok(PlacementReport {
+        scenarios: scenarios.iter().map(|c| c.name.clone()).collect(),
+        selection,
+        selected_sensors,
+        comparison,
+    })
+}
+
+/// Trains the hybrid predictor with each set on the typical cycles and evaluates it on every
+/// diagonal under the held-out states, for each compare seed.
+fn compare(
+    cand_spec: &MachineSpec,
+    candidates: &[SensorSpec],
+    sets: &[(String, Vec<String>)],
+    cfg: &PlacementConfig,
+    selection_data: &Dataset,
+) -> Result<Vec<SetResult>, PlacementError> {
+    let cal = ThermalCycle::calibration_set();
+    let cal_names: Vec<&str> = cal.iter().map(|c| c.name.as_str()).collect();
+    let plans = evaluation::diagonal_plans(cand_spec)?;
+    // One calibration dataset per seed, with every candidate logged; each set trains on its
+    // columns. The selection seed's typical cycles are the first cycles of the selection data.
+    let datasets: Vec<Dataset> = cfg
+        .compare_seeds
+        .par_iter()
+        .map(|&seed| {
+            if seed == cfg.seed {
+                let mut d = selection_data.clone();
+                d.records.retain(|r| cal_names.contains(&r.cycle.as_str()));
+                Ok(d)
+            } else {
+                campaign::calibrate(cand_spec, &cal, &CampaignConfig::new(seed))
+                    .map_err(EvalError::from)
+            }
+        })
+        .collect::<Result<_, EvalError>>()?;
+    let mut out = Vec::new();
+    for (label, names) in sets {
+        let sensors: Vec<SensorSpec> = names
+            .iter()
+            .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
+            .collect();
+        let set_spec = with_sensors(cand_spec, sensors)?;
+        let mut runs: Vec<RunReport> = Vec::new();
+        for (seed, data) in cfg.compare_seeds.iter().zip(&datasets) {
+            let settings = Settings {
+                seed: *seed,
+                sensors: names.clone(),
+                ..cfg.settings.clone()
+            };
+            let (hybrid, _) = predictor::train_hybrid(data, &set_spec.geometry(), &settings)
+                .map_err(EvalError::from)?;
+            let states = campaign::evaluation_states(*seed);
+            runs.extend(evaluation::evaluate_predictor(
+                &set_spec, *seed, label, &hybrid, &states, &plans,
+            )?);
+        }
+        out.push(summarise(label, names, &runs));
+    }
+    Ok(out)
+}
+
+fn summarise(label: &str, names: &[String], runs: &[RunReport]) -> SetResult {
+    let mut red: Vec<f64> = runs.iter().map(|r| r.reduction).collect();
+    SetResult {
+        label: label.to_string(),
+        sensors: names.to_vec(),
+        runs: runs.len(),
+        median_reduction: evaluation::median(&mut red).unwrap_or(f64::NAN),
+        worst_reduction: runs.iter().map(|r| r.reduction).fold(f64::INFINITY, f64::min),
+        max_residual_um: runs.iter().map(|r| r.max_after_um).fold(0.0, f64::max),
+        mean_rms_after_um: runs.iter().map(|r| r.rms_after_um).sum::<f64>() / runs.len().max(1) as f64,
+    }
+}
+
+/// The structural group of a node, from its name (`spindle`, `headstock`, `column`, `x`, …):
+/// what the coverage line of the report counts.
+fn group_of(name: &str) -> &str {
+    name.split('_').next().unwrap_or(name)
+}
+
+/// Prints the study: candidates, ranking with evidence, clusters, comparison.
+///
+/// # Errors
+/// Write errors.
+pub fn write_report(
+    rep: &PlacementReport,
+    spec: &MachineSpec,
+    cfg: &PlacementConfig,
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    let sel = &rep.selection;
+    let t = spec.sensors.iter().find(|s| s.node != AMBIENT_NODE);
+    writeln!(
+        out,
+        "vmc-twin select-sensors on {}: {} candidate locations (thermal nodes + ambient), read as thermistors{}",
+        spec.machine.name,
+        sel.candidates.len(),
+        t.map(|t| format!(
+            " (σ {} °C, τ {} s, {} °C steps)",
+            t.noise_sigma_degc, t.time_constant_s, t.resolution_degc
+        ))
+        .unwrap_or_default()
+    )?;
+    writeln!(
+        out,
+        "selection campaign (machine seed {}): {}; {} rows, {} thermal error channels (laser sweeps, squareness, spindle drifts; rotations × {} mm; {} channels without predictable thermal signal dropped)",
+        cfg.seed,
+        rep.scenarios.join(", "),
+        sel.n_rows,
+        sel.n_channels,
+        cfg.selection.arm_mm,
+        sel.n_channels_dropped
+    )?;
+    writeln!(
+        out,
+        "procedure: greedy forward selection from the cold reference (ambient) on the leave-one-cycle-out RMS error of a linear model (information phase) until no candidate gains {:.0} % of the reference score, then, among candidates with |r| ≥ {} to a thermal error, the one least correlated with the chosen ones (coverage phase); a candidate with |r| ≥ {} to a chosen one is redundant",
+        100.0 * cfg.selection.min_gain_fraction,
+        cfg.selection.min_relevance,
+        cfg.selection.redundancy_corr
+    )?;
+    writeln!(
+        out,
+        "score, µm: reference only {:.3}, all {} candidates {:.3}",
+        sel.reference_score_um,
+        sel.candidates.len(),
+        sel.all_score_um
+    )?;
+    writeln!(
+        out,
+        "{:>4}  {:<22} {:>9} {:>8} {:>7}  {:<28} {:>7}  {}",
+        "rank", "location", "score_um", "gain_um", "max|r|", "strongest error channel", "cluster", "phase"
+    )?;
+    let ev = |name: &str| sel.candidates.iter().find(|c| c.name == name);
+    for (i, r) in sel.reference.iter().enumerate() {
+        if let Some(c) = ev(r) {
+            writeln!(
+                out,
+                "{:>4}  {:<22} {:>9.3} {:>8} {:>7.3}  {:<28} {:>7}",
+                format!("ref{}", i),
+                c.name,
+                sel.reference_score_um,
+                "-",
+                c.max_abs_corr,
+                c.best_channel,
+                c.cluster
+            )?;
+        }
+    }
+    for (i, s) in sel.steps.iter().enumerate() {
+        let c = ev(&s.name);
+        writeln!(
+            out,
+            "{:>4}  {:<22} {:>9.3} {:>8.3} {:>7.3}  {:<28} {:>7}  {}",
+            i + 1,
+            s.name,
+            s.score_um,
+            s.gain_um,
+            c.map_or(f64::NAN, |c| c.max_abs_corr),
+            c.map_or("", |c| c.best_channel.as_str()),
+            c.map_or(0, |c| c.cluster),
+            s.phase.name()
+        )?;
+    }
+    let mut groups: Vec<(String, usize)> = Vec::new();
+    for n in sel.sensor_names() {
+        let g = group_of(&n).to_string();
+        match groups.iter_mut().find(|(k, _)| *k == g) {
+            Some(e) => e.1 += 1,
+            None => groups.push((g, 1)),
+        }
+    }
+    let cov: Vec<String> = groups.iter().map(|(g, n)| format!("{g} ×{n}")).collect();
+    writeln!(out, "coverage by structure: {}", cov.join(", "))?;
+    let n_clusters = sel.candidates.iter().map(|c| c.cluster).max().map_or(0, |m| m + 1);
+    let mut multi = Vec::new();
+    for k in 0..n_clusters {
+        let members: Vec<&str> = sel
+            .candidates
+            .iter()
+            .filter(|c| c.cluster == k)
+            .map(|c| c.name.as_str())
+            .collect();
+        if members.len() > 1 {
+            multi.push(format!("{{{}}}", members.join(", ")));
+        }
+    }
+    writeln!(
+        out,
+        "redundant clusters (|r| ≥ {}): {}",
+        cfg.selection.redundancy_corr,
+        if multi.is_empty() {
+            "none".to_string()
+        } else {
+            multi.join(" ")
+        }
+    )?;
+    if !rep.comparison.is_empty() {
+        let seeds: Vec<String> = cfg.compare_seeds.iter().map(u64::to_string).collect();
+        writeln!(
+            out,
+            "compensation on held-out runs (hybrid predictor trained on the typical cycles with each set; every diagonal × held-out state; machine seeds {}):",
+            seeds.join(",")
+        )?;
+        writeln!(
+            out,
+            "  {:<16} {:>7} {:>5} {:>12} {:>10} {:>13} {:>15}",
+            "sensor set", "sensors", "runs", "median red.", "worst run", "max resid um", "mean RMS' um"
+        )?;
+        for r in &rep.comparison {
+            writeln!(
+                out,
+                "  {:<16} {:>7} {:>5} {:>11.1}% {:>9.1}% {:>13.2} {:>15.2}",
+                r.label,
+                r.sensors.len(),
+                r.runs,
+                100.0 * r.median_reduction,
+                100.0 * r.worst_reduction,
+                r.max_residual_um,
+                r.mean_rms_after_um
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// The study as JSON (selection steps, evidence, comparison).
+///
+/// # Errors
+/// Serialisation errors.
+pub fn report_json(rep: &PlacementReport) -> Result<String, serde_json::Error> {
+    let sel = &rep.selection;
+    let v = serde_json::json!({
+        "scenarios": rep.scenarios,
+        "reference": sel.reference,
+        "reference_score_um": sel.reference_score_um,
+        "all_score_um": sel.all_score_um,
+        "selected": sel.steps.iter().map(|s| serde_json::json!({
+            "name": s.name, "score_um": s.score_um, "gain_um": s.gain_um, "phase": s.phase.name(),
+        })).collect::<Vec<_>>(),
+        "candidates": sel.candidates.iter().map(|c| serde_json::json!({
+            "name": c.name, "cluster": c.cluster, "max_abs_corr": c.max_abs_corr,
+            "best_channel": c.best_channel, "alone_score_um": c.alone_score_um,
+        })).collect::<Vec<_>>(),
+        "comparison": rep.comparison,
+    });
+    serde_json::to_string_pretty(&v)
+}
+
+/// A sensor set file: `[[sensors]]` entries, as in a machine file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSet {
+    /// The sensors, in predictor order.
+    pub sensors: Vec<SensorSpec>,
+}
+
+impl SensorSet {
+    /// TOML text with a header comment (the file `select-sensors` writes).
+    pub fn to_toml(&self, header: &str) -> String {
+        let body = toml::to_string(self).unwrap_or_default();
+        let mut s = String::new();
+        for line in header.lines() {
+            s.push_str("# ");
+            s.push_str(line);
+            s.push('\n');
+        }
+        s.push('\n');
+        s.push_str(&body);
+        s
+    }
+
+    /// Parses a sensor set file; `path` names it in errors.
+    ///
+    /// # Errors
+    /// [`MachineError::Parse`] with the TOML location.
+    pub fn from_toml_str(text: &str, path: &str) -> Result<Self, MachineError> {
+        toml::from_str(text).map_err(|e| MachineError::Parse {
+            path: path.to_string(),
+            msg: e.to_string(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_node_and_ambient_is_a_candidate_with_the_machines_thermistor_model() {
+        let spec = MachineSpec::reference();
+        let c = candidate_sensors(&spec).unwrap();
+        assert_eq!(c.len(), spec.thermal.nodes.len() + 1);
+        assert_eq!(c[0].node, AMBIENT_NODE);
+        let t = spec.sensors.iter().find(|s| s.node != AMBIENT_NODE).unwrap();
+        assert!(c[1..].iter().all(|s| s.noise_sigma_degc == t.noise_sigma_degc
+            && s.time_constant_s == t.time_constant_s
+            && s.resolution_degc == t.resolution_degc));
+        with_sensors(&spec, c).unwrap();
+    }
+
+    #[test]
+    fn selection_scenarios_are_not_evaluation_states() {
+        let sel: Vec<String> = selection_cycles(1).iter().map(|c| c.name.clone()).collect();
+        for s in campaign::evaluation_states(1) {
+            assert!(!sel.contains(&s.cycle.name), "{} is held out", s.cycle.name);
+        }
+    }
+
+    #[test]
+    fn the_default_locations_are_the_reference_machines_nodes() {
+        let spec = MachineSpec::reference();
+        let d = default_locations(&spec);
+        assert_eq!(d[0], AMBIENT_NODE);
+        assert_eq!(d.len(), 12, "{d:?}");
+    }
+
+    #[test]
+    fn a_sensor_set_file_round_trips_and_rejects_unknown_fields() {
+        let spec = MachineSpec::reference();
+        let set = SensorSet {
+            sensors: spec.sensors.clone(),
+        };
+        let text = set.to_toml("test");
+        let back = SensorSet::from_toml_str(&text, "s.toml").unwrap();
+        assert_eq!(back.sensors, set.sensors);
+        let bad = text.replace("noise_sigma_degc", "noise_sigma");
+        let e = SensorSet::from_toml_str(&bad, "s.toml").unwrap_err().to_string();
+        assert!(e.contains("s.toml") && e.contains("noise_sigma"), "{e}");
+    }
+}
