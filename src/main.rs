@@ -214,11 +214,15 @@ fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<MachineSp
         return Ok(spec);
     };
     let name = file.display().to_string();
-    let text = std::fs::read_to_string(file)
-        .with_context(|| format!("{name}: cannot read sensor set"))?;
+    let text =
+        std::fs::read_to_string(file).with_context(|| format!("{name}: cannot read sensor set"))?;
     let set = placement::SensorSet::from_toml_str(&text, &name)?;
-    let spec = placement::with_sensors(&spec, set.sensors)
-        .with_context(|| format!("{name}: sensor set does not fit machine {}", spec.machine.name))?;
+    let spec = placement::with_sensors(&spec, set.sensors).with_context(|| {
+        format!(
+            "{name}: sensor set does not fit machine {}",
+            spec.machine.name
+        )
+    })?;
     Ok(spec)
 }
 
@@ -501,7 +505,12 @@ fn select_sensors(args: SelectArgs) -> Result<()> {
             .collect();
         for w in &wanted {
             if w != "ambient" && !machine.thermal.nodes.iter().any(|n| &n.name == w) {
-                let nodes: Vec<&str> = machine.thermal.nodes.iter().map(|n| n.name.as_str()).collect();
+                let nodes: Vec<&str> = machine
+                    .thermal
+                    .nodes
+                    .iter()
+                    .map(|n| n.name.as_str())
+                    .collect();
                 anyhow::bail!(
                     "--candidates: `{w}` is not a thermal node of {}; use `all` or some of: {}",
                     machine.machine.name,

@@ -103,7 +103,12 @@ pub fn candidate_sensors(spec: &MachineSpec) -> Result<Vec<SensorSpec>, Placemen
         .find(|s| s.node == AMBIENT_NODE)
         .unwrap_or(template);
     Ok(std::iter::once(sensor_on(ambient, AMBIENT_NODE))
-        .chain(spec.thermal.nodes.iter().map(|n| sensor_on(template, &n.name)))
+        .chain(
+            spec.thermal
+                .nodes
+                .iter()
+                .map(|n| sensor_on(template, &n.name)),
+        )
         .collect())
 }
 
@@ -111,7 +116,10 @@ pub fn candidate_sensors(spec: &MachineSpec) -> Result<Vec<SensorSpec>, Placemen
 ///
 /// # Errors
 /// [`MachineError`] naming the bad sensor field.
-pub fn with_sensors(spec: &MachineSpec, sensors: Vec<SensorSpec>) -> Result<MachineSpec, MachineError> {
+pub fn with_sensors(
+    spec: &MachineSpec,
+    sensors: Vec<SensorSpec>,
+) -> Result<MachineSpec, MachineError> {
     let mut s = spec.clone();
     s.sensors = sensors;
     s.validate("sensor set")?;
@@ -352,9 +360,13 @@ fn summarise(label: &str, names: &[String], runs: &[RunReport]) -> SetResult {
         sensors: names.to_vec(),
         runs: runs.len(),
         median_reduction: evaluation::median(&mut red).unwrap_or(f64::NAN),
-        worst_reduction: runs.iter().map(|r| r.reduction).fold(f64::INFINITY, f64::min),
+        worst_reduction: runs
+            .iter()
+            .map(|r| r.reduction)
+            .fold(f64::INFINITY, f64::min),
         max_residual_um: runs.iter().map(|r| r.max_after_um).fold(0.0, f64::max),
-        mean_rms_after_um: runs.iter().map(|r| r.rms_after_um).sum::<f64>() / runs.len().max(1) as f64,
+        mean_rms_after_um: runs.iter().map(|r| r.rms_after_um).sum::<f64>()
+            / runs.len().max(1) as f64,
     }
 }
 
@@ -413,8 +425,8 @@ pub fn write_report(
     )?;
     writeln!(
         out,
-        "{:>4}  {:<22} {:>9} {:>8} {:>7}  {:<28} {:>7}  {}",
-        "rank", "location", "score_um", "gain_um", "max|r|", "strongest error channel", "cluster", "phase"
+        "{:>4}  {:<22} {:>9} {:>8} {:>7}  {:<28} {:>7}  phase",
+        "rank", "location", "score_um", "gain_um", "max|r|", "strongest error channel", "cluster"
     )?;
     let ev = |name: &str| sel.candidates.iter().find(|c| c.name == name);
     for (i, r) in sel.reference.iter().enumerate() {
@@ -457,7 +469,12 @@ pub fn write_report(
     }
     let cov: Vec<String> = groups.iter().map(|(g, n)| format!("{g} ×{n}")).collect();
     writeln!(out, "coverage by structure: {}", cov.join(", "))?;
-    let n_clusters = sel.candidates.iter().map(|c| c.cluster).max().map_or(0, |m| m + 1);
+    let n_clusters = sel
+        .candidates
+        .iter()
+        .map(|c| c.cluster)
+        .max()
+        .map_or(0, |m| m + 1);
     let mut multi = Vec::new();
     for k in 0..n_clusters {
         let members: Vec<&str> = sel
@@ -490,7 +507,13 @@ pub fn write_report(
         writeln!(
             out,
             "  {:<16} {:>7} {:>5} {:>12} {:>10} {:>13} {:>15}",
-            "sensor set", "sensors", "runs", "median red.", "worst run", "max resid um", "mean RMS' um"
+            "sensor set",
+            "sensors",
+            "runs",
+            "median red.",
+            "worst run",
+            "max resid um",
+            "mean RMS' um"
         )?;
         for r in &rep.comparison {
             writeln!(
@@ -577,10 +600,16 @@ mod tests {
         let c = candidate_sensors(&spec).unwrap();
         assert_eq!(c.len(), spec.thermal.nodes.len() + 1);
         assert_eq!(c[0].node, AMBIENT_NODE);
-        let t = spec.sensors.iter().find(|s| s.node != AMBIENT_NODE).unwrap();
-        assert!(c[1..].iter().all(|s| s.noise_sigma_degc == t.noise_sigma_degc
-            && s.time_constant_s == t.time_constant_s
-            && s.resolution_degc == t.resolution_degc));
+        let t = spec
+            .sensors
+            .iter()
+            .find(|s| s.node != AMBIENT_NODE)
+            .unwrap();
+        assert!(c[1..]
+            .iter()
+            .all(|s| s.noise_sigma_degc == t.noise_sigma_degc
+                && s.time_constant_s == t.time_constant_s
+                && s.resolution_degc == t.resolution_degc));
         with_sensors(&spec, c).unwrap();
     }
 
@@ -610,7 +639,9 @@ mod tests {
         let back = SensorSet::from_toml_str(&text, "s.toml").unwrap();
         assert_eq!(back.sensors, set.sensors);
         let bad = text.replace("noise_sigma_degc", "noise_sigma");
-        let e = SensorSet::from_toml_str(&bad, "s.toml").unwrap_err().to_string();
+        let e = SensorSet::from_toml_str(&bad, "s.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("s.toml") && e.contains("noise_sigma"), "{e}");
     }
 }

@@ -96,7 +96,9 @@ pub enum SelectionError {
     #[error("the dataset has {0} thermal cycle(s); selection needs at least 2 (whole cycles are held out)")]
     TooFewCycles(usize),
     /// No usable error channel.
-    #[error("the dataset has no instrument channel measured in every block and no spindle records")]
+    #[error(
+        "the dataset has no instrument channel measured in every block and no spindle records"
+    )]
     NoChannels,
     /// K larger than the eligible candidates.
     #[error("asked for {asked} sensors but only {available} non-redundant candidates are left after {chosen} were chosen")]
@@ -292,14 +294,17 @@ impl SelectionData {
             let mut channels: Vec<String> = Vec::new();
             for (key, _) in &blocks[0].values {
                 if !channels.contains(key)
-                    && blocks.iter().all(|b| b.values.iter().any(|(k2, _)| k2 == key))
+                    && blocks
+                        .iter()
+                        .all(|b| b.values.iter().any(|(k2, _)| k2 == key))
                 {
                     channels.push(key.clone());
                 }
             }
             if !channels.is_empty() {
                 let rows = blocks.len();
-                let temps = DMatrix::from_fn(rows, k, |i, j| blocks[i].temps[j] / blocks[i].n as f64);
+                let temps =
+                    DMatrix::from_fn(rows, k, |i, j| blocks[i].temps[j] / blocks[i].n as f64);
                 let values = DMatrix::from_fn(rows, channels.len(), |i, j| {
                     blocks[i]
                         .values
@@ -404,7 +409,8 @@ impl SelectionData {
             let mut err_sq = vec![0.0; m];
             let mut count = 0usize;
             for fold in 0..self.n_cycles {
-                let train: Vec<usize> = (0..g.cycle.len()).filter(|&i| g.cycle[i] != fold).collect();
+                let train: Vec<usize> =
+                    (0..g.cycle.len()).filter(|&i| g.cycle[i] != fold).collect();
                 let test: Vec<usize> = (0..g.cycle.len()).filter(|&i| g.cycle[i] == fold).collect();
                 if test.is_empty() || train.len() < 2 {
                     continue;
@@ -454,7 +460,10 @@ impl SelectionData {
 const COMPONENTS: [&str; 6] = ["dx_um", "dy_um", "dz_um", "rx_urad", "ry_urad", "rz_urad"];
 
 /// Pearson correlation; 0 when either side is constant.
-fn pearson<'a>(a: impl Iterator<Item = &'a f64> + Clone, b: impl Iterator<Item = &'a f64> + Clone) -> f64 {
+fn pearson<'a>(
+    a: impl Iterator<Item = &'a f64> + Clone,
+    b: impl Iterator<Item = &'a f64> + Clone,
+) -> f64 {
     let n = a.clone().count() as f64;
     if n < 2.0 {
         return 0.0;
@@ -548,22 +557,18 @@ pub fn select_sensors(ds: &Dataset, cfg: &SelectionConfig) -> Result<Selection, 
 
     // Clusters of mutually redundant candidates (complete linkage at the threshold).
     let mut clusters: Vec<Vec<usize>> = Vec::new();
-    let mut cluster_of = vec![0usize; names.len()];
+    let mut cluster_of = Vec::with_capacity(names.len());
     for i in 0..names.len() {
         let found = clusters.iter().position(|cl| {
             cl.iter()
                 .all(|&j| data.temp_corr(i, j).abs() >= cfg.redundancy_corr)
         });
-        match found {
-            Some(c) => {
-                clusters[c].push(i);
-                cluster_of[i] = c;
-            }
-            None => {
-                cluster_of[i] = clusters.len();
-                clusters.push(vec![i]);
-            }
+        let c = found.unwrap_or(clusters.len());
+        if c == clusters.len() {
+            clusters.push(Vec::new());
         }
+        clusters[c].push(i);
+        cluster_of.push(c);
     }
     let candidates: Vec<CandidateEvidence> = (0..names.len())
         .map(|i| {
@@ -602,17 +607,16 @@ pub fn select_sensors(ds: &Dataset, cfg: &SelectionConfig) -> Result<Selection, 
                 (i, data.score_um(&with))
             })
             .collect();
-        let Some(&(best_i, best_s)) = scored
-            .iter()
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-        else {
+        let Some(&(best_i, best_s)) = scored.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
             return Err(SelectionError::NotEnoughCandidates {
                 asked: cfg.count,
                 available: eligible.len(),
                 chosen: steps.len(),
             });
         };
-        if phase == Phase::Information && score - best_s < cfg.min_gain_fraction * reference_score_um {
+        if phase == Phase::Information
+            && score - best_s < cfg.min_gain_fraction * reference_score_um
+        {
             phase = Phase::Coverage;
         }
         let (i, s) = match phase {

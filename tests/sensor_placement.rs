@@ -1,0 +1,184 @@
+//! Sensor placement (issue 4/6 part A) through the real binary: `select-sensors` ranks the
+//! candidate locations, writes a sensor set that the other commands accept with `--sensors`,
+//! compares compensation quality on held-out runs, and rejects bad requests clearly.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vmc-twin-placement-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+fn vmc(cwd: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("run vmc-twin")
+}
+
+fn text(o: &Output) -> (String, String) {
+    (
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+fn diag_xy() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("trajectories/diag_xy.ngc")
+        .display()
+        .to_string()
+}
+
+#[test]
+fn select_sensors_ranks_candidates_and_writes_a_set_that_run_accepts() {
+    let dir = temp_dir("select");
+    let o = vmc(
+        &dir,
+        &[
+            "select-sensors",
+            "--count",
+            "4",
+            "--no-compare",
+            "-o",
+            "s.toml",
+        ],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("40 candidate locations"), "{out}");
+    // Reference first, then 4 ranked locations with their evidence.
+    let ranked: Vec<&str> = out
+        .lines()
+        .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+        .filter(|l| l.contains("information") || l.contains("coverage"))
+        .collect();
+    assert_eq!(ranked.len(), 4, "{out}");
+    let set = std::fs::read_to_string(dir.join("s.toml")).unwrap();
+    assert_eq!(set.matches("[[sensors]]").count(), 5, "{set}");
+    assert!(set.contains("node = \"ambient\""), "{set}");
+    // The set drives a run: the sensor line names the chosen locations.
+    let o = vmc(&dir, &["run", &diag_xy(), "--sensors", "s.toml"]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let first_chosen = ranked[0].split_whitespace().nth(1).unwrap();
+    assert!(out.contains(first_chosen), "{first_chosen} not in\n{out}");
+    // Nothing is overwritten without --force.
+    let o = vmc(
+        &dir,
+        &[
+            "select-sensors",
+            "--count",
+            "4",
+            "--no-compare",
+            "-o",
+            "s.toml",
+        ],
+    );
+    assert!(!o.status.success());
+    assert!(text(&o).1.contains("--force"), "{}", text(&o).1);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_comparison_reports_each_sensor_set_on_held_out_runs() {
+    let dir = temp_dir("compare");
+    let o = vmc(
+        &dir,
+        &[
+            "select-sensors",
+            "--count",
+            "3",
+            "--random-draws",
+            "1",
+            "-o",
+            "s.toml",
+            "--json",
+            "study.json",
+        ],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    for label in ["selected", "study default", "random #1", "all candidates"] {
+        let line = out
+            .lines()
+            .find(|l| l.trim_start().starts_with(label))
+            .unwrap_or_else(|| panic!("no `{label}` row in\n{out}"));
+        // 7 diagonals × 7 held-out states for one seed.
+        assert!(line.contains(" 49 "), "{line}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("study.json")).unwrap()).unwrap();
+    let cmp = json["comparison"].as_array().unwrap();
+    assert_eq!(cmp.len(), 4);
+    for c in cmp {
+        let red = c["median_reduction"].as_f64().unwrap();
+        // Any set with ambient + 3 locations removes part of the error, none all of it.
+        assert!(red > 0.0 && red < 1.0, "{c}");
+    }
+    assert_eq!(cmp[0]["sensors"].as_array().unwrap().len(), 4);
+    assert_eq!(cmp[3]["sensors"].as_array().unwrap().len(), 40);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_selection_requests_are_clear_errors() {
+    let dir = temp_dir("bad");
+    let o = vmc(
+        &dir,
+        &[
+            "select-sensors",
+            "--candidates",
+            "spindle_nose,spindel_motor",
+            "--no-compare",
+        ],
+    );
+    let err = text(&o).1;
+    assert!(!o.status.success());
+    assert!(
+        err.contains("`spindel_motor` is not a thermal node") && err.contains("spindle_motor"),
+        "{err}"
+    );
+
+    let o = vmc(
+        &dir,
+        &[
+            "select-sensors",
+            "--candidates",
+            "spindle_nose,x_motor",
+            "--count",
+            "3",
+            "--no-compare",
+        ],
+    );
+    let err = text(&o).1;
+    assert!(!o.status.success());
+    assert!(err.contains("asked for 3 sensors"), "{err}");
+
+    let o = vmc(&dir, &["select-sensors", "--count", "0", "--no-compare"]);
+    assert!(
+        text(&o).1.contains("--count must be at least 1"),
+        "{}",
+        text(&o).1
+    );
+
+    std::fs::write(
+        dir.join("bad.toml"),
+        "[[sensors]]\nname = \"S1\"\nnode = \"spindle_nosee\"\n",
+    )
+    .unwrap();
+    let o = vmc(&dir, &["run", &diag_xy(), "--sensors", "bad.toml"]);
+    let err = text(&o).1;
+    assert!(!o.status.success());
+    assert!(
+        err.contains("bad.toml") && err.contains("spindle_nosee"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
