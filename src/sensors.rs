@@ -171,6 +171,9 @@ pub struct SensorBank {
     specs: Vec<SensorSpec>,
     node_count: usize,
     lag_degc: Vec<f64>,
+    /// Lag gains `1 − e^(−dt/τ)` for the step `lag_gain_dt_bits` (steps repeat: computed once).
+    lag_gain: Vec<f64>,
+    lag_gain_dt_bits: Option<u64>,
     primed: bool,
     rng: StdRng,
     readings: SensorReadings,
@@ -203,6 +206,8 @@ impl SensorBank {
             specs: specs.to_vec(),
             node_count: node_names.len(),
             lag_degc: vec![f64::NAN; specs.len()],
+            lag_gain: vec![0.0; specs.len()],
+            lag_gain_dt_bits: None,
             primed: false,
             rng: StdRng::seed_from_u64(seed),
         })
@@ -240,6 +245,16 @@ impl SensorBank {
         if !ambient_degc.is_finite() {
             return Err(bad("ambient_degc", "finite", ambient_degc.to_string()));
         }
+        if self.lag_gain_dt_bits != Some(dt_s.to_bits()) {
+            for (g, spec) in self.lag_gain.iter_mut().zip(&self.specs) {
+                *g = if spec.time_constant_s == 0.0 {
+                    1.0
+                } else {
+                    -(-dt_s / spec.time_constant_s).exp_m1()
+                };
+            }
+            self.lag_gain_dt_bits = Some(dt_s.to_bits());
+        }
         for (i, spec) in self.specs.iter().enumerate() {
             let input = match self.inputs[i] {
                 Input::Node(n) => node_temps_degc[n],
@@ -249,7 +264,7 @@ impl SensorBank {
             if !self.primed || spec.time_constant_s == 0.0 {
                 *lag = input;
             } else {
-                *lag += (input - *lag) * -(-dt_s / spec.time_constant_s).exp_m1();
+                *lag += (input - *lag) * self.lag_gain[i];
             }
             // Always draw, so the noise stream does not depend on which sensors have σ = 0.
             let z: f64 = StandardNormal.sample(&mut self.rng);
