@@ -270,7 +270,18 @@ pub fn run_campaign(
     seeds: &[u64],
     settings: &Settings,
 ) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
-    let cal_cycles = ThermalCycle::calibration_set();
+    run_campaign_with_cycles(spec, seeds, settings, &ThermalCycle::calibration_set())
+}
+
+/// [`run_campaign`] calibrated on `cal_cycles` instead of the typical set (scaling studies, a
+/// user's own calibration plan).
+pub fn run_campaign_with_cycles(
+    spec: &MachineSpec,
+    seeds: &[u64],
+    settings: &Settings,
+    cal_cycles: &[ThermalCycle],
+) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
+    let cal_cycles = cal_cycles.to_vec();
     let plans = diagonal_plans(spec)?;
     let mut report = CampaignReport {
         machine: spec.machine.name.clone(),

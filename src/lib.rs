@@ -7,6 +7,7 @@
 //! as [`predict`]; it does not depend on this crate (the information boundary of DESIGN §3).
 pub use vmc_predict as predict;
 
+pub mod benchmark;
 pub mod campaign;
 pub mod errors;
 pub mod evaluation;

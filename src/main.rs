@@ -45,6 +45,19 @@ enum Command {
     /// print the ranking with its evidence, compare compensation with the selected, default,
     /// random and all locations on held-out runs, and write the sensor set (TOML).
     SelectSensors(SelectArgs),
+    /// Measure the speed figures (compensation query, 8 h of machine time, campaign) and how
+    /// they scale with the interpolation cycle and the number of calibration cycles.
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Repeats of the cheap measurements (median reported).
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+    /// Skip the campaign scaling (the slowest part, ~1 min).
+    #[arg(long)]
+    quick: bool,
 }
 
 #[derive(clap::Args)]
@@ -195,6 +208,7 @@ fn main() -> ExitCode {
         Command::Campaign(args) => run_campaign(args),
         Command::Train(args) => train(args),
         Command::SelectSensors(args) => select_sensors(args),
+        Command::Bench(args) => bench(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -571,6 +585,58 @@ fn select_and_write(
     if let Some(j) = &args.json {
         report::write_atomic(j, placement::report_json(&rep)?.as_bytes(), args.force)?;
         writeln!(out, "wrote {}", j.display())?;
+    }
+    Ok(())
+}
+
+fn bench(args: BenchArgs) -> Result<()> {
+    use vmc_twin::benchmark;
+    let spec = MachineSpec::reference();
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "vmc-twin bench on {} ({} threads; release build: {})",
+        spec.machine.name,
+        rayon::current_num_threads(),
+        !cfg!(debug_assertions)
+    )?;
+    for r in benchmark::query(&spec, args.repeats)? {
+        writeln!(out, "  {:<90} {:>12.1} {}", r.what, r.value, r.unit)?;
+    }
+    writeln!(
+        out,
+        "8 h of machine time, XY diagonal every 30 min, error at every interpolation sample:"
+    )?;
+    writeln!(
+        out,
+        "  {:>10} {:>12} {:>10} {:>14}",
+        "cycle ms", "samples", "wall s", "ns / sample"
+    )?;
+    for ms in [4.0, 2.0, 1.0, 0.5, 0.25] {
+        let (s, n) = benchmark::machine_8h(&spec, ms, args.repeats.min(3))?;
+        writeln!(
+            out,
+            "  {ms:>10} {n:>12} {s:>10.3} {:>14.0}",
+            s * 1e9 / n.max(1) as f64
+        )?;
+    }
+    if !args.quick {
+        writeln!(
+            out,
+            "campaign (seed 1: calibration, 3 trainings, 147 held-out runs) vs calibration cycles:"
+        )?;
+        writeln!(out, "  {:>8} {:>8} {:>10}", "cycles", "runs", "wall s")?;
+        for n in [2, 4, 6, 12] {
+            let (s, runs) =
+                benchmark::campaign_with(&spec, &benchmark::calibration_cycles(n), &[1])?;
+            writeln!(out, "  {n:>8} {runs:>8} {s:>10.2}")?;
+        }
+        let (s, runs) =
+            benchmark::campaign_with(&spec, &benchmark::calibration_cycles(6), &[1, 2, 3])?;
+        writeln!(out, "default campaign, seeds 1,2,3 ({runs} runs): {s:.2} s")?;
+    }
+    if let Some(m) = benchmark::peak_rss_mib() {
+        writeln!(out, "peak resident memory of this process: {m:.0} MiB")?;
     }
     Ok(())
 }

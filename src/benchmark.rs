@@ -1,0 +1,197 @@
+//! `vmc-twin bench`: the speed figures of DESIGN §13 and how they scale, measured in one
+//! command (the criterion benches in `benches/loop.rs` give the same first figures with
+//! confidence intervals; this command adds the scaling tables).
+//!
+//! Wall-clock times of the whole process's work, release build; the figures depend on the
+//! machine and its load, so each is the median of `repeats` runs where that is cheap.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::campaign::{self, CampaignConfig, ThermalCycle};
+use crate::evaluation::{self, EvalError};
+use crate::machine::MachineSpec;
+use crate::predict::controller::Compensator;
+use crate::predict::predictor::{self, Settings};
+use crate::program;
+use crate::sim::{self, SampleMode, SimConfig};
+use crate::twin::Twin;
+
+/// One measured row: what, the figure, its unit.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// What was measured.
+    pub what: String,
+    /// The figure.
+    pub value: f64,
+    /// Its unit.
+    pub unit: &'static str,
+}
+
+fn row(what: impl Into<String>, value: f64, unit: &'static str) -> Row {
+    Row {
+        what: what.into(),
+        value,
+        unit,
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Compensation query: median ns per query over `repeats` batches of 100,000 queries on one
+/// core, and the batch throughput on all cores (queries/s).
+///
+/// # Errors
+/// Campaign or training errors.
+pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> {
+    let data = campaign::calibrate(
+        spec,
+        &ThermalCycle::calibration_set(),
+        &CampaignConfig::new(1),
+    )?;
+    let settings = Settings {
+        seed: 1,
+        ..Settings::default()
+    };
+    let (model, _) = predictor::train_hybrid(&data, &spec.geometry(), &settings)?;
+    let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
+    let temps: Vec<f64> = (0..names.len()).map(|i| 22.0 + 0.25 * i as f64).collect();
+    const N: usize = 100_000;
+    let batch = |comp: &mut Compensator<_>, offset: usize| {
+        let mut acc = 0.0;
+        for k in 0..N {
+            let s = ((k + offset) % 1000) as f64 * 0.5;
+            let q = comp.axis_command_mm([10.0 + s, 60.0 + 0.5 * s, -225.0], &temps);
+            acc += q[0];
+        }
+        std::hint::black_box(acc)
+    };
+    let mut comp = Compensator::for_machine(model.clone(), &names)?;
+    batch(&mut comp, 0); // warm-up
+    let per_query_ns: Vec<f64> = (0..repeats.max(1))
+        .map(|r| {
+            let t = Instant::now();
+            batch(&mut comp, r);
+            t.elapsed().as_secs_f64() * 1e9 / N as f64
+        })
+        .collect();
+    let threads = rayon::current_num_threads();
+    let t = Instant::now();
+    (0..threads * 4).into_par_iter().try_for_each(|r| {
+        let mut c = Compensator::for_machine(model.clone(), &names)?;
+        batch(&mut c, r);
+        Ok::<(), EvalError>(())
+    })?;
+    let qps = (threads * 4 * N) as f64 / t.elapsed().as_secs_f64();
+    Ok(vec![
+        row(
+            "one compensation query (hybrid: all nets + synthesis + fixed-point solve), one core, median",
+            median(per_query_ns),
+            "ns",
+        ),
+        row(
+            format!("batch compensation throughput, {threads} threads"),
+            qps,
+            "queries/s",
+        ),
+    ])
+}
+
+/// 8 h of machine time with an XY diagonal every 30 min, motion sampled at `interp_ms`:
+/// seconds of wall time (median of `repeats`) and the number of samples.
+///
+/// # Errors
+/// Planning or simulation errors.
+pub fn machine_8h(
+    spec: &MachineSpec,
+    interp_ms: f64,
+    repeats: usize,
+) -> Result<(f64, usize), EvalError> {
+    let plan = program::plan_source(
+        include_str!("../trajectories/diag_xy.ngc"),
+        "diag_xy.ngc",
+        spec,
+        spec.axes.home_mm,
+    )?;
+    let cycle = &ThermalCycle::calibration_set()[2];
+    let cfg = SimConfig {
+        sample_mode: SampleMode::EveryCycle,
+        interp_cycle_s: interp_ms * 1e-3,
+        ..SimConfig::default()
+    };
+    let mut times = Vec::new();
+    let mut n = 0;
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        let mut twin = Twin::new(spec, 1)?;
+        n = 0;
+        for k in 0..16 {
+            campaign::drive(&mut twin, cycle, 0.0, k as f64 * 1800.0, 1.0)?;
+            let mut count = sim::CountPoints::default();
+            sim::execute(&mut twin, &plan, &cfg, None, &mut count)?;
+            n += count.points;
+        }
+        times.push(t.elapsed().as_secs_f64());
+    }
+    Ok((median(times), n))
+}
+
+/// The default campaign (one seed) calibrated on `cycles`: seconds of wall time and runs.
+///
+/// # Errors
+/// Campaign errors.
+pub fn campaign_with(
+    spec: &MachineSpec,
+    cycles: &[ThermalCycle],
+    seeds: &[u64],
+) -> Result<(f64, usize), EvalError> {
+    let t = Instant::now();
+    let (rep, _) = evaluation::run_campaign_with_cycles(spec, seeds, &Settings::default(), cycles)?;
+    Ok((t.elapsed().as_secs_f64(), rep.runs.len()))
+}
+
+/// The typical calibration cycles, `n` of them: the first `n` of the set, repeated (as the same
+/// duty on another day, renamed `<name>_day<k>`) when `n` exceeds it.
+pub fn calibration_cycles(n: usize) -> Vec<ThermalCycle> {
+    let base = ThermalCycle::calibration_set();
+    (0..n)
+        .map(|i| {
+            let mut c = base[i % base.len()].clone();
+            if i >= base.len() {
+                c.name = format!("{}_day{}", c.name, i / base.len() + 1);
+            }
+            c
+        })
+        .collect()
+}
+
+/// Peak resident memory of this process so far (VmHWM), MiB; None where /proc is missing.
+pub fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn more_calibration_cycles_than_the_set_repeat_it_under_new_names() {
+        let c = calibration_cycles(14);
+        assert_eq!(c.len(), 14);
+        let names: std::collections::HashSet<_> = c.iter().map(|c| c.name.clone()).collect();
+        assert_eq!(
+            names.len(),
+            14,
+            "names must stay unique (validation split by cycle)"
+        );
+        assert_eq!(c[6].phases, c[0].phases);
+        assert!(c[13].name.ends_with("_day3"), "{}", c[13].name);
+    }
+}
