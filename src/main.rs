@@ -16,6 +16,8 @@ use vmc_twin::report::{self, RunLog};
 use vmc_twin::sim::{self, SampleMode, SimConfig};
 use vmc_twin::twin::Twin;
 
+mod thermal_cli;
+
 #[derive(Parser)]
 #[command(
     name = "vmc-twin",
@@ -40,6 +42,11 @@ enum Command {
     Campaign(CampaignArgs),
     /// Train a predictor on a calibration dataset (CSV) and write the model (JSON).
     Train(TrainArgs),
+    /// Fit a thermal-drift model (linear + MLP on filtered temperatures) on measured data (CSV),
+    /// evaluate it on the held-out last cycle and write it (JSON).
+    FitThermal(thermal_cli::FitThermalArgs),
+    /// Predict the drift columns of a CSV file with a model from `fit-thermal`.
+    PredictThermal(thermal_cli::PredictThermalArgs),
 }
 
 #[derive(clap::Args)]
@@ -142,6 +149,8 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate(args),
         Command::Campaign(args) => run_campaign(args),
         Command::Train(args) => train(args),
+        Command::FitThermal(args) => thermal_cli::fit_thermal(args),
+        Command::PredictThermal(args) => thermal_cli::predict_thermal(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -11,3 +11,4 @@ pub mod metrics;
 pub mod nn;
 pub mod predictor;
 pub mod synthesis;
+pub mod thermal_fit;
