@@ -5,7 +5,8 @@
 //! Levenberg–Marquardt to the residual `y − L(φ)` of the training rows, early-stopped on the
 //! validation rows (hidden width chosen there too). The linear part extrapolates sensibly
 //! beyond the training temperatures (a hotter cycle than any seen); the net only corrects what is
-//! not linear. [`Architecture::Linear`] is `L` alone (the baseline), [`Architecture::Mlp`] is
+//! not linear, and only on the outputs where it lowered the validation error (per-output choice,
+//! `mlp_outputs`). [`Architecture::Linear`] is `L` alone (the baseline), [`Architecture::Mlp`] is
 //! `N` fitted to `y` directly.
 
 use serde::{Deserialize, Serialize};
@@ -193,6 +194,9 @@ pub struct ThermalModel {
     /// Net part (features → outputs or linear residual), with its input and output
     /// normalisation.
     pub mlp: Option<Regressor>,
+    /// Per output: whether the net's correction is added (linear-mlp keeps it only on outputs
+    /// where it lowered the validation RMSE of the linear part; all true for mlp).
+    pub mlp_outputs: Vec<bool>,
     /// The held-out evaluation made when fitting.
     pub evaluation: Option<Evaluation>,
 }
@@ -405,6 +409,7 @@ impl Parts {
             outputs: outputs.iter().map(|s| Channel::from_name(s)).collect(),
             features: settings.features.clone(),
             linear: (settings.architecture != Architecture::Mlp).then_some(self.linear),
+            mlp_outputs: vec![self.net.is_some(); outputs.len()],
             mlp: self.net.map(|n| n.0),
             evaluation: None,
         }
@@ -482,10 +487,15 @@ pub fn fit(
         net: sel.net.as_ref().map(|n| (n.1, n.2)),
     };
     let sel_lin = predict_linear(&sel.linear, &feats, width, n_out);
-    let sel_model = sel.into_model(table, inputs, outputs, settings);
-    let sel_pred = sel_model.predict_features(&feats)?;
-    let val_model = rmse(&y, &sel_pred, &val_rows);
+    let mut sel_model = sel.into_model(table, inputs, outputs, settings);
     let val_lin = rmse(&y, &sel_lin, &val_rows);
+    let val_net = rmse(&y, &sel_model.predict_features(&feats)?, &val_rows);
+    let mask: Vec<bool> = match settings.architecture {
+        Architecture::LinearMlp => val_net.iter().zip(&val_lin).map(|(n, l)| n < l).collect(),
+        _ => sel_model.mlp_outputs.clone(),
+    };
+    sel_model.mlp_outputs.clone_from(&mask);
+    let val_model = rmse(&y, &sel_model.predict_features(&feats)?, &val_rows);
 
     // Final stage: training + validation rows.
     let fit_rows: Vec<usize> = train_rows.iter().chain(&val_rows).copied().collect();
@@ -502,6 +512,7 @@ pub fn fit(
     let n_fit_net = thin_rows(&fit_rows, t, settings.min_train_step_s).len();
     let lin_pred = predict_linear(&fin.linear, &feats, width, n_out);
     let mut model = fin.into_model(table, inputs, outputs, settings);
+    model.mlp_outputs = mask;
     let pred = model.predict_features(&feats)?;
     let hold_model = rmse(&y, &pred, &hold_rows);
     let hold_lin = rmse(&y, &lin_pred, &hold_rows);
@@ -567,7 +578,11 @@ impl ThermalModel {
             }
             if let Some(m) = &self.mlp {
                 m.predict_into(x, &mut scratch, &mut o)?;
-                sum.iter_mut().zip(&o).for_each(|(s, v)| *s += v);
+                for ((s, v), on) in sum.iter_mut().zip(&o).zip(&self.mlp_outputs) {
+                    if *on {
+                        *s += v;
+                    }
+                }
             }
             for (c, v) in out.iter_mut().zip(&sum) {
                 c[r] = *v;
@@ -651,7 +666,8 @@ impl ThermalModel {
             Architecture::Mlp => m.linear.is_none() && m.mlp.is_some(),
             Architecture::LinearMlp => m.linear.is_some() && m.mlp.is_some(),
         };
-        if m.inputs.is_empty() || n_out == 0 || !lin_ok || !mlp_ok || !parts_ok {
+        let mask_ok = m.mlp_outputs.len() == n_out;
+        if m.inputs.is_empty() || n_out == 0 || !lin_ok || !mlp_ok || !parts_ok || !mask_ok {
             return Err(bad(format!(
                 "inconsistent model: {} inputs × {} features each, {n_out} outputs, \
                  architecture {} do not match its parts",
