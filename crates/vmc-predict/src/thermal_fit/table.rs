@@ -265,3 +265,57 @@ pub fn read_csv(
         lines: rows_line,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn request(cols: &[&str]) -> TableRequest {
+        TableRequest {
+            time: None,
+            required: cols.iter().map(|c| (c.to_string(), "input")).collect(),
+            optional: vec!["ch9_um".into()],
+            min_rows: 2,
+        }
+    }
+
+    #[test]
+    fn minutes_are_converted_and_quotes_crlf_and_blank_lines_are_accepted() {
+        let text = "\"time_min\", t1_degc ,ch1_um\r\n0,20.5,1\r\n\r\n1.5,21,2\r\n";
+        let t = read_csv(text, "a.csv", &request(&["t1_degc"])).unwrap();
+        assert_eq!(t.time_s, vec![0.0, 90.0]);
+        assert_eq!(t.column("t1_degc"), Some(&[20.5, 21.0][..]));
+        // Optional columns absent from the file are simply not there.
+        assert_eq!(t.column("ch9_um"), None);
+        assert_eq!(t.lines, vec![2, 4]);
+    }
+
+    #[test]
+    fn the_closest_column_is_suggested_only_when_it_is_close() {
+        let header: Vec<String> = ["time_s", "t1_degc", "t12_degc", "ch1_um"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        assert_eq!(closest("T1_degC", &header), Some("t1_degc"));
+        assert_eq!(closest("ch1_mm", &header), Some("ch1_um"));
+        assert_eq!(closest("spindle_rpm", &header), None);
+    }
+
+    #[test]
+    fn unknown_time_units_duplicates_and_ragged_rows_are_errors() {
+        let e = read_csv("time_ms,a_x\n0,1\n", "f", &request(&["a_x"])).unwrap_err();
+        assert!(matches!(e, ThermalFitError::TimeUnit { .. }), "{e}");
+        let e = read_csv("time_s,a_x,a_x\n0,1,2\n", "f", &request(&["a_x"])).unwrap_err();
+        assert!(e.to_string().contains("appears twice"), "{e}");
+        let e = read_csv("time_s,a_x\n0,1\n1\n", "f", &request(&["a_x"])).unwrap_err();
+        assert_eq!(e.to_string(), "f: line 3: 1 fields, the header has 2");
+        let e = read_csv("time_s,a_x\n0,\n", "f", &request(&["a_x"])).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "f: line 2, column \"a_x\": empty cell (\"\")"
+        );
+        // Cells of columns nobody asked for are not parsed.
+        let t = read_csv("time_s,a_x,junk\n0,1,n/a\n1,2,?\n", "f", &request(&["a_x"])).unwrap();
+        assert_eq!(t.len(), 2);
+    }
+}
