@@ -7,9 +7,10 @@
 //! - features ([`FeatureSpec`]): each named input as read and its differences to a bank of
 //!   first-order low-pass filters (time constants 15 min, 1 h, 3 h by default), all computed
 //!   causally (row n uses rows 0…n only) with the filter state set to the first reading;
-//! - model ([`ThermalModel`]): a linear regression on the features plus an MLP fitted to the
-//!   linear part's residual (Levenberg–Marquardt, normalisation, early stopping, seeded
-//!   initialisation: the predictor's [`crate::nn`] machinery); `linear` alone is the baseline;
+//! - model ([`ThermalModel`]): per output, a linear regression on the features, the same plus an
+//!   MLP fitted to its residual, or an MLP on the features (Levenberg–Marquardt, normalisation,
+//!   early stopping, seeded initialisation: the predictor's [`crate::nn`] machinery), chosen on
+//!   the validation cycle; the linear regression alone is the baseline;
 //! - split ([`Split`]): time-ordered. The held-out part (the last cycle) is never used for
 //!   fitting or model selection; early-stopping validation is the last part of the remaining
 //!   rows in time (never a shuffled subset of one time series);
@@ -21,13 +22,15 @@
 //! seconds. Nothing here touches files; [`read_csv`] parses text.
 
 mod features;
+mod fit;
 mod model;
 mod split;
 mod table;
 
 pub use features::FeatureSpec;
+pub use fit::{fit, FitSettings};
 pub use model::{
-    fit, Architecture, Channel, ChannelScore, Evaluation, FitSettings, ThermalModel, FORMAT_NAME,
+    Architecture, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel, FORMAT_NAME,
     FORMAT_VERSION,
 };
 pub use split::Split;
