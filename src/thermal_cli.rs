@@ -57,6 +57,9 @@ pub struct FitThermalArgs {
     /// best on validation is kept.
     #[arg(long, value_delimiter = ',', default_values_t = [0.01, 0.1, 1.0, 10.0, 100.0])]
     ridge: Vec<f64>,
+    /// Members of each MLP ensemble (their predictions are averaged).
+    #[arg(long, default_value_t = 5)]
+    ensemble: usize,
     /// Seed of the network initialisation.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -142,6 +145,7 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
         ridge_candidates: args.ridge.clone(),
         val_fraction: args.val_fraction,
         seed: args.seed,
+        ensemble: args.ensemble,
         ..FitSettings::default()
     };
     let model = thermal_fit::fit(&table, &args.inputs, &args.outputs, &split, &settings)?;

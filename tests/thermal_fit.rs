@@ -203,7 +203,7 @@ fn fitted_model_predicts_every_row_and_beats_a_constant_on_the_held_out_cycle() 
     }
     let n = (hold_rows.len() * OUTPUTS.len()) as f64;
     let (rmse_model, rmse_const) = ((ss_model / n).sqrt(), (ss_const / n).sqrt());
-    // Measured on this slice: ≈ 8.6 µm vs ≈ 18.6 µm.
+    // Measured on this slice: 10.9 µm vs 18.6 µm (seed 0; the linear part alone: 10.2 µm).
     assert!(
         rmse_model < 0.75 * rmse_const,
         "held-out RMSE {rmse_model:.3} µm vs constant {rmse_const:.3} µm"
