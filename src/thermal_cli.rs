@@ -36,7 +36,8 @@ pub struct FitThermalArgs {
     /// cycle of --cycle-col, else the last quarter of the time span.
     #[arg(long)]
     holdout_from_s: Option<f64>,
-    /// Column whose rise from 0 starts a cycle (default: spindle_rpm if the file has it).
+    /// Column whose rise from 0 starts a cycle (default: spindle_rpm if the file has it); the
+    /// validation part is the cycle before the held-out one.
     #[arg(long)]
     cycle_col: Option<String>,
     /// Fraction of the rows before the held-out part (the last ones) that validate.
@@ -108,8 +109,11 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
         .split(',')
         .map(|s| s.trim().trim_matches('"').to_string())
         .collect();
+    // The cycle column also places the validation cycle when the held-out start is given.
     let cycle_col = args.cycle_col.clone().or_else(|| {
-        (args.holdout_from_s.is_none() && header.iter().any(|h| h == "spindle_rpm"))
+        header
+            .iter()
+            .any(|h| h == "spindle_rpm")
             .then(|| "spindle_rpm".to_string())
     });
     let mut required: Vec<(String, &'static str)> = args

@@ -60,7 +60,8 @@ impl FeatureSpec {
         1 + self.time_constants_s.len()
     }
 
-    /// Feature names for inputs `names` (`<input>` and `<input>_lag<τ>s`).
+    /// Feature names for inputs `names`, in feature order: `<input>`, then `<input>-lowpass<τ>s`
+    /// for each τ (the difference input − filtered input).
     pub fn names(&self, names: &[String]) -> Vec<String> {
         let mut out = Vec::new();
         for n in names {
