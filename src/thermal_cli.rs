@@ -200,18 +200,22 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
         "output", "raw_rms", "constant", "linear", "ratio", "form", "model", "ratio", "aim"
     );
     for c in &ev.channels {
-        let met = c.model_ratio <= 0.25 && c.model_rmse < c.linear_rmse;
+        let met = c.model_ratio.is_some_and(|r| r <= 0.25) && c.model_rmse < c.linear_rmse;
+        let pct = |r: Option<f64>| {
+            r.map(|v| format!("{:.1}%", 100.0 * v))
+                .unwrap_or_else(|| "-".into())
+        };
         let _ = writeln!(
             s,
-            "  {:<10} {:>8.3} {:>8.3} {:>8.3} {:>6.1}% {:<10} {:>8.3} {:>6.1}%  {:<8} | {:>17.3} {:>6.3}",
+            "  {:<10} {:>8.3} {:>8.3} {:>8.3} {:>7} {:<10} {:>8.3} {:>7}  {:<8} | {:>17.3} {:>6.3}",
             c.output.name,
             c.raw_rms,
             c.constant_rmse,
             c.linear_rmse,
-            100.0 * c.linear_ratio,
+            pct(c.linear_ratio),
             c.form.name(),
             c.model_rmse,
-            100.0 * c.model_ratio,
+            pct(c.model_ratio),
             if met { "met" } else { "NOT met" },
             c.val_linear_rmse,
             c.val_model_rmse

@@ -500,8 +500,8 @@ pub fn fit(
             constant_rmse: constant[k],
             linear_rmse: hold_lin[k],
             model_rmse: hold_model[k],
-            linear_ratio: hold_lin[k] / raw[k],
-            model_ratio: hold_model[k] / raw[k],
+            linear_ratio: (raw[k] > 0.0).then(|| hold_lin[k] / raw[k]),
+            model_ratio: (raw[k] > 0.0).then(|| hold_model[k] / raw[k]),
             val_linear_rmse: val_lin[k],
             val_model_rmse: val_model[k],
         })

@@ -132,10 +132,10 @@ pub struct ChannelScore {
     pub linear_rmse: f64,
     /// RMSE of the fitted model on the held-out part.
     pub model_rmse: f64,
-    /// `linear_rmse / raw_rms`.
-    pub linear_ratio: f64,
-    /// `model_rmse / raw_rms`.
-    pub model_ratio: f64,
+    /// `linear_rmse / raw_rms` (None when the held-out values are all zero).
+    pub linear_ratio: Option<f64>,
+    /// `model_rmse / raw_rms` (None when the held-out values are all zero).
+    pub model_ratio: Option<f64>,
     /// RMSE of the selection-stage linear baseline on the validation part.
     pub val_linear_rmse: f64,
     /// RMSE of the selection-stage model on the validation part.
