@@ -17,6 +17,8 @@ use vmc_twin::report::{self, RunLog};
 use vmc_twin::sim::{self, SampleMode, SimConfig};
 use vmc_twin::twin::Twin;
 
+mod thermal_cli;
+
 #[derive(Parser)]
 #[command(
     name = "vmc-twin",
@@ -41,6 +43,11 @@ enum Command {
     Campaign(CampaignArgs),
     /// Train a predictor on a calibration dataset (CSV) and write the model (JSON).
     Train(TrainArgs),
+    /// Fit a thermal-drift model (linear + MLP on filtered temperatures) on measured data (CSV),
+    /// evaluate it on the held-out last cycle and write it (JSON).
+    FitThermal(thermal_cli::FitThermalArgs),
+    /// Predict the drift columns of a CSV file with a model from `fit-thermal`.
+    PredictThermal(thermal_cli::PredictThermalArgs),
     /// Choose K temperature sensor locations among every thermal node (read as a sensor would),
     /// print the ranking with its evidence, compare compensation with the selected, default,
     /// random and all locations on held-out runs, and write the sensor set (TOML).
@@ -209,6 +216,8 @@ fn main() -> ExitCode {
         Command::Train(args) => train(args),
         Command::SelectSensors(args) => select_sensors(args),
         Command::Bench(args) => bench(args),
+        Command::FitThermal(args) => thermal_cli::fit_thermal(args),
+        Command::PredictThermal(args) => thermal_cli::predict_thermal(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

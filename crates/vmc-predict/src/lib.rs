@@ -12,3 +12,4 @@ pub mod nn;
 pub mod predictor;
 pub mod selection;
 pub mod synthesis;
+pub mod thermal_fit;

@@ -1,0 +1,175 @@
+//! Thermal-drift models fitted on a user's measurements (issue 5, part B).
+//!
+//! A user brings a CSV file with a time column, temperature columns (and optionally the spindle
+//! speed) and measured drift columns, e.g. a spindle thermal test (5 probes, 16 thermometers,
+//! one row every 15 s). This module turns it into a model `drift(t) = g(features(t))`:
+//!
+//! - features ([`FeatureSpec`]): each named input as read and its differences to a bank of
+//!   first-order low-pass filters (time constants 15 min, 1 h, 3 h by default), all computed
+//!   causally (row n uses rows 0…n only) with the filter state set to the first reading;
+//! - model ([`ThermalModel`]): per output, a linear regression on the features, the same plus an
+//!   MLP fitted to its residual, or an MLP on the features (Levenberg–Marquardt, normalisation,
+//!   early stopping, seeded initialisation: the predictor's [`crate::nn`] machinery), chosen on
+//!   the validation cycle; the linear regression alone is the baseline;
+//! - split ([`Split`]): time-ordered. The held-out part (the last cycle) is never used for
+//!   fitting or model selection; early-stopping validation is the last part of the remaining
+//!   rows in time (never a shuffled subset of one time series);
+//! - evaluation ([`Evaluation`]): per output, RMSE of the model, of the linear baseline and of a
+//!   constant (the training mean) on the held-out part, and residual RMS / raw drift RMS, where
+//!   the raw drift RMS is the RMS of the measured values (what is left with no compensation).
+//!
+//! Units: whatever the column names say (`_degc`, `_um`, `_rpm`); the time column is converted to
+//! seconds. Nothing here touches files; [`read_csv`] parses text.
+
+mod features;
+mod fit;
+mod model;
+mod split;
+mod table;
+
+pub use features::FeatureSpec;
+pub use fit::{fit, FitSettings};
+pub use model::{
+    Architecture, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel, FORMAT_NAME,
+    FORMAT_VERSION,
+};
+pub use split::Split;
+pub use table::{read_csv, Table, TableRequest};
+
+use thiserror::Error;
+
+/// Everything that can go wrong reading tables, fitting and applying thermal-drift models.
+#[derive(Debug, Error)]
+pub enum ThermalFitError {
+    /// The text has no header line.
+    #[error("{source_name}: the file is empty (expected a header line with column names)")]
+    EmptyTable {
+        /// File name.
+        source_name: String,
+    },
+    /// Header problem (empty or duplicate name).
+    #[error("{source_name}: line 1 (header): {reason}")]
+    BadHeader {
+        /// File name.
+        source_name: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A named column is not in the header.
+    #[error(
+        "{source_name}: no {role} column \"{column}\"{}; columns in the file: {}",
+        suggestion.as_ref().map(|s| format!(" (did you mean \"{s}\"?)")).unwrap_or_default(),
+        available.join(", ")
+    )]
+    MissingColumn {
+        /// File name.
+        source_name: String,
+        /// The name asked for.
+        column: String,
+        /// `"input"`, `"output"` or `"time"`.
+        role: &'static str,
+        /// The closest header name, if any is close.
+        suggestion: Option<String>,
+        /// Every header name.
+        available: Vec<String>,
+    },
+    /// No unique time column and none was named.
+    #[error(
+        "{source_name}: cannot tell the time column: {} (rule: the only column whose name starts \
+         with \"time\"); name it with --time; columns in the file: {}",
+        if candidates.is_empty() { "no column name starts with \"time\"".to_string() }
+        else { format!("several candidates {}", candidates.join(", ")) },
+        available.join(", ")
+    )]
+    NoTimeColumn {
+        /// File name.
+        source_name: String,
+        /// Columns starting with "time".
+        candidates: Vec<String>,
+        /// Every header name.
+        available: Vec<String>,
+    },
+    /// The time column's unit suffix is not one of `_s`, `_min`, `_h`.
+    #[error("{source_name}: time column \"{column}\" has no known unit suffix (_s, _min or _h)")]
+    TimeUnit {
+        /// File name.
+        source_name: String,
+        /// The column.
+        column: String,
+    },
+    /// A row with a different number of fields than the header.
+    #[error("{source_name}: line {line}: {got} fields, the header has {expected}")]
+    RaggedRow {
+        /// File name.
+        source_name: String,
+        /// 1-based line.
+        line: usize,
+        /// Header width.
+        expected: usize,
+        /// Fields on this line.
+        got: usize,
+    },
+    /// A cell that is not a finite number.
+    #[error("{source_name}: line {line}, column \"{column}\": {reason} (\"{text}\")")]
+    BadCell {
+        /// File name.
+        source_name: String,
+        /// 1-based line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// The cell's text.
+        text: String,
+        /// Why it was rejected.
+        reason: String,
+    },
+    /// Time does not increase strictly.
+    #[error(
+        "{source_name}: line {line}: time does not increase (column \"{column}\": {time_s} s \
+         after {previous_s} s on the previous row); rows must be in time order without repeats"
+    )]
+    TimeNotIncreasing {
+        /// File name.
+        source_name: String,
+        /// 1-based line.
+        line: usize,
+        /// Time column.
+        column: String,
+        /// Time of this row, s.
+        time_s: f64,
+        /// Time of the previous row, s.
+        previous_s: f64,
+    },
+    /// Not enough rows for the task.
+    #[error("{source_name}: {rows} data rows, need at least {needed}")]
+    TooFewRows {
+        /// File name.
+        source_name: String,
+        /// Rows found.
+        rows: usize,
+        /// Rows needed.
+        needed: usize,
+    },
+    /// A setting is out of range.
+    #[error("invalid setting {field}: {reason}")]
+    BadSettings {
+        /// The setting.
+        field: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The model file is not a thermal-drift model of a supported version, or is inconsistent.
+    #[error("{source_name}: {reason}")]
+    BadModel {
+        /// File name.
+        source_name: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Network training failed.
+    #[error("training the residual MLP: {0}")]
+    Net(#[from] crate::nn::NnError),
+    /// Linear regression failed.
+    #[error("fitting the linear part: {0}")]
+    Linear(#[from] crate::linreg::LinRegError),
+}

@@ -1,0 +1,328 @@
+//! The thermal-drift model: its parts, its prediction and its file format.
+//!
+//! Each output k is predicted by one of three forms ([`OutputModel`]), on the causal features
+//! `φ(t)` ([`FeatureSpec`]):
+//! - `linear`: `y_k = L_k(φ)`, a ridge linear regression (the baseline);
+//! - `linear-mlp`: `y_k = L_k(φ) + R_k(φ)`, `R` an MLP fitted to the linear part's residual
+//!   (the linear part extrapolates sensibly to a hotter cycle than any seen, the net corrects
+//!   what is not linear);
+//! - `mlp`: `y_k = N_k(φ)`, an MLP fitted to the outputs directly.
+//!
+//! `L` is one multi-output linear model, `R` and `N` are small ensembles of multi-output nets
+//! (tanh hidden layer, input and output normalisation inside, see [`Regressor`]; the members
+//! differ by their seeded initialisation and their predictions are averaged: with a few thermal
+//! cycles to learn from, one net's result depends on its initialisation by several µm, the
+//! average much less); which form serves which output is chosen on the validation cycle when
+//! fitting (see `fit.rs`).
+//!
+//! File: JSON with `format` = [`FORMAT_NAME`] and `version` = [`FORMAT_VERSION`], the input and
+//! output names and units, the feature spec, the parts with their normalisations and weights,
+//! the per-output choice and the held-out evaluation. Reading checks all of it.
+
+use serde::{Deserialize, Serialize};
+
+use super::features::FeatureSpec;
+use super::split::Split;
+use super::ThermalFitError;
+use crate::linreg::LinearModel;
+use crate::nn::Regressor;
+
+/// The `format` field of every thermal-drift model file.
+pub const FORMAT_NAME: &str = "vmc-twin thermal-drift model";
+/// Version of the model file layout this build reads and writes.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// Which forms the fit may use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Architecture {
+    /// Linear regression only (the baseline).
+    Linear,
+    /// MLP on the outputs directly, every output.
+    Mlp,
+    /// Linear + MLP on its residual, on the outputs where the net lowers the validation error
+    /// (linear elsewhere; the default).
+    LinearMlp,
+    /// Per output, whichever of the three forms has the lowest validation error.
+    Auto,
+}
+
+impl Architecture {
+    /// Parses `auto`, `linear`, `mlp` or `linear-mlp`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "linear" => Some(Self::Linear),
+            "mlp" => Some(Self::Mlp),
+            "linear-mlp" => Some(Self::LinearMlp),
+            "auto" => Some(Self::Auto),
+            _ => None,
+        }
+    }
+
+    /// The name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Linear => "linear",
+            Self::Mlp => "mlp",
+            Self::LinearMlp => "linear-mlp",
+            Self::Auto => "auto",
+        }
+    }
+}
+
+/// The form that predicts one output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OutputModel {
+    /// `L_k(φ)`.
+    Linear,
+    /// `L_k(φ) + R_k(φ)`.
+    LinearMlp,
+    /// `N_k(φ)`.
+    Mlp,
+}
+
+impl OutputModel {
+    /// The name used in files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Linear => "linear",
+            Self::LinearMlp => "linear-mlp",
+            Self::Mlp => "mlp",
+        }
+    }
+}
+
+/// A named column and the unit its name ends with (`t1_degc` → `degc`; empty if no `_`).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Channel {
+    /// Column name as in the file.
+    pub name: String,
+    /// Unit suffix of the name.
+    pub unit: String,
+}
+
+impl Channel {
+    /// The channel of column `name`.
+    pub fn from_name(name: &str) -> Self {
+        let unit = name
+            .rsplit_once('_')
+            .map(|(_, u)| u.to_string())
+            .unwrap_or_default();
+        Self {
+            name: name.to_string(),
+            unit,
+        }
+    }
+}
+
+/// Scores of one output channel (RMS values in the channel's unit).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelScore {
+    /// The output.
+    pub output: Channel,
+    /// The form chosen for it.
+    pub form: OutputModel,
+    /// RMS of the measured values on the held-out part (the drift left with no compensation).
+    pub raw_rms: f64,
+    /// RMSE of a constant prediction (the mean over training + validation rows) on the
+    /// held-out part.
+    pub constant_rmse: f64,
+    /// RMSE of the linear baseline on the held-out part.
+    pub linear_rmse: f64,
+    /// RMSE of the fitted model on the held-out part.
+    pub model_rmse: f64,
+    /// `linear_rmse / raw_rms` (None when the held-out values are all zero).
+    pub linear_ratio: Option<f64>,
+    /// `model_rmse / raw_rms` (None when the held-out values are all zero).
+    pub model_ratio: Option<f64>,
+    /// RMSE of the selection-stage linear baseline on the validation part.
+    pub val_linear_rmse: f64,
+    /// RMSE of the selection-stage model on the validation part.
+    pub val_model_rmse: f64,
+}
+
+/// The held-out evaluation written by [`super::fit`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Evaluation {
+    /// The split used.
+    pub split: Split,
+    /// Training rows of the selection stage.
+    pub n_train: usize,
+    /// Validation rows.
+    pub n_val: usize,
+    /// Rows the final nets trained on (training + validation, thinned to `min_train_step_s`).
+    pub n_fit_net: usize,
+    /// Held-out rows.
+    pub n_holdout: usize,
+    /// Ridge λ of the linear part chosen on validation.
+    pub ridge: f64,
+    /// Residual nets: hidden width and LM epochs of each member's final fit, if used.
+    pub residual_net: Option<(usize, Vec<usize>)>,
+    /// Direct nets: hidden width and LM epochs of each member's final fit, if used.
+    pub direct_net: Option<(usize, Vec<usize>)>,
+    /// Per output.
+    pub channels: Vec<ChannelScore>,
+}
+
+/// A fitted thermal-drift model, as saved in JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ThermalModel {
+    /// Always [`FORMAT_NAME`].
+    pub format: String,
+    /// Always [`FORMAT_VERSION`] when written by this build.
+    pub version: u32,
+    /// Forms the fit was allowed to use.
+    pub architecture: Architecture,
+    /// Time column of the training file (prediction files may name theirs differently).
+    pub time_column: String,
+    /// Input columns, in feature order.
+    pub inputs: Vec<Channel>,
+    /// Output columns, in output order.
+    pub outputs: Vec<Channel>,
+    /// Feature construction.
+    pub features: FeatureSpec,
+    /// The form predicting each output.
+    pub output_models: Vec<OutputModel>,
+    /// Linear part `L` (features → outputs), physical units.
+    pub linear: LinearModel,
+    /// Residual net `R` (features → outputs − L): an ensemble whose members' predictions are
+    /// averaged, each with its normalisations; empty when no output uses it.
+    pub residual_mlp: Vec<Regressor>,
+    /// Direct net `N` (features → outputs): an ensemble as `residual_mlp`.
+    pub direct_mlp: Vec<Regressor>,
+    /// The held-out evaluation made when fitting.
+    pub evaluation: Option<Evaluation>,
+}
+
+impl ThermalModel {
+    /// Width of a feature row.
+    pub(crate) fn feature_width(&self) -> usize {
+        self.inputs.len() * self.features.per_input()
+    }
+
+    /// Predictions (output-major: one column per output) from row-major feature rows.
+    pub(crate) fn predict_features(&self, feats: &[f64]) -> Result<Vec<Vec<f64>>, ThermalFitError> {
+        let width = self.feature_width();
+        let n = feats.len() / width.max(1);
+        let n_out = self.outputs.len();
+        let mut out = vec![vec![0.0; n]; n_out];
+        let mut lin = vec![0.0; n_out];
+        let mut res = vec![0.0; n_out];
+        let mut dir = vec![0.0; n_out];
+        let scratch_len = self
+            .residual_mlp
+            .iter()
+            .chain(&self.direct_mlp)
+            .map(Regressor::scratch_len)
+            .max()
+            .unwrap_or(0);
+        let mut scratch = vec![0.0; scratch_len];
+        let mut one = vec![0.0; n_out];
+        for r in 0..n {
+            let x = &feats[r * width..(r + 1) * width];
+            self.linear.predict_into(x, &mut lin)?;
+            for (nets, out) in [(&self.residual_mlp, &mut res), (&self.direct_mlp, &mut dir)] {
+                out.iter_mut().for_each(|v| *v = 0.0);
+                for m in nets.iter() {
+                    m.predict_into(x, &mut scratch, &mut one)?;
+                    let w = 1.0 / nets.len() as f64;
+                    out.iter_mut().zip(&one).for_each(|(o, v)| *o += w * v);
+                }
+            }
+            for (k, c) in out.iter_mut().enumerate() {
+                c[r] = match self.output_models[k] {
+                    OutputModel::Linear => lin[k],
+                    OutputModel::LinearMlp => lin[k] + res[k],
+                    OutputModel::Mlp => dir[k],
+                };
+            }
+        }
+        Ok(out)
+    }
+
+    /// Predicts every output at every row of `time_s` (s, strictly increasing) from the input
+    /// columns (in [`ThermalModel::inputs`] order). Returns one column per output.
+    pub fn predict(
+        &self,
+        time_s: &[f64],
+        inputs: &[&[f64]],
+    ) -> Result<Vec<Vec<f64>>, ThermalFitError> {
+        if inputs.len() != self.inputs.len() || inputs.iter().any(|c| c.len() != time_s.len()) {
+            return Err(ThermalFitError::BadSettings {
+                field: "inputs",
+                reason: format!(
+                    "the model needs {} input columns of {} rows",
+                    self.inputs.len(),
+                    time_s.len()
+                ),
+            });
+        }
+        let feats = self.features.compute(time_s, inputs);
+        self.predict_features(&feats)
+    }
+
+    /// Serialises the model (pretty JSON).
+    pub fn to_json(&self) -> String {
+        // Serialising plain numbers, strings and vectors cannot fail.
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Reads a model written by [`ThermalModel::to_json`], checking format, version and that
+    /// the parts fit together. `source` names the file in errors.
+    pub fn from_json(text: &str, source: &str) -> Result<Self, ThermalFitError> {
+        let bad = |reason: String| ThermalFitError::BadModel {
+            source_name: source.to_string(),
+            reason,
+        };
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| bad(format!("not JSON: {e}")))?;
+        match value.get("format").and_then(|f| f.as_str()) {
+            Some(FORMAT_NAME) => {}
+            Some(other) => {
+                return Err(bad(format!(
+                    "not a thermal-drift model: format is \"{other}\", expected \"{FORMAT_NAME}\""
+                )))
+            }
+            None => {
+                return Err(bad(format!(
+                    "not a thermal-drift model (no \"format\": \"{FORMAT_NAME}\" field; a \
+                     predictor model from `vmc-twin train` is a different kind of file)"
+                )))
+            }
+        }
+        match value.get("version").and_then(|v| v.as_u64()) {
+            Some(v) if v == u64::from(FORMAT_VERSION) => {}
+            v => {
+                return Err(bad(format!(
+                    "model file version {v:?}, this build reads version {FORMAT_VERSION}"
+                )))
+            }
+        }
+        let m: ThermalModel =
+            serde_json::from_value(value).map_err(|e| bad(format!("malformed model: {e}")))?;
+        m.features.validate()?;
+        let width = m.feature_width();
+        let n_out = m.outputs.len();
+        let net_ok = |nets: &[Regressor], form: OutputModel| {
+            nets.iter().all(|r| r.n_in() == width && r.n_out() == n_out)
+                && (!nets.is_empty() || !m.output_models.contains(&form))
+        };
+        if m.inputs.is_empty()
+            || n_out == 0
+            || m.output_models.len() != n_out
+            || m.linear.n_in() != width
+            || m.linear.n_out() != n_out
+            || !net_ok(&m.residual_mlp, OutputModel::LinearMlp)
+            || !net_ok(&m.direct_mlp, OutputModel::Mlp)
+        {
+            return Err(bad(format!(
+                "inconsistent model: {} inputs × {} features each and {n_out} outputs do not \
+                 match its linear part, nets or per-output forms",
+                m.inputs.len(),
+                m.features.per_input(),
+            )));
+        }
+        Ok(m)
+    }
+}
