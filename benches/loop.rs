@@ -17,8 +17,6 @@ use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::{self, Settings};
-use vmc_twin::program;
-use vmc_twin::sim::{self, SampleMode, SimConfig};
 use vmc_twin::thermal::Activity;
 use vmc_twin::twin::Twin;
 
@@ -74,32 +72,11 @@ fn thermal_8h(c: &mut Criterion) {
 
 fn machine_8h_with_diagonals(c: &mut Criterion) {
     let spec = MachineSpec::reference();
-    let plan = program::plan_source(
-        include_str!("../trajectories/diag_xy.ngc"),
-        "diag_xy.ngc",
-        &spec,
-        spec.axes.home_mm,
-    )
-    .unwrap();
-    let cycle = &ThermalCycle::calibration_set()[2];
-    let cfg = SimConfig {
-        sample_mode: SampleMode::EveryCycle,
-        ..SimConfig::default()
-    };
+    let workload = vmc_twin::benchmark::workload_8h(&spec, 1.0).unwrap();
     let mut g = c.benchmark_group("machine_8h_with_diagonals");
     g.sample_size(10);
     g.bench_function("xy_every_30min_1ms", |b| {
-        b.iter(|| {
-            let mut twin = Twin::new(&spec, 1).unwrap();
-            let mut n = 0usize;
-            for k in 0..16 {
-                campaign::drive(&mut twin, cycle, 0.0, k as f64 * 1800.0, 1.0).unwrap();
-                let mut count = sim::CountPoints::default();
-                sim::execute(&mut twin, &plan, &cfg, None, &mut count).unwrap();
-                n += count.points;
-            }
-            black_box(n)
-        })
+        b.iter(|| black_box(vmc_twin::benchmark::run_8h(&spec, &workload).unwrap()))
     });
     g.finish();
 }

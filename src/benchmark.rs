@@ -101,6 +101,51 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
     ])
 }
 
+/// The 8 h workload: the XY diagonal planned from home, the 9000 rpm heating cycle, the
+/// sampling settings at `interp_ms`.
+///
+/// # Errors
+/// Planning errors.
+pub fn workload_8h(
+    spec: &MachineSpec,
+    interp_ms: f64,
+) -> Result<(crate::motion::Plan, ThermalCycle, SimConfig), EvalError> {
+    let plan = program::plan_source(
+        include_str!("../trajectories/diag_xy.ngc"),
+        "diag_xy.ngc",
+        spec,
+        spec.axes.home_mm,
+    )?;
+    let cycle = ThermalCycle::calibration_set()[2].clone();
+    let cfg = SimConfig {
+        sample_mode: SampleMode::EveryCycle,
+        interp_cycle_s: interp_ms * 1e-3,
+        ..SimConfig::default()
+    };
+    Ok((plan, cycle, cfg))
+}
+
+/// Runs the 8 h workload once on a fresh twin: the cycle's duty, and the diagonal every
+/// 30 min with the error at every interpolation sample; returns the number of samples.
+///
+/// # Errors
+/// Simulation errors.
+pub fn run_8h(
+    spec: &MachineSpec,
+    workload: &(crate::motion::Plan, ThermalCycle, SimConfig),
+) -> Result<usize, EvalError> {
+    let (plan, cycle, cfg) = workload;
+    let mut twin = Twin::new(spec, 1)?;
+    let mut n = 0;
+    for k in 0..16 {
+        campaign::drive(&mut twin, cycle, 0.0, k as f64 * 1800.0, 1.0)?;
+        let mut count = sim::CountPoints::default();
+        sim::execute(&mut twin, plan, cfg, None, &mut count)?;
+        n += count.points;
+    }
+    Ok(n)
+}
+
 /// 8 h of machine time with an XY diagonal every 30 min, motion sampled at `interp_ms`:
 /// seconds of wall time (median of `repeats`) and the number of samples.
 ///
@@ -111,30 +156,12 @@ pub fn machine_8h(
     interp_ms: f64,
     repeats: usize,
 ) -> Result<(f64, usize), EvalError> {
-    let plan = program::plan_source(
-        include_str!("../trajectories/diag_xy.ngc"),
-        "diag_xy.ngc",
-        spec,
-        spec.axes.home_mm,
-    )?;
-    let cycle = &ThermalCycle::calibration_set()[2];
-    let cfg = SimConfig {
-        sample_mode: SampleMode::EveryCycle,
-        interp_cycle_s: interp_ms * 1e-3,
-        ..SimConfig::default()
-    };
+    let workload = workload_8h(spec, interp_ms)?;
     let mut times = Vec::new();
     let mut n = 0;
     for _ in 0..repeats.max(1) {
         let t = Instant::now();
-        let mut twin = Twin::new(spec, 1)?;
-        n = 0;
-        for k in 0..16 {
-            campaign::drive(&mut twin, cycle, 0.0, k as f64 * 1800.0, 1.0)?;
-            let mut count = sim::CountPoints::default();
-            sim::execute(&mut twin, &plan, &cfg, None, &mut count)?;
-            n += count.points;
-        }
+        n = run_8h(spec, &workload)?;
         times.push(t.elapsed().as_secs_f64());
     }
     Ok((median(times), n))
