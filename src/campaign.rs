@@ -114,6 +114,21 @@ impl ThermalCycle {
                 },
                 vec![phase(4.0, 7000.0, [3000.0, 3000.0, 1500.0]), cool()],
             ),
+            cycle(
+                "cal_ambient_steps",
+                AmbientProfile::Table {
+                    points: vec![
+                        [3600.0, 20.0],
+                        [4500.0, 22.5],
+                        [5.0 * 3600.0, 22.5],
+                        [5.25 * 3600.0, 19.0],
+                    ],
+                },
+                vec![
+                    phase(3.0, 5000.0, [2500.0, 2000.0, 1000.0]),
+                    phase(5.0, 0.0, [0.0; 3]),
+                ],
+            ),
         ]
     }
 
@@ -217,6 +232,11 @@ pub struct CampaignConfig {
     pub grid_points_per_axis: usize,
     /// Interval of the continuously logging 5-probe spindle test, s (default 300).
     pub spindle_every_s: f64,
+    /// How long the spindle test keeps logging after the spindle stops at the start of each
+    /// measurement block, before the laser sweeps, s (default 180).
+    pub spindle_stop_log_s: f64,
+    /// Interval of the spindle readings during that stop, s (default 30).
+    pub spindle_stop_every_s: f64,
 }
 
 impl CampaignConfig {
@@ -228,6 +248,8 @@ impl CampaignConfig {
             step_s: 1.0,
             grid_points_per_axis: 3,
             spindle_every_s: 300.0,
+            spindle_stop_log_s: 180.0,
+            spindle_stop_every_s: 30.0,
         }
     }
 }
@@ -295,6 +317,15 @@ pub fn calibrate(
             let t = twin.time_s() - t0;
             if t >= next_block - 1e-9 {
                 inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
+                inst.spindle_stop_log(
+                    &mut twin,
+                    mid(spec),
+                    cfg.spindle_stop_log_s,
+                    cfg.spindle_stop_every_s,
+                    &cycle.name,
+                    t0,
+                    &mut records,
+                )?;
                 measurement_block(&mut twin, &mut inst, &grid, &cycle.name, t0, &mut records)?;
                 next_block += cfg.measure_every_s;
                 continue;

@@ -187,6 +187,33 @@ impl Instruments {
         out.push(r);
     }
 
+    /// The 5-probe spindle test logged at `q_mm` right after the spindle stops (ISO 230-3's
+    /// stopped phase): a reading every `every_s` for `duration_s` of machine time, axes parked.
+    /// The drift's fast transient after a stop (bearings and nose cooling) is what a diagonal
+    /// test run right after a duty sees, so the calibration must observe it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn spindle_stop_log(
+        &mut self,
+        twin: &mut Twin,
+        q_mm: [f64; 3],
+        duration_s: f64,
+        every_s: f64,
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) -> Result<(), TwinError> {
+        if !(every_s > 0.0) {
+            return Ok(());
+        }
+        let mut t = 0.0;
+        while t + every_s <= duration_s + 1e-9 {
+            self.dwell(twin, q_mm, None, every_s)?;
+            t += every_s;
+            self.spindle_test(twin, q_mm, cycle, t0_s, out);
+        }
+        Ok(())
+    }
+
     /// Squareness with a laser and optical square: α_yz, α_xz, α_xy (µrad) in rx, ry, rz.
     pub fn squareness(
         &mut self,
