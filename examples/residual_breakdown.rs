@@ -5,7 +5,8 @@
 //! grid of poses over the diagonals' region, compares predicted and true elementary errors. The
 //! error of the predicted volumetric error is split by part (X, Y, Z axis nets, spindle,
 //! squareness) by substituting each predicted part into the true set (first-order synthesis, so
-//! the parts add up). Prints per state the max |contribution| of each part to Ex, Ey, Ez (µm).
+//! the parts add up). Prints per state the max |contribution| of each part to Ex, Ey, Ez (µm),
+//! at the state and over the next 90 s with the spindle stopped, as during a diagonal test.
 //!
 //! `cargo run --release --example residual_breakdown -- 1 2 3`
 
