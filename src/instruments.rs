@@ -202,7 +202,7 @@ impl Instruments {
         t0_s: f64,
         out: &mut Vec<Record>,
     ) -> Result<(), TwinError> {
-        if !(every_s > 0.0) {
+        if every_s.is_nan() || every_s <= 0.0 {
             return Ok(());
         }
         let mut t = 0.0;
