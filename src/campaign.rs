@@ -7,9 +7,12 @@
 //! ambient swing, restart after a stop) and never enter the calibration data.
 //!
 //! The calibration campaign runs each calibration cycle on a fresh, cold twin of the machine
-//! (same machine seed, fresh noise) and every `measure_every_s` takes a measurement block: laser
-//! sweeps of X, Y, Z, the spindle test, squareness and a volumetric grid — all with the spindle
-//! stopped, taking machine time, temperatures logged with each reading.
+//! (same machine seed, fresh noise) and every `measure_every_s` takes a measurement block: the
+//! spindle test at the stop and for `spindle_stop_log_s` after it (the drift's fast transient
+//! after a stop is what a diagonal test run right after a duty sees), laser sweeps of X, Y, Z,
+//! squareness and a volumetric grid — all with the spindle stopped, taking machine time,
+//! temperatures logged with each reading. Between blocks the spindle test logs with the spindle
+//! running.
 
 use crate::instruments::Instruments;
 use crate::machine::MachineSpec;
@@ -69,7 +72,9 @@ impl ThermalCycle {
     }
 
     /// Typical cycles for calibration: heating at constant duties (one with a speed change, one
-    /// axis-heavy), then cooling, over an ordinary workshop day (one with a slow ambient drift).
+    /// axis-heavy), then cooling, over an ordinary workshop day (one with a slow ambient drift,
+    /// one with ambient steps as when the air conditioning changes its set point — steps and
+    /// ramps, not the held-out sinusoidal swing).
     pub fn calibration_set() -> Vec<ThermalCycle> {
         let cool = || phase(4.0, 0.0, [0.0; 3]);
         let cycle = |name: &str, ambient: AmbientProfile, phases: Vec<Phase>| ThermalCycle {
