@@ -267,3 +267,32 @@ impl Instruments {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::MachineSpec;
+
+    #[test]
+    fn the_stopped_phase_spindle_log_reads_every_interval_while_time_passes() {
+        let spec = MachineSpec::reference();
+        let mut twin = Twin::new(&spec, 1).unwrap();
+        let mut inst = Instruments::new(&twin, 7);
+        let mut out = Vec::new();
+        let q = [280.0, 200.0, -225.0];
+        inst.spindle_stop_log(&mut twin, q, 180.0, 30.0, "c", 0.0, &mut out)
+            .unwrap();
+        let times: Vec<f64> = out.iter().map(|r| r.time_s).collect();
+        assert_eq!(times, vec![30.0, 60.0, 90.0, 120.0, 150.0, 180.0]);
+        assert!(out.iter().all(|r| r.instrument == Instrument::Spindle
+            && r.pos_mm == q
+            && r.values[..5].iter().all(|v| v.is_finite())));
+        // A zero or NaN interval logs nothing and lets no time pass.
+        let t = twin.time_s();
+        inst.spindle_stop_log(&mut twin, q, 180.0, 0.0, "c", 0.0, &mut out)
+            .unwrap();
+        inst.spindle_stop_log(&mut twin, q, 180.0, f64::NAN, "c", 0.0, &mut out)
+            .unwrap();
+        assert_eq!((out.len(), twin.time_s()), (6, t));
+    }
+}
