@@ -7,9 +7,12 @@
 //! ambient swing, restart after a stop) and never enter the calibration data.
 //!
 //! The calibration campaign runs each calibration cycle on a fresh, cold twin of the machine
-//! (same machine seed, fresh noise) and every `measure_every_s` takes a measurement block: laser
-//! sweeps of X, Y, Z, the spindle test, squareness and a volumetric grid — all with the spindle
-//! stopped, taking machine time, temperatures logged with each reading.
+//! (same machine seed, fresh noise) and every `measure_every_s` takes a measurement block: the
+//! spindle test at the stop and for `spindle_stop_log_s` after it (the drift's fast transient
+//! after a stop is what a diagonal test run right after a duty sees), laser sweeps of X, Y, Z,
+//! squareness and a volumetric grid — all with the spindle stopped, taking machine time,
+//! temperatures logged with each reading. Between blocks the spindle test logs with the spindle
+//! running.
 
 use crate::instruments::Instruments;
 use crate::machine::MachineSpec;
@@ -69,7 +72,9 @@ impl ThermalCycle {
     }
 
     /// Typical cycles for calibration: heating at constant duties (one with a speed change, one
-    /// axis-heavy), then cooling, over an ordinary workshop day (one with a slow ambient drift).
+    /// axis-heavy), then cooling, over an ordinary workshop day (one with a slow ambient drift,
+    /// one with ambient steps as when the air conditioning changes its set point — steps and
+    /// ramps, not the held-out sinusoidal swing).
     pub fn calibration_set() -> Vec<ThermalCycle> {
         let cool = || phase(4.0, 0.0, [0.0; 3]);
         let cycle = |name: &str, ambient: AmbientProfile, phases: Vec<Phase>| ThermalCycle {
@@ -113,6 +118,21 @@ impl ThermalCycle {
                     points: vec![[0.0, 19.5], [8.0 * 3600.0, 21.5]],
                 },
                 vec![phase(4.0, 7000.0, [3000.0, 3000.0, 1500.0]), cool()],
+            ),
+            cycle(
+                "cal_ambient_steps",
+                AmbientProfile::Table {
+                    points: vec![
+                        [3600.0, 20.0],
+                        [4500.0, 22.5],
+                        [5.0 * 3600.0, 22.5],
+                        [5.25 * 3600.0, 19.0],
+                    ],
+                },
+                vec![
+                    phase(3.0, 5000.0, [2500.0, 2000.0, 1000.0]),
+                    phase(5.0, 0.0, [0.0; 3]),
+                ],
             ),
         ]
     }
@@ -217,6 +237,11 @@ pub struct CampaignConfig {
     pub grid_points_per_axis: usize,
     /// Interval of the continuously logging 5-probe spindle test, s (default 300).
     pub spindle_every_s: f64,
+    /// How long the spindle test keeps logging after the spindle stops at the start of each
+    /// measurement block, before the laser sweeps, s (default 180).
+    pub spindle_stop_log_s: f64,
+    /// Interval of the spindle readings during that stop, s (default 30).
+    pub spindle_stop_every_s: f64,
 }
 
 impl CampaignConfig {
@@ -228,6 +253,8 @@ impl CampaignConfig {
             step_s: 1.0,
             grid_points_per_axis: 3,
             spindle_every_s: 300.0,
+            spindle_stop_log_s: 180.0,
+            spindle_stop_every_s: 30.0,
         }
     }
 }
@@ -295,6 +322,15 @@ pub fn calibrate(
             let t = twin.time_s() - t0;
             if t >= next_block - 1e-9 {
                 inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
+                inst.spindle_stop_log(
+                    &mut twin,
+                    mid(spec),
+                    cfg.spindle_stop_log_s,
+                    cfg.spindle_stop_every_s,
+                    &cycle.name,
+                    t0,
+                    &mut records,
+                )?;
                 measurement_block(&mut twin, &mut inst, &grid, &cycle.name, t0, &mut records)?;
                 next_block += cfg.measure_every_s;
                 continue;

@@ -187,6 +187,33 @@ impl Instruments {
         out.push(r);
     }
 
+    /// The 5-probe spindle test logged at `q_mm` right after the spindle stops (ISO 230-3's
+    /// stopped phase): a reading every `every_s` for `duration_s` of machine time, axes parked.
+    /// The drift's fast transient after a stop (bearings and nose cooling) is what a diagonal
+    /// test run right after a duty sees, so the calibration must observe it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn spindle_stop_log(
+        &mut self,
+        twin: &mut Twin,
+        q_mm: [f64; 3],
+        duration_s: f64,
+        every_s: f64,
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) -> Result<(), TwinError> {
+        if every_s.is_nan() || every_s <= 0.0 {
+            return Ok(());
+        }
+        let mut t = 0.0;
+        while t + every_s <= duration_s + 1e-9 {
+            self.dwell(twin, q_mm, None, every_s)?;
+            t += every_s;
+            self.spindle_test(twin, q_mm, cycle, t0_s, out);
+        }
+        Ok(())
+    }
+
     /// Squareness with a laser and optical square: α_yz, α_xz, α_xy (µrad) in rx, ry, rz.
     pub fn squareness(
         &mut self,
@@ -238,5 +265,34 @@ impl Instruments {
             out.push(r);
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::MachineSpec;
+
+    #[test]
+    fn the_stopped_phase_spindle_log_reads_every_interval_while_time_passes() {
+        let spec = MachineSpec::reference();
+        let mut twin = Twin::new(&spec, 1).unwrap();
+        let mut inst = Instruments::new(&twin, 7);
+        let mut out = Vec::new();
+        let q = [280.0, 200.0, -225.0];
+        inst.spindle_stop_log(&mut twin, q, 180.0, 30.0, "c", 0.0, &mut out)
+            .unwrap();
+        let times: Vec<f64> = out.iter().map(|r| r.time_s).collect();
+        assert_eq!(times, vec![30.0, 60.0, 90.0, 120.0, 150.0, 180.0]);
+        assert!(out.iter().all(|r| r.instrument == Instrument::Spindle
+            && r.pos_mm == q
+            && r.values[..5].iter().all(|v| v.is_finite())));
+        // A zero or NaN interval logs nothing and lets no time pass.
+        let t = twin.time_s();
+        inst.spindle_stop_log(&mut twin, q, 180.0, 0.0, "c", 0.0, &mut out)
+            .unwrap();
+        inst.spindle_stop_log(&mut twin, q, 180.0, f64::NAN, "c", 0.0, &mut out)
+            .unwrap();
+        assert_eq!((out.len(), twin.time_s()), (6, t));
     }
 }

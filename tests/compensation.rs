@@ -86,6 +86,24 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
     }
     worst.sort_by(|a, b| a.0.total_cmp(&b.0));
     println!("worst runs: {:?}", &worst[..3]);
+    // Regression guard on the largest compensated error over all 147 runs: measured 2.46 µm
+    // (README, "Compensation: the campaign"); the target of 2 µm is not reached yet, so
+    // this only stops the figure from sliding back towards the 7 µm of the first version.
+    let (max_after, at) = runs
+        .iter()
+        .map(|r| {
+            (
+                r.max_after_um,
+                format!("{} {} seed {}", r.diagonal, r.thermal_state, r.seed),
+            )
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap();
+    println!("max residual |E| {max_after:.2} µm ({at})");
+    assert!(
+        max_after <= 3.0,
+        "max residual |E| {max_after:.2} µm at {at} > 3 µm"
+    );
 }
 
 #[test]

@@ -312,6 +312,7 @@ pub(crate) fn fit_mlp(
         epochs: Some(report.epochs),
         stop_reason: Some(report.stop_reason),
         candidates,
+        linear_val_rmse: Vec::new(),
     };
     Ok((reg, summary))
 }
@@ -342,6 +343,7 @@ pub(crate) fn fit_linear(
         epochs: None,
         stop_reason: None,
         candidates: Vec::new(),
+        linear_val_rmse: Vec::new(),
     };
     Ok((lin, summary))
 }

@@ -3,7 +3,7 @@
 //! ```text
 //! {
 //!   "format": "vmc-twin-model",
-//!   "version": 1,
+//!   "version": 2,
 //!   "kind": "hybrid" | "volumetric" | "linear",
 //!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
 //!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
@@ -11,10 +11,12 @@
 //! }
 //! ```
 //!
-//! `model` of a `hybrid`: `axis_nets` (3 regressors X, Y, Z: `[position mm, temps °C] →
-//! [dx, dy, dz µm, rx, ry, rz µrad]`), `spindle_net` (`temps → [dx, dy, dz µm, rx, ry µrad]`),
-//! `squareness` (linear model `temps → [α_yz, α_xz, α_xy] µrad`). Of a `volumetric`: `net`
-//! (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
+//! `model` of a `hybrid`: `axis_nets` (3 parts X, Y, Z: `[position mm, temps °C] →
+//! [dx, dy, dz µm, rx, ry, rz µrad]`), `spindle_net` (a part `temps → [dx, dy, dz µm, rx, ry
+//! µrad]`), `squareness` (linear model `temps → [α_yz, α_xz, α_xy] µrad`); a part is
+//! `{"linear": linear model, "net": regressor or null}` (the net models what the linear model
+//! leaves, see `part`; version 2 introduced the parts, version 1 held bare regressors). Of a
+//! `volumetric`: `net` (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
 //! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
 //! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
 //! (normalisation in physical units, weights flat as documented in `nn::mlp`); a linear model is
@@ -42,7 +44,7 @@ use super::{ErrorPredictor, PredictError};
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
 /// The model file version this build writes and reads.
-pub const FORMAT_VERSION: u64 = 1;
+pub const FORMAT_VERSION: u64 = 2;
 /// The only temperature unit models use.
 const TEMP_UNIT: &str = "degC";
 
@@ -522,10 +524,10 @@ mod tests {
     fn bad_version_format_and_kind_give_the_documented_messages() {
         let model = all_kinds().remove(2);
         let text = model.to_json_string().unwrap();
-        let v2 = text.replacen("\"version\": 1", "\"version\": 2", 1);
+        let v1 = text.replacen("\"version\": 2", "\"version\": 1", 1);
         assert_eq!(
-            AnyPredictor::from_json_str(&v2).unwrap_err().to_string(),
-            "model file version 2 is not supported (this build reads version 1)"
+            AnyPredictor::from_json_str(&v1).unwrap_err().to_string(),
+            "model file version 1 is not supported (this build reads version 2)"
         );
         let other = text.replacen("vmc-twin-model", "something-else", 1);
         assert_eq!(
@@ -570,7 +572,7 @@ mod tests {
         assert_ne!(cut, text, "the edit must apply");
         let err = AnyPredictor::from_json_str(&cut).unwrap_err().to_string();
         assert!(
-            err.starts_with("inconsistent model file: network `axis_x` maps 5 → 6 values"),
+            err.starts_with("inconsistent model file: linear model `axis_x` must map 4 → 6 values"),
             "{err}"
         );
     }

@@ -5,15 +5,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::dataset::{Dataset, Instrument, Record};
 use crate::linreg::LinearModel;
-use crate::nn::Regressor;
 use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
 
 use super::data::{
-    fit_linear, fit_mlp, records_of, required_values, CycleSplit, SensorSelection, Table,
-    VALUE_COLUMNS,
+    fit_linear, records_of, required_values, CycleSplit, SensorSelection, Table, VALUE_COLUMNS,
 };
-use super::fastnet::SplitNet;
 use super::file::{check_linear_model, ModelKind};
+use super::part::{fit_linear_plus_net, LinearPlusNet, PartRuntime};
 use super::{assert_temps_len, ErrorPredictor, PredictError, Settings, TrainSummary};
 
 /// Network names of the X, Y, Z axis nets.
@@ -28,25 +26,26 @@ const MIN_SQUARENESS_RECORDS: usize = 5;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub(crate) struct HybridParts {
     /// X, Y, Z: `(position along the axis mm, temperatures °C) → (dx, dy, dz µm, rx, ry, rz µrad)`.
-    pub axis_nets: [Regressor; 3],
+    pub axis_nets: [LinearPlusNet; 3],
     /// `temperatures °C → (dx, dy, dz µm, rx, ry µrad)` of the spindle.
-    pub spindle_net: Regressor,
+    pub spindle_net: LinearPlusNet,
     /// `temperatures °C → (α_yz, α_xz, α_xy) µrad`.
     pub squareness: LinearModel,
 }
 
-/// Query-time state: split nets, cached temperature-only results, scratch.
+/// Query-time state: part evaluators with cached temperature-only results, scratch.
 #[derive(Debug, Clone)]
 struct Runtime {
-    axes: [SplitNet; 3],
-    spindle: SplitNet,
+    axes: [PartRuntime<6>; 3],
+    spindle: PartRuntime<5>,
     /// Spindle and squareness fields hold the values for `last_temps`.
     errs: ElementaryErrors,
     last_temps: Vec<f64>,
     cache_valid: bool,
 }
 
-/// Hybrid predictor: 3 axis MLPs + spindle MLP + squareness regression + first-order synthesis.
+/// Hybrid predictor: 3 axis MLPs + spindle MLP (each on a linear part) + squareness regression
+/// + first-order synthesis.
 #[derive(Debug, Clone)]
 pub struct HybridPredictor {
     sensors: Vec<String>,
@@ -63,31 +62,17 @@ impl HybridPredictor {
         parts: HybridParts,
     ) -> Result<Self, PredictError> {
         let k = sensors.len();
-        let check = |net: &str, reg: &Regressor, n_in: usize, n_out: usize| {
-            if reg.n_in() == n_in && reg.n_out() == n_out {
-                Ok(())
-            } else {
-                Err(PredictError::Inconsistent {
-                    reason: format!(
-                        "network `{net}` maps {} → {} values; with {k} sensors it must map \
-                         {n_in} → {n_out}",
-                        reg.n_in(),
-                        reg.n_out()
-                    ),
-                })
-            }
-        };
-        for (name, net) in AXIS_NETS.iter().zip(&parts.axis_nets) {
-            check(name, net, k + 1, 6)?;
+        for (name, part) in AXIS_NETS.iter().zip(&parts.axis_nets) {
+            part.check(name, 1, k, 6)?;
         }
-        check("spindle", &parts.spindle_net, k, 5)?;
+        parts.spindle_net.check("spindle", 0, k, 5)?;
         check_linear_model("squareness", &parts.squareness, k, 3)?;
         let axes = [
-            SplitNet::new(&parts.axis_nets[0], 1, AXIS_NETS[0])?,
-            SplitNet::new(&parts.axis_nets[1], 1, AXIS_NETS[1])?,
-            SplitNet::new(&parts.axis_nets[2], 1, AXIS_NETS[2])?,
+            PartRuntime::new(&parts.axis_nets[0], 1, AXIS_NETS[0])?,
+            PartRuntime::new(&parts.axis_nets[1], 1, AXIS_NETS[1])?,
+            PartRuntime::new(&parts.axis_nets[2], 1, AXIS_NETS[2])?,
         ];
-        let spindle = SplitNet::new(&parts.spindle_net, 0, "spindle")?;
+        let spindle = PartRuntime::new(&parts.spindle_net, 0, "spindle")?;
         let rt = Runtime {
             axes,
             spindle,
@@ -244,7 +229,7 @@ pub fn train_hybrid(
     let mut nets = Vec::new();
     let mut axis_nets = Vec::with_capacity(3);
     for (k, table) in axis_tables.iter().enumerate() {
-        let (reg, summary) = fit_mlp(
+        let (reg, summary) = fit_linear_plus_net(
             AXIS_NETS[k],
             &VALUE_COLUMNS,
             table,
@@ -255,7 +240,7 @@ pub fn train_hybrid(
         axis_nets.push(reg);
         nets.push(summary);
     }
-    let (spindle_net, summary) = fit_mlp(
+    let (spindle_net, summary) = fit_linear_plus_net(
         "spindle",
         &VALUE_COLUMNS[..5],
         &spindle_table,
@@ -273,7 +258,7 @@ pub fn train_hybrid(
     )?;
     nets.push(summary);
 
-    let [ax, ay, az]: [Regressor; 3] =
+    let [ax, ay, az]: [LinearPlusNet; 3] =
         axis_nets
             .try_into()
             .map_err(|_| PredictError::Inconsistent {

@@ -8,8 +8,12 @@
 //! - [`HybridPredictor`] (the study's method): per axis `k` an MLP `(q_k, T) → (δx, δy, δz, εx,
 //!   εy, εz)_k` trained on `laser_k` records; a spindle MLP `T → (δx_b, δy_b, δz_b, εx_b, εy_b)`
 //!   on `spindle` records; squareness `α = α₀ + A·T` by linear regression on `squareness`
-//!   records; all 26 elementary errors feed [`first_order_error_mm`]. Nets work in the dataset's
-//!   units (µm, µrad); the conversion to mm and rad (×1e-3, ×1e-6) happens at the synthesis.
+//!   records; all 26 elementary errors feed [`first_order_error_mm`]. Each axis and spindle
+//!   "MLP" is a linear regression plus an MLP on its residual (`part`): the linear part carries
+//!   the thermal trend and extrapolates sanely, the MLP the non-linear rest, and it is dropped
+//!   when it does not pay on the validation cycles ([`Settings::residual_net_min_gain`]). Nets
+//!   work in the dataset's units (µm, µrad); the conversion to mm and rad (×1e-3, ×1e-6)
+//!   happens at the synthesis.
 //! - [`VolumetricPredictor`] (baseline): one MLP `(X, Y, Z, T) → (Ex, Ey, Ez)` in µm on
 //!   `volumetric` records.
 //! - [`LinearPredictor`] (baseline): per component of E a linear model of the features
@@ -37,6 +41,7 @@ mod fastnet;
 pub mod file;
 mod hybrid;
 mod linear;
+mod part;
 mod volumetric;
 
 #[cfg(test)]
@@ -244,6 +249,11 @@ pub struct Settings {
     pub squareness_ridge: f64,
     /// Ridge λ of the linear baseline (default: 1e-6): just enough to survive collinear features.
     pub linear_ridge: f64,
+    /// Ridge λ of the linear part of each hybrid network (default: 1e-3), see `part`.
+    pub part_ridge: f64,
+    /// A hybrid network's residual MLP is kept only if it lowers the validation RMSE of its
+    /// linear part by at least this fraction (mean over outputs) (default: 0.2).
+    pub residual_net_min_gain: f64,
 }
 
 impl Default for Settings {
@@ -260,6 +270,8 @@ impl Default for Settings {
             min_records: 20,
             squareness_ridge: 1e-3,
             linear_ridge: 1e-6,
+            part_ridge: 1e-3,
+            residual_net_min_gain: 0.2,
         }
     }
 }
@@ -307,6 +319,10 @@ pub struct NetSummary {
     pub stop_reason: Option<StopReason>,
     /// Every width tried and its validation score.
     pub candidates: Vec<CandidateScore>,
+    /// For a hybrid part (linear model + residual MLP): validation RMSE per output of the
+    /// linear model alone, in the output's unit (empty otherwise).
+    #[serde(default)]
+    pub linear_val_rmse: Vec<f64>,
 }
 
 /// What a training call did.

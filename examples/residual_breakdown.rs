@@ -1,0 +1,101 @@
+//! Diagnosis (truth side): where the hybrid predictor's error comes from on the held-out states.
+//!
+//! For each seed given on the command line, calibrates and trains the hybrid predictor, then for
+//! every held-out evaluation state drives a twin (evaluation noise) to the state and, at a 3×3×3
+//! grid of poses over the diagonals' region, compares predicted and true elementary errors. The
+//! error of the predicted volumetric error is split by part (X, Y, Z axis nets, spindle,
+//! squareness) by substituting each predicted part into the true set (first-order synthesis, so
+//! the parts add up). Prints per state the max |contribution| of each part to Ex, Ey, Ez (µm),
+//! at the state and over the next 90 s with the spindle stopped, as during a diagonal test.
+//!
+//! `cargo run --release --example residual_breakdown -- 1 2 3`
+
+use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::machine::MachineSpec;
+use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::predict::synthesis::first_order_error_mm;
+use vmc_twin::twin::{sub_seed, Twin};
+
+fn main() {
+    let seeds: Vec<u64> = std::env::args()
+        .skip(1)
+        .map(|s| s.parse().expect("seed"))
+        .collect();
+    let spec = MachineSpec::reference();
+    let geom = spec.geometry();
+    let grid = campaign::volume_grid(&spec, 3);
+    for seed in seeds {
+        let data = campaign::calibrate(
+            &spec,
+            &ThermalCycle::calibration_set(),
+            &CampaignConfig::new(seed),
+        )
+        .unwrap();
+        let (mut h, _) = predictor::train_hybrid(
+            &data,
+            &geom,
+            &Settings {
+                seed,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        println!("seed {seed}: max |prediction error| contribution, µm (Ex Ey Ez)");
+        println!(
+            "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17}",
+            "state", "axis X", "axis Y", "axis Z", "spindle", "squareness", "total"
+        );
+        for (si, state) in campaign::evaluation_states(seed).iter().enumerate() {
+            let mut twin =
+                Twin::with_noise_seed(&spec, seed, sub_seed(seed, 9000 + si as u64)).unwrap();
+            twin.set_ambient(state.cycle.ambient.clone()).unwrap();
+            campaign::drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0).unwrap();
+            let mut worst = [[0.0f64; 3]; 6];
+            // At the state and over the next 90 s with the spindle stopped (a diagonal test).
+            for step in 0..4 {
+                if step > 0 {
+                    let stopped = vmc_twin::thermal::Activity {
+                        spindle_rpm: 0.0,
+                        axis_pos_mm: grid[13],
+                        axis_speed_mm_per_min: [0.0; 3],
+                        coolant: false,
+                    };
+                    twin.advance(30.0, &stopped).unwrap();
+                }
+                let temps = twin.sensor_readings().values_degc;
+                for &q in &grid {
+                    let t = twin.elementary_errors(q);
+                    let p = h.elementary_errors(q, &temps);
+                    let base = first_order_error_mm(&geom, q, &t);
+                    let mut parts = Vec::new();
+                    for part in 0..5 {
+                        let mut m = t;
+                        match part {
+                            0..=2 => m.axes[part] = p.axes[part],
+                            3 => m.spindle = p.spindle,
+                            _ => m.squareness = p.squareness,
+                        }
+                        parts.push(first_order_error_mm(&geom, q, &m) - base);
+                    }
+                    parts.push(first_order_error_mm(&geom, q, &p) - base);
+                    for (w, d) in worst.iter_mut().zip(&parts) {
+                        for c in 0..3 {
+                            w[c] = w[c].max((d[c] * 1e3).abs());
+                        }
+                    }
+                }
+            }
+            let f = |w: [f64; 3]| format!("{:5.2} {:5.2} {:5.2}", w[0], w[1], w[2]);
+            println!(
+                "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17}",
+                state.name,
+                f(worst[0]),
+                f(worst[1]),
+                f(worst[2]),
+                f(worst[3]),
+                f(worst[4]),
+                f(worst[5])
+            );
+        }
+    }
+}
