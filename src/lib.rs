@@ -8,6 +8,7 @@
 pub use vmc_predict as predict;
 
 pub mod campaign;
+pub mod collision;
 pub mod errors;
 pub mod evaluation;
 pub mod gcode;

@@ -11,6 +11,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::collision::CollisionSpec;
 use crate::errors::ErrorFieldSpec;
 use crate::motion::MotionLimits;
 use crate::predict::synthesis::{Chain, MachineGeometry};
@@ -149,6 +150,9 @@ pub struct MachineSpec {
     pub instruments: InstrumentSpec,
     /// Geometric error field.
     pub errors: ErrorFieldSpec,
+    /// Collision geometry (holder, spindle nose, table) for `vmc-twin check`; optional.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collision: Option<CollisionSpec>,
 }
 
 fn invalid(path: &str, field: impl Into<String>, msg: impl Into<String>) -> MachineError {
@@ -261,6 +265,10 @@ impl MachineSpec {
         crate::sensors::validate_sensors(&self.sensors, &node_names)
             .map_err(|e| invalid(path, "sensors", e.to_string()))?;
         self.validate_instruments(path)?;
+        if let Some(c) = &self.collision {
+            c.validate(self.tool.offset_mm)
+                .map_err(|(field, msg)| invalid(path, field, msg))?;
+        }
         self.errors
             .validate(&|n| node_names.iter().any(|m| m == n))
             .map_err(|e| match e {

@@ -53,8 +53,23 @@ pub fn load_plan(
     plan_source(&text, &file, machine, start_mm)
 }
 
-/// Interprets, plans and travel-checks program text; `file` names it in errors.
-pub fn plan_source(
+/// Reads, interprets and plans a program file without the travel check (for `check`, which
+/// reports every travel violation instead of stopping at the first).
+pub fn load_plan_unchecked(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|err| ProgramError::Io {
+        file: file.clone(),
+        err,
+    })?;
+    plan_source_unchecked(&text, &file, machine, start_mm)
+}
+
+/// Interprets and plans program text, without the travel check; `file` names it in errors.
+pub fn plan_source_unchecked(
     text: &str,
     file: &str,
     machine: &MachineSpec,
@@ -68,11 +83,24 @@ pub fn plan_source(
         file: file.to_string(),
         err,
     })?;
+    motion::plan(&moves, start_mm, &machine.motion).map_err(|err| ProgramError::Motion {
+        file: file.to_string(),
+        err,
+    })
+}
+
+/// Interprets, plans and travel-checks program text; `file` names it in errors.
+pub fn plan_source(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
+    let plan = plan_source_unchecked(text, file, machine, start_mm)?;
     let motion_err = |err| ProgramError::Motion {
         file: file.to_string(),
         err,
     };
-    let plan = motion::plan(&moves, start_mm, &machine.motion).map_err(motion_err)?;
     motion::check_travel(
         &plan,
         machine.axes.travel_min_mm,

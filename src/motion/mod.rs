@@ -42,7 +42,7 @@ mod tests;
 pub use geometry::{plane_axes, ArcGeometry, Geometry, MIN_ARC_RADIUS_MM};
 pub use profile::SpeedProfile;
 pub use sampling::{AxisActivity, DwellPoint, Sample, Samples, DEFAULT_INTERPOLATION_CYCLE_S};
-pub use travel::check_travel;
+pub use travel::{check_travel, segment_travel_violations};
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
