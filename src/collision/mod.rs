@@ -472,7 +472,7 @@ fn crash_reason(head: HeadBody, role: BodyRole, seg: &Segment) -> Option<&'stati
                     if dir[0] == 0.0 && dir[1] == 0.0 && dir[2] > 0.0);
                 (!retract).then_some("rapid into the stock")
             }
-            _ if seg.spindle_rpm <= 0.0 => Some("cutting with the spindle stopped"),
+            _ if seg.spindle_rpm <= 0.0 => Some("cut with the spindle stopped"),
             _ => None,
         },
         (HeadBody::Tool, BodyRole::Table) => Some("tool contact with the table"),
@@ -601,7 +601,7 @@ pub fn check_plan(
                 if let Some(c) = found {
                     let continuing = reported_prev.contains(&(m.body, si))
                         && start_depth_mm > 0.0
-                        && c.depth_mm <= start_depth_mm;
+                        && c.depth_mm <= start_depth_mm + CONTACT_TOLERANCE_MM;
                     reported_now.push((m.body, si));
                     if !continuing {
                         sum.collisions += 1;
