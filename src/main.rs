@@ -195,6 +195,14 @@ fn run(args: RunArgs) -> Result<()> {
         warmups.push(plan);
     }
     let plan = program::load_plan(&args.program, &machine, start)?;
+    let total_s = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
+    program::check_run_size(
+        &args.program.display().to_string(),
+        total_s,
+        args.thermal_step_s,
+        plan.duration_s(),
+        args.every_cycle.then_some(args.interp_cycle_ms * 1e-3),
+    )?;
     let out_files = match &args.out {
         Some(dir) => {
             std::fs::create_dir_all(dir)

@@ -39,6 +39,70 @@ pub enum ProgramError {
     },
 }
 
+/// Most thermal integration steps one `run` may take (machine time / thermal step).
+pub const MAX_THERMAL_STEPS: f64 = 2.0e7;
+/// Most interpolation samples one `run --every-cycle` may record (program time / cycle).
+pub const MAX_CYCLE_SAMPLES: f64 = 2.0e7;
+
+/// A run whose size (machine time over step) would take hours or exhaust memory.
+#[derive(Debug, Error)]
+#[error("{file}: {duration_s:.0} s of machine time at {what} {step_s} s is {steps:.3e} steps, above the limit of {max:.0e}: use a larger {option}")]
+pub struct RunTooLarge {
+    /// The program (the last one counted).
+    pub file: String,
+    /// Machine time counted (s).
+    pub duration_s: f64,
+    /// Which step (`thermal step` or `interpolation cycle`).
+    pub what: &'static str,
+    /// The step (s).
+    pub step_s: f64,
+    /// Steps it would take.
+    pub steps: f64,
+    /// The limit.
+    pub max: f64,
+    /// The command-line option to change.
+    pub option: &'static str,
+}
+
+/// Refuses runs of more than [`MAX_THERMAL_STEPS`] thermal steps over `duration_s` of machine
+/// time, or, with `interp_cycle_s`, more than [`MAX_CYCLE_SAMPLES`] recorded samples over the
+/// measured program's `program_s`.
+pub fn check_run_size(
+    file: &str,
+    duration_s: f64,
+    thermal_step_s: f64,
+    program_s: f64,
+    interp_cycle_s: Option<f64>,
+) -> Result<(), RunTooLarge> {
+    let steps = duration_s / thermal_step_s;
+    if steps > MAX_THERMAL_STEPS {
+        return Err(RunTooLarge {
+            file: file.to_string(),
+            duration_s,
+            what: "thermal step",
+            step_s: thermal_step_s,
+            steps,
+            max: MAX_THERMAL_STEPS,
+            option: "--thermal-step-s",
+        });
+    }
+    if let Some(dt_s) = interp_cycle_s {
+        let samples = program_s / dt_s;
+        if samples > MAX_CYCLE_SAMPLES {
+            return Err(RunTooLarge {
+                file: file.to_string(),
+                duration_s: program_s,
+                what: "interpolation cycle",
+                step_s: dt_s,
+                steps: samples,
+                max: MAX_CYCLE_SAMPLES,
+                option: "--interp-cycle-ms (or drop --every-cycle)",
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Reads, interprets, plans and travel-checks a program file, starting at `start_mm`.
 pub fn load_plan(
     path: &Path,
