@@ -491,6 +491,31 @@ fn move_kind(kind: SegmentKind) -> Option<MoveKind> {
     }
 }
 
+/// For a line segment: the path interval `[s0, s1]` (mm) over which the bounding box of `m`
+/// overlaps that of `st`; `None` when it never does (or for an arc, which is sampled whole).
+fn line_window(seg: &Segment, m: &Moving, st: &Static) -> Option<(f64, f64)> {
+    let Geometry::Line { dir, length_mm } = seg.geometry else {
+        return None;
+    };
+    let (lo_off, hi_off) = Scene::moving_box(m, [0.0; 3], [0.0; 3]);
+    let (mut s0, mut s1) = (0.0f64, length_mm);
+    for i in 0..3 {
+        // Need: p_i(s) + lo_off_i ≤ hi_i  and  lo_i ≤ p_i(s) + hi_off_i, p_i(s) = a_i + d_i·s.
+        let a = seg.start_mm[i];
+        let (lo, hi) = (st.lo_mm[i] - hi_off[i] - a, st.hi_mm[i] - lo_off[i] - a);
+        if dir[i] == 0.0 {
+            if lo > 0.0 || hi < 0.0 {
+                return None;
+            }
+        } else {
+            let (t0, t1) = (lo / dir[i], hi / dir[i]);
+            s0 = s0.max(t0.min(t1));
+            s1 = s1.min(t0.max(t1));
+        }
+    }
+    (s0 <= s1).then_some((s0, s1))
+}
+
 /// Bounding box of a segment's tip path.
 fn segment_bounds(seg: &Segment) -> ([f64; 3], [f64; 3]) {
     match &seg.geometry {
@@ -566,7 +591,18 @@ pub fn check_plan(
                 };
                 let mut found: Option<Collision> = None;
                 let mut start_depth_mm = 0.0;
-                for k in 0..=n {
+                // On a line, only the samples whose bounding boxes can overlap (same results,
+                // cost ∝ the length near the body rather than the whole move).
+                let (k0, k1) = match line_window(seg, m, s) {
+                    Some((s0, s1)) => {
+                        let k0 = ((s0 / length_mm) * n as f64).floor().max(0.0) as usize;
+                        let k1 = ((s1 / length_mm) * n as f64).ceil().min(n as f64) as usize;
+                        (k0, k1)
+                    }
+                    None if matches!(seg.geometry, Geometry::Line { .. }) => continue,
+                    None => (0, n),
+                };
+                for k in k0..=k1 {
                     let s_mm = length_mm * k as f64 / n as f64;
                     let tip = seg.geometry.point_at(seg.start_mm, s_mm);
                     sum.samples += 1;
