@@ -297,11 +297,12 @@ impl MachineSpec {
         for i in 0..3 {
             let span = self.axes.travel_max_mm[i] - self.axes.travel_min_mm[i];
             let st = s.laser_step_mm[i];
-            if !(st.is_finite() && st > 0.0 && st <= span) {
+            // At least 1 mm (and ≤ the travel): at most travel/1 mm readings per sweep.
+            if !(st.is_finite() && st >= 1.0 && st <= span) {
                 return Err(invalid(
                     path,
                     format!("instruments.laser_step_mm[{i}]"),
-                    format!("must be in (0, travel = {span} mm], got {st}"),
+                    format!("must be in [1 mm, travel = {span} mm], got {st}"),
                 ));
             }
         }

@@ -315,9 +315,9 @@ fn run(args: RunArgs) -> Result<()> {
 
 fn calibrate(args: CalibrateArgs) -> Result<()> {
     let machine = load_machine(args.machine.as_deref())?;
-    if !(args.measure_every_min > 0.0 && args.measure_every_min.is_finite()) {
+    if !(args.measure_every_min >= 1.0 && args.measure_every_min.is_finite()) {
         anyhow::bail!(
-            "--measure-every-min must be > 0, got {}",
+            "--measure-every-min must be at least 1 (minute), got {}",
             args.measure_every_min
         );
     }
