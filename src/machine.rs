@@ -173,7 +173,7 @@ impl MachineSpec {
 
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, MachineError> {
-        let text = std::fs::read_to_string(path).map_err(|err| MachineError::Io {
+        let text = crate::program::read_text(path).map_err(|err| MachineError::Io {
             path: path.display().to_string(),
             err,
         })?;

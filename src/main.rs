@@ -317,7 +317,7 @@ fn calibrate(args: CalibrateArgs) -> Result<()> {
     let machine = load_machine(args.machine.as_deref())?;
     if !(args.measure_every_min >= 1.0 && args.measure_every_min.is_finite()) {
         anyhow::bail!(
-            "--measure-every-min must be at least 1 (minute), got {}",
+            "--measure-every-min must be at least 1 (minute), got {:e}",
             args.measure_every_min
         );
     }

@@ -39,6 +39,33 @@ pub enum ProgramError {
     },
 }
 
+/// Reads a text file; bytes that are not UTF-8 are an `InvalidData` error naming their line,
+/// column and value (instead of the standard library's location-free message).
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    let bytes = std::fs::read(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let bad_at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let before = &bytes[..bad_at];
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        // Characters (not bytes) before the bad byte on its line; the prefix is valid UTF-8.
+        let col = 1 + String::from_utf8_lossy(&before[line_start..])
+            .chars()
+            .count();
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text: line {line}, column {col}: byte 0x{:02X}",
+                bytes[bad_at]
+            ),
+        )
+    })
+}
+
 /// Most thermal integration steps one `run` may take (machine time / thermal step).
 pub const MAX_THERMAL_STEPS: f64 = 2.0e7;
 /// Most interpolation samples one `run --every-cycle` may record (program time / cycle).
@@ -46,7 +73,7 @@ pub const MAX_CYCLE_SAMPLES: f64 = 2.0e7;
 
 /// A run whose size (machine time over step) would take hours or exhaust memory.
 #[derive(Debug, Error)]
-#[error("{file}: {duration_s:.0} s of machine time at {what} {step_s} s is {steps:.3e} steps, above the limit of {max:.0e}: use a larger {option}")]
+#[error("{file}: {duration_s:.0} s of machine time at {what} {step_s:e} s is {steps:.3e} steps, above the limit of {max:.0e}: use a larger {option}")]
 pub struct RunTooLarge {
     /// The program (the last one counted).
     pub file: String,
@@ -110,7 +137,7 @@ pub fn load_plan(
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|err| ProgramError::Io {
+    let text = read_text(path).map_err(|err| ProgramError::Io {
         file: file.clone(),
         err,
     })?;
@@ -125,7 +152,7 @@ pub fn load_plan_unchecked(
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|err| ProgramError::Io {
+    let text = read_text(path).map_err(|err| ProgramError::Io {
         file: file.clone(),
         err,
     })?;

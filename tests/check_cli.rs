@@ -40,9 +40,17 @@ const VISE: &str = "tests/data/collision/vise.toml";
 fn failing_check(program: &str) -> Vec<String> {
     let o = vmc(&["check", program, "--fixture", VISE]);
     let err = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "stdout:\n{}\nstderr:\n{err}", text(&o.stdout));
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "stdout:\n{}\nstderr:\n{err}",
+        text(&o.stdout)
+    );
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.starts_with(&format!("vmc-twin: error: {program}: would crash")), "{err}");
+    assert!(
+        err.starts_with(&format!("vmc-twin: error: {program}: would crash")),
+        "{err}"
+    );
     problem_lines(&o, program)
 }
 
@@ -53,8 +61,14 @@ fn a_clean_program_passes_with_exit_code_0() {
     let out = text(&o.stdout);
     assert!(o.status.success(), "{out}\n{}", text(&o.stderr));
     assert!(problem_lines(&o, p).is_empty(), "{out}");
-    assert!(out.contains("stock (stock): X230.000 Y160.000 Z-380.000 … X330.000 Y240.000 Z-250.000 mm"), "{out}");
-    assert!(out.contains("0 collision(s), 0 travel violation(s)"), "{out}");
+    assert!(
+        out.contains("stock (stock): X230.000 Y160.000 Z-380.000 … X330.000 Y240.000 Z-250.000 mm"),
+        "{out}"
+    );
+    assert!(
+        out.contains("0 collision(s), 0 travel violation(s)"),
+        "{out}"
+    );
     assert!(out.contains("no problem found"), "{out}");
 }
 
@@ -69,7 +83,12 @@ fn a_rapid_into_the_vise_is_reported_with_line_bodies_position_and_depth() {
     let lines = failing_check(p);
     assert_eq!(lines.len(), 1, "{lines:?}");
     assert!(lines[0].starts_with(&format!("{p}: line 4: G0 rapid: tool hits vise_fixed_jaw (fixture), 5.000 mm deep at tool tip X280.000 Y150.000 Z-340.000 (t = 1.927 s), contact point X")), "{lines:?}");
-    assert!(lines[0].ends_with(" Z-335.000; first contact at tool tip X280.000 Y150.000 Z-335.200 (t = 1.847 s)"), "{lines:?}");
+    assert!(
+        lines[0].ends_with(
+            " Z-335.000; first contact at tool tip X280.000 Y150.000 Z-335.200 (t = 1.847 s)"
+        ),
+        "{lines:?}"
+    );
 }
 
 #[test]
@@ -83,7 +102,10 @@ fn the_holder_entering_the_stock_on_a_deep_plunge_is_a_crash() {
         lines[0].starts_with(&format!("{p}: line 6: G1 feed: holder hits stock (stock), 15.000 mm deep at tool tip X280.000 Y200.000 Z-370.000")),
         "{lines:?}"
     );
-    assert!(lines[0].contains("first contact at tool tip X280.000 Y200.000 Z-355.200"), "{lines:?}");
+    assert!(
+        lines[0].contains("first contact at tool tip X280.000 Y200.000 Z-355.200"),
+        "{lines:?}"
+    );
 }
 
 #[test]
@@ -113,8 +135,15 @@ fn x_past_travel_is_reported_per_move_and_run_refuses_with_the_same_message() {
     );
     let o = vmc(&["run", p]);
     assert_eq!(o.status.code(), Some(1));
-    assert_eq!(text(&o.stderr).trim_end(), format!("vmc-twin: error: {want}"));
-    assert!(o.stdout.is_empty(), "nothing simulated: {}", text(&o.stdout));
+    assert_eq!(
+        text(&o.stderr).trim_end(),
+        format!("vmc-twin: error: {want}")
+    );
+    assert!(
+        o.stdout.is_empty(),
+        "nothing simulated: {}",
+        text(&o.stdout)
+    );
 }
 
 #[test]
@@ -134,12 +163,18 @@ fn campaign_refuses_a_machine_its_diagonals_do_not_fit_with_the_check_message() 
         .into_iter()
         .next()
         .expect("a travel violation");
-    assert!(first.contains("axis X reaches") && first.contains("outside travel [0, 500] mm"), "{first}");
+    assert!(
+        first.contains("axis X reaches") && first.contains("outside travel [0, 500] mm"),
+        "{first}"
+    );
 
     let campaign = vmc(&["campaign", "--seeds", "1", "--machine", &m]);
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(campaign.status.code(), Some(1));
-    assert_eq!(text(&campaign.stderr).trim_end(), format!("vmc-twin: error: {first}"));
+    assert_eq!(
+        text(&campaign.stderr).trim_end(),
+        format!("vmc-twin: error: {first}")
+    );
 }
 
 #[test]
@@ -153,8 +188,18 @@ fn bad_fixture_files_are_one_line_errors_naming_file_and_field() {
     )
     .unwrap();
     let fs = f.display().to_string();
-    let o = vmc(&["check", "tests/data/collision/clean_pocket.ngc", "--fixture", &fs]);
-    let missing = vmc(&["check", "tests/data/collision/clean_pocket.ngc", "--fixture", "nope.toml"]);
+    let o = vmc(&[
+        "check",
+        "tests/data/collision/clean_pocket.ngc",
+        "--fixture",
+        &fs,
+    ]);
+    let missing = vmc(&[
+        "check",
+        "tests/data/collision/clean_pocket.ngc",
+        "--fixture",
+        "nope.toml",
+    ]);
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(o.status.code(), Some(1));
     let err = text(&o.stderr);
@@ -169,7 +214,12 @@ fn the_problem_report_does_not_depend_on_the_working_folder_path() {
     let p = repo().join("tests/data/collision/rapid_into_vise.ngc");
     let v = repo().join(VISE);
     let o = Command::new(BIN)
-        .args(["check", &p.display().to_string(), "--fixture", &v.display().to_string()])
+        .args([
+            "check",
+            &p.display().to_string(),
+            "--fixture",
+            &v.display().to_string(),
+        ])
         .current_dir(Path::new("/"))
         .output()
         .unwrap();

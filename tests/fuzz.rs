@@ -38,10 +38,7 @@ fn runner(cases: u32) -> TestRunner {
         failure_persistence: None,
         ..Config::default()
     };
-    TestRunner::new_with_rng(
-        cfg,
-        TestRng::from_seed(RngAlgorithm::ChaCha, &[7; 32]),
-    )
+    TestRunner::new_with_rng(cfg, TestRng::from_seed(RngAlgorithm::ChaCha, &[7; 32]))
 }
 
 /// Does `msg` start with `<file>: line N` (and, for G-code errors, `, column C`)?
@@ -50,7 +47,8 @@ fn has_line_location(msg: &str, file: &str) -> bool {
         return false;
     };
     let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
-    !digits.is_empty() && (rest[digits.len()..].starts_with(": ") || rest[digits.len()..].starts_with(", column "))
+    !digits.is_empty()
+        && (rest[digits.len()..].starts_with(": ") || rest[digits.len()..].starts_with(", column "))
 }
 
 /// The whole front end on one text: plan (with travel check), and when the plan is accepted
@@ -60,7 +58,10 @@ fn front_end(text: &str) -> Result<(), TestCaseError> {
     let file = "fuzz.ngc";
     match program::plan_source_unchecked(text, file, &machine, machine.axes.home_mm) {
         Ok(plan) => {
-            prop_assert!(plan.duration_s() <= MAX_PLAN_DURATION_S, "unbounded plan accepted");
+            prop_assert!(
+                plan.duration_s() <= MAX_PLAN_DURATION_S,
+                "unbounded plan accepted"
+            );
             let fixture = FixtureSpec::from_toml_str(VISE, "vise.toml").unwrap();
             let scene = Scene::new(&machine, Some(&fixture)).unwrap();
             let mut problems = Vec::new();
@@ -157,7 +158,16 @@ const INSERTS: [&str; 14] = [
     "G2 X10 Y10 I5 J5 F100\n",
 ];
 const NUMBERS: [&str; 10] = [
-    "1e9", "-1e9", "0", "1e-9", "99999999", "nan", "inf", "-0", "3.4028235e38", "1.7976931348623157e308",
+    "1e9",
+    "-1e9",
+    "0",
+    "1e-9",
+    "99999999",
+    "nan",
+    "inf",
+    "-0",
+    "3.4028235e38",
+    "1.7976931348623157e308",
 ];
 
 fn mutation() -> impl Strategy<Value = Mutation> {
@@ -326,8 +336,20 @@ fn machine_file(text: &str) -> Result<(), TestCaseError> {
 }
 
 const VALUES: [&str; 14] = [
-    "nan", "inf", "-inf", "-1.0", "0.0", "1e308", "-1e308", "1e-308", "\"x\"", "true", "[]",
-    "1e12", "-0.0", "12345678901234567890",
+    "nan",
+    "inf",
+    "-inf",
+    "-1.0",
+    "0.0",
+    "1e308",
+    "-1e308",
+    "1e-308",
+    "\"x\"",
+    "true",
+    "[]",
+    "1e12",
+    "-0.0",
+    "12345678901234567890",
 ];
 
 #[test]
@@ -353,7 +375,8 @@ fn mutated_reference_machines_never_panic_and_every_rejection_names_a_field_or_l
             lines.insert(k, lines[k]);
             lines.join("\n")
         }),
-        (0..REFERENCE_TOML.len()).prop_map(|k| REFERENCE_TOML[..floor_boundary(REFERENCE_TOML, k)].to_string()),
+        (0..REFERENCE_TOML.len())
+            .prop_map(|k| REFERENCE_TOML[..floor_boundary(REFERENCE_TOML, k)].to_string()),
     ];
     runner(400).run(&strategy, |t| machine_file(&t)).unwrap();
 }
@@ -365,7 +388,11 @@ fn arbitrary_text_as_a_machine_or_fixture_file_is_rejected_with_a_location() {
             machine_file(&t)?;
             if let Err(e) = FixtureSpec::from_toml_str(&t, "f.toml") {
                 let msg = e.to_string();
-                prop_assert!(msg.starts_with("f.toml: ") && !msg.contains('\n'), "{}", msg);
+                prop_assert!(
+                    msg.starts_with("f.toml: ") && !msg.contains('\n'),
+                    "{}",
+                    msg
+                );
                 prop_assert!(msg.contains("field `") || msg.contains("line "), "{}", msg);
             }
             Ok(())
@@ -376,10 +403,11 @@ fn arbitrary_text_as_a_machine_or_fixture_file_is_rejected_with_a_location() {
 #[test]
 fn mutated_fixtures_never_panic_and_name_the_field() {
     let spans = number_spans(VISE);
-    let strategy = (0..spans.len(), prop::sample::select(VALUES.to_vec())).prop_map(move |(k, v)| {
-        let (a, b) = spans[k];
-        format!("{}{}{}", &VISE[..a], v, &VISE[b..])
-    });
+    let strategy =
+        (0..spans.len(), prop::sample::select(VALUES.to_vec())).prop_map(move |(k, v)| {
+            let (a, b) = spans[k];
+            format!("{}{}{}", &VISE[..a], v, &VISE[b..])
+        });
     runner(300)
         .run(&strategy, |t| {
             match FixtureSpec::from_toml_str(&t, "f.toml") {
@@ -387,13 +415,9 @@ fn mutated_fixtures_never_panic_and_name_the_field() {
                     // Accepted: the check runs on it.
                     let m = MachineSpec::reference();
                     let scene = Scene::new(&m, Some(&f)).unwrap();
-                    let plan = program::plan_source_unchecked(
-                        SEEDS[3],
-                        "p.ngc",
-                        &m,
-                        m.axes.home_mm,
-                    )
-                    .unwrap();
+                    let plan =
+                        program::plan_source_unchecked(SEEDS[3], "p.ngc", &m, m.axes.home_mm)
+                            .unwrap();
                     let mut v = Vec::new();
                     collision::check_plan(&plan, &m, Some(&scene), &mut v).unwrap();
                 }
@@ -406,4 +430,3 @@ fn mutated_fixtures_never_panic_and_name_the_field() {
         })
         .unwrap();
 }
-

@@ -360,8 +360,7 @@ impl Scene {
 
     fn static_body(b: &BodySpec) -> Static {
         // Validated specs have the fields of their shape.
-        let (shape, pose, lo_mm, hi_mm): (Box<dyn Shape>, Pose, [f64; 3], [f64; 3]) = match b
-            .shape
+        let (shape, pose, lo_mm, hi_mm): (Box<dyn Shape>, Pose, [f64; 3], [f64; 3]) = match b.shape
         {
             ShapeKind::Box => {
                 let lo = b.min_mm.unwrap_or_default();

@@ -245,7 +245,10 @@ impl CollisionSpec {
     /// Checks the section against the machine's tool (`tool_offset_mm`); fields are named
     /// `collision.…` (or `tool.offset_mm[i]` when the tool does not fit the holder).
     pub fn validate(&self, tool_offset_mm: [f64; 3]) -> Result<(), FieldError> {
-        for (name, c) in [("holder", &self.holder), ("spindle_nose", &self.spindle_nose)] {
+        for (name, c) in [
+            ("holder", &self.holder),
+            ("spindle_nose", &self.spindle_nose),
+        ] {
             check_size(format!("collision.{name}.diameter_mm"), c.diameter_mm)?;
             check_size(format!("collision.{name}.length_mm"), c.length_mm)?;
         }
@@ -275,7 +278,7 @@ impl FixtureSpec {
     /// Reads and validates a fixture file.
     pub fn load(path: &Path) -> Result<Self, CollisionSpecError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|err| CollisionSpecError::Io {
+        let text = crate::program::read_text(path).map_err(|err| CollisionSpecError::Io {
             path: name.clone(),
             err,
         })?;

@@ -195,7 +195,10 @@ proptest::proptest! {
 
 #[test]
 fn travel_violations_carry_the_same_message_as_the_planner() {
-    let p = problems("G0 X100 Y100 Z-100\nG1 X580 F2000\nG0 X100 Y-5\nM30", "bodies = []");
+    let p = problems(
+        "G0 X100 Y100 Z-100\nG1 X580 F2000\nG0 X100 Y-5\nM30",
+        "bodies = []",
+    );
     let msgs: Vec<String> = p.iter().map(|p| p.to_string()).collect();
     assert_eq!(
         msgs,
@@ -220,22 +223,48 @@ fn travel_violations_carry_the_same_message_as_the_planner() {
 fn the_vise_fixture_loads_and_bad_fixtures_name_the_field() {
     let f = FixtureSpec::from_toml_str(VISE, "vise.toml").unwrap();
     assert_eq!(f.bodies.len(), 5);
-    let bad = |text: &str| FixtureSpec::from_toml_str(text, "f.toml").unwrap_err().to_string();
+    let bad = |text: &str| {
+        FixtureSpec::from_toml_str(text, "f.toml")
+            .unwrap_err()
+            .to_string()
+    };
     let one = |body: &str| bad(&format!("bodies = [ {{ name = \"b\", {body} }} ]"));
-    let m = one(r#"role = "fixture", shape = "box", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, -1.0, 1.0]"#);
+    let m = one(
+        r#"role = "fixture", shape = "box", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, -1.0, 1.0]"#,
+    );
     assert!(m.contains("f.toml: field `bodies[0].max_mm[1]`"), "{m}");
-    let m = one(r#"role = "fixture", shape = "cylinder", base_center_mm = [0.0, 0.0, 0.0], height_mm = 1.0"#);
-    assert!(m.contains("`bodies[0].radius_mm`") && m.contains("missing"), "{m}");
-    let m = one(r#"role = "stock", shape = "cylinder", base_center_mm = [0.0, 0.0, 0.0], radius_mm = nan, height_mm = 1.0"#);
+    let m = one(
+        r#"role = "fixture", shape = "cylinder", base_center_mm = [0.0, 0.0, 0.0], height_mm = 1.0"#,
+    );
+    assert!(
+        m.contains("`bodies[0].radius_mm`") && m.contains("missing"),
+        "{m}"
+    );
+    let m = one(
+        r#"role = "stock", shape = "cylinder", base_center_mm = [0.0, 0.0, 0.0], radius_mm = nan, height_mm = 1.0"#,
+    );
     assert!(m.contains("`bodies[0].radius_mm`"), "{m}");
-    let m = one(r#"role = "stock", shape = "box", min_mm = [0.0, 0.0, inf], max_mm = [1.0, 1.0, 1.0]"#);
+    let m =
+        one(r#"role = "stock", shape = "box", min_mm = [0.0, 0.0, inf], max_mm = [1.0, 1.0, 1.0]"#);
     assert!(m.contains("`bodies[0].min_mm[2]`"), "{m}");
-    let m = one(r#"role = "stock", shape = "box", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, 1.0, 1.0], radius_mm = 3.0"#);
-    assert!(m.contains("`bodies[0].radius_mm`") && m.contains("not a field"), "{m}");
-    let m = one(r#"role = "clamp", shape = "box", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, 1.0, 1.0]"#);
-    assert!(m.contains("f.toml") && m.contains("clamp") && m.contains("line 1"), "{m}");
+    let m = one(
+        r#"role = "stock", shape = "box", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, 1.0, 1.0], radius_mm = 3.0"#,
+    );
+    assert!(
+        m.contains("`bodies[0].radius_mm`") && m.contains("not a field"),
+        "{m}"
+    );
+    let m =
+        one(r#"role = "clamp", shape = "box", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, 1.0, 1.0]"#);
+    assert!(
+        m.contains("f.toml") && m.contains("clamp") && m.contains("line 1"),
+        "{m}"
+    );
     let m = bad("bodies = [ { name = \"a\", role = \"stock\", shape = \"box\", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, 1.0, 1.0] }, { name = \"a\", role = \"stock\", shape = \"box\", min_mm = [0.0, 0.0, 0.0], max_mm = [1.0, 1.0, 1.0] } ]");
-    assert!(m.contains("`bodies[1].name`") && m.contains("duplicate"), "{m}");
+    assert!(
+        m.contains("`bodies[1].name`") && m.contains("duplicate"),
+        "{m}"
+    );
 }
 
 #[test]

@@ -96,7 +96,10 @@ pub fn check_travel(
     validate_travel(travel_min_mm, travel_max_mm)?;
     if plan.segments().is_empty() {
         let p = plan.start_mm();
-        return match box_violations(0, p, p, travel_min_mm, travel_max_mm).into_iter().next() {
+        return match box_violations(0, p, p, travel_min_mm, travel_max_mm)
+            .into_iter()
+            .next()
+        {
             Some(e) => Err(e),
             None => Ok(()),
         };

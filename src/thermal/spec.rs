@@ -337,7 +337,7 @@ impl ThermalSpec {
             return Err(invalid(
                 "thermal.step_s",
                 "in [0.001, 3600] s",
-                self.step_s.to_string(),
+                format!("{:e}", self.step_s),
             ));
         }
         self.ambient.validate("thermal.ambient")?;
