@@ -453,7 +453,7 @@ impl Scene {
         })?;
         Ok(c.and_then(|c| {
             let depth = -c.dist;
-            (depth > CONTACT_TOLERANCE_MM).then(|| (depth, [c.point2.x, c.point2.y, c.point2.z]))
+            (depth > CONTACT_TOLERANCE_MM).then_some((depth, [c.point2.x, c.point2.y, c.point2.z]))
         }))
     }
 }

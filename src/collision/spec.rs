@@ -252,8 +252,8 @@ impl CollisionSpec {
             check_size(format!("collision.{name}.diameter_mm"), c.diameter_mm)?;
             check_size(format!("collision.{name}.length_mm"), c.length_mm)?;
         }
-        for i in 0..2 {
-            if tool_offset_mm[i] != 0.0 {
+        for (i, &off_mm) in tool_offset_mm.iter().take(2).enumerate() {
+            if off_mm != 0.0 {
                 return Err((
                     format!("tool.offset_mm[{i}]"),
                     "the collision check models a tool on the spindle axis: must be 0".into(),
