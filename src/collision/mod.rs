@@ -44,8 +44,8 @@
 //!   material already cut is reported as a rapid into the stock.
 //!
 //! One [`Problem`] is reported per segment and pair of bodies in contact (with the first contact
-//! and the deepest point), and one per segment and axis out of travel, in time order, through a
-//! [`CheckObserver`] (the shape a recorder needs to draw them).
+//! and the deepest point), and one per segment and axis out of travel, move by move in plan
+//! order, through a [`CheckObserver`] (the shape a recorder needs to draw them).
 
 pub mod spec;
 #[cfg(test)]
@@ -224,7 +224,7 @@ impl std::fmt::Display for Problem {
     }
 }
 
-/// Receives each problem as it is found, in time order.
+/// Receives each problem as it is found, move by move, in plan order.
 pub trait CheckObserver {
     /// Called once per problem.
     fn on_problem(&mut self, problem: &Problem);
@@ -530,7 +530,7 @@ fn segment_bounds(seg: &Segment) -> ([f64; 3], [f64; 3]) {
 }
 
 /// Checks every segment of `plan` against the travel limits of `machine` and, with a `scene`,
-/// for collisions; reports each problem to `observer` in time order.
+/// for collisions; reports each problem to `observer` move by move, in plan order.
 ///
 /// Errors when the machine's travel range itself is invalid or a contact query is unsupported.
 pub fn check_plan(
