@@ -9,6 +9,7 @@ pub use vmc_predict as predict;
 
 pub mod benchmark;
 pub mod campaign;
+pub mod collision;
 pub mod errors;
 pub mod evaluation;
 pub mod gcode;

@@ -11,6 +11,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::collision::CollisionSpec;
 use crate::errors::ErrorFieldSpec;
 use crate::motion::MotionLimits;
 use crate::predict::synthesis::{Chain, MachineGeometry};
@@ -149,6 +150,9 @@ pub struct MachineSpec {
     pub instruments: InstrumentSpec,
     /// Geometric error field.
     pub errors: ErrorFieldSpec,
+    /// Collision geometry (holder, spindle nose, table) for `vmc-twin check`; optional.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collision: Option<CollisionSpec>,
 }
 
 fn invalid(path: &str, field: impl Into<String>, msg: impl Into<String>) -> MachineError {
@@ -169,7 +173,7 @@ impl MachineSpec {
 
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, MachineError> {
-        let text = std::fs::read_to_string(path).map_err(|err| MachineError::Io {
+        let text = crate::program::read_text(path).map_err(|err| MachineError::Io {
             path: path.display().to_string(),
             err,
         })?;
@@ -261,6 +265,10 @@ impl MachineSpec {
         crate::sensors::validate_sensors(&self.sensors, &node_names)
             .map_err(|e| invalid(path, "sensors", e.to_string()))?;
         self.validate_instruments(path)?;
+        if let Some(c) = &self.collision {
+            c.validate(self.tool.offset_mm)
+                .map_err(|(field, msg)| invalid(path, field, msg))?;
+        }
         self.errors
             .validate(&|n| node_names.iter().any(|m| m == n))
             .map_err(|e| match e {
@@ -289,11 +297,12 @@ impl MachineSpec {
         for i in 0..3 {
             let span = self.axes.travel_max_mm[i] - self.axes.travel_min_mm[i];
             let st = s.laser_step_mm[i];
-            if !(st.is_finite() && st > 0.0 && st <= span) {
+            // At least 1 mm (and ≤ the travel): at most travel/1 mm readings per sweep.
+            if !(st.is_finite() && st >= 1.0 && st <= span) {
                 return Err(invalid(
                     path,
                     format!("instruments.laser_step_mm[{i}]"),
-                    format!("must be in (0, travel = {span} mm], got {st}"),
+                    format!("must be in [1 mm, travel = {span} mm], got {st}"),
                 ));
             }
         }

@@ -52,6 +52,9 @@ enum Command {
     /// print the ranking with its evidence, compare compensation with the selected, default,
     /// random and all locations on held-out runs, and write the sensor set (TOML).
     SelectSensors(SelectArgs),
+    /// Would this program crash the machine? Checks every move for travel limits and for
+    /// contact of tool, holder and spindle nose with the table, fixture and stock.
+    Check(CheckArgs),
     /// Measure the speed figures (compensation query, 8 h of machine time, campaign) and how
     /// they scale with the interpolation cycle and the number of calibration cycles.
     Bench(BenchArgs),
@@ -100,6 +103,18 @@ struct SelectArgs {
     /// Overwrite existing output files.
     #[arg(long)]
     force: bool,
+}
+
+#[derive(clap::Args)]
+struct CheckArgs {
+    /// G-code program to check.
+    program: PathBuf,
+    /// Machine description (TOML) with a [collision] section; default: the reference machine.
+    #[arg(long)]
+    machine: Option<PathBuf>,
+    /// Fixture file (TOML): vise, clamps and stock on the table.
+    #[arg(long)]
+    fixture: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -218,6 +233,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench(args),
         Command::FitThermal(args) => thermal_cli::fit_thermal(args),
         Command::PredictThermal(args) => thermal_cli::predict_thermal(args),
+        Command::Check(args) => check(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -269,6 +285,14 @@ fn run(args: RunArgs) -> Result<()> {
         warmups.push(plan);
     }
     let plan = program::load_plan(&args.program, &machine, start)?;
+    let total_s = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
+    program::check_run_size(
+        &args.program.display().to_string(),
+        total_s,
+        args.thermal_step_s,
+        plan.duration_s(),
+        args.every_cycle.then_some(args.interp_cycle_ms * 1e-3),
+    )?;
     let out_files = match &args.out {
         Some(dir) => {
             std::fs::create_dir_all(dir)
@@ -381,9 +405,9 @@ fn run(args: RunArgs) -> Result<()> {
 
 fn calibrate(args: CalibrateArgs) -> Result<()> {
     let machine = load_machine(args.machine.as_deref(), args.sensors.as_deref())?;
-    if !(args.measure_every_min > 0.0 && args.measure_every_min.is_finite()) {
+    if !(args.measure_every_min >= 1.0 && args.measure_every_min.is_finite()) {
         anyhow::bail!(
-            "--measure-every-min must be > 0, got {}",
+            "--measure-every-min must be at least 1 (minute), got {:e}",
             args.measure_every_min
         );
     }
@@ -648,4 +672,72 @@ fn bench(args: BenchArgs) -> Result<()> {
         writeln!(out, "peak resident memory of this process: {m:.0} MiB")?;
     }
     Ok(())
+}
+
+fn check(args: CheckArgs) -> Result<()> {
+    use vmc_twin::collision::{self, FixtureSpec, Problem, Scene};
+    let machine = load_machine(args.machine.as_deref(), None)?;
+    let fixture = args.fixture.as_deref().map(FixtureSpec::load).transpose()?;
+    let scene = match (&machine.collision, &fixture) {
+        (None, None) => None,
+        _ => Some(Scene::new(&machine, fixture.as_ref())?),
+    };
+    let plan = program::load_plan_unchecked(&args.program, &machine, machine.axes.home_mm)?;
+    let file = args.program.display().to_string();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let fixture_name = args
+        .fixture
+        .as_ref()
+        .map(|p| format!("fixture {}", p.display()))
+        .unwrap_or_else(|| "no fixture file".into());
+    writeln!(
+        out,
+        "vmc-twin check: {file} on {} ({fixture_name})",
+        machine.machine.name
+    )?;
+    match &scene {
+        Some(sc) => {
+            writeln!(out, "bodies (machine frame: tool tip relative to the table, mm):")?;
+            for l in sc.describe() {
+                writeln!(out, "  {l}")?;
+            }
+            writeln!(
+                out,
+                "method: every move sampled along its exact path at ≤ {} mm steps: no contact deeper than {} mm can be missed",
+                collision::SAMPLE_SPACING_MM,
+                0.5 * collision::SAMPLE_SPACING_MM
+            )?;
+        }
+        None => writeln!(
+            out,
+            "travel check only: the machine file has no [collision] section and no --fixture was given"
+        )?,
+    }
+    struct Print<'a, W: Write>(&'a mut W, &'a str, std::io::Result<()>);
+    impl<W: Write> collision::CheckObserver for Print<'_, W> {
+        fn on_problem(&mut self, p: &Problem) {
+            if self.2.is_ok() {
+                self.2 = writeln!(self.0, "{}: {p}", self.1);
+            }
+        }
+    }
+    let mut printer = Print(&mut out, &file, Ok(()));
+    let sum = collision::check_plan(&plan, &machine, scene.as_ref(), &mut printer)?;
+    printer.2?;
+    writeln!(
+        out,
+        "checked {} moves ({:.1} mm of path, {} poses): {} collision(s), {} travel violation(s)",
+        sum.segments, sum.path_mm, sum.samples, sum.collisions, sum.travel_violations
+    )?;
+    if sum.is_clean() {
+        writeln!(out, "no problem found")?;
+        Ok(())
+    } else {
+        anyhow::bail!(
+            "{file}: would crash or leave the travel: {} collision(s), {} travel violation(s)",
+            sum.collisions,
+            sum.travel_violations
+        )
+    }
 }

@@ -39,6 +39,97 @@ pub enum ProgramError {
     },
 }
 
+/// Reads a text file; bytes that are not UTF-8 are an `InvalidData` error naming their line,
+/// column and value (instead of the standard library's location-free message).
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    let bytes = std::fs::read(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let bad_at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let before = &bytes[..bad_at];
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        // Characters (not bytes) before the bad byte on its line; the prefix is valid UTF-8.
+        let col = 1 + String::from_utf8_lossy(&before[line_start..])
+            .chars()
+            .count();
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text: line {line}, column {col}: byte 0x{:02X}",
+                bytes[bad_at]
+            ),
+        )
+    })
+}
+
+/// Most thermal integration steps one `run` may take (machine time / thermal step).
+pub const MAX_THERMAL_STEPS: f64 = 2.0e7;
+/// Most interpolation samples one `run --every-cycle` may record (program time / cycle).
+pub const MAX_CYCLE_SAMPLES: f64 = 2.0e7;
+
+/// A run whose size (machine time over step) would take hours or exhaust memory.
+#[derive(Debug, Error)]
+#[error("{file}: {duration_s:.0} s of machine time at {what} {step_s:e} s is {steps:.3e} steps, above the limit of {max:.0e}: use a larger {option}")]
+pub struct RunTooLarge {
+    /// The program (the last one counted).
+    pub file: String,
+    /// Machine time counted (s).
+    pub duration_s: f64,
+    /// Which step (`thermal step` or `interpolation cycle`).
+    pub what: &'static str,
+    /// The step (s).
+    pub step_s: f64,
+    /// Steps it would take.
+    pub steps: f64,
+    /// The limit.
+    pub max: f64,
+    /// The command-line option to change.
+    pub option: &'static str,
+}
+
+/// Refuses runs of more than [`MAX_THERMAL_STEPS`] thermal steps over `duration_s` of machine
+/// time, or, with `interp_cycle_s`, more than [`MAX_CYCLE_SAMPLES`] recorded samples over the
+/// measured program's `program_s`.
+pub fn check_run_size(
+    file: &str,
+    duration_s: f64,
+    thermal_step_s: f64,
+    program_s: f64,
+    interp_cycle_s: Option<f64>,
+) -> Result<(), RunTooLarge> {
+    let steps = duration_s / thermal_step_s;
+    if steps > MAX_THERMAL_STEPS {
+        return Err(RunTooLarge {
+            file: file.to_string(),
+            duration_s,
+            what: "thermal step",
+            step_s: thermal_step_s,
+            steps,
+            max: MAX_THERMAL_STEPS,
+            option: "--thermal-step-s",
+        });
+    }
+    if let Some(dt_s) = interp_cycle_s {
+        let samples = program_s / dt_s;
+        if samples > MAX_CYCLE_SAMPLES {
+            return Err(RunTooLarge {
+                file: file.to_string(),
+                duration_s: program_s,
+                what: "interpolation cycle",
+                step_s: dt_s,
+                steps: samples,
+                max: MAX_CYCLE_SAMPLES,
+                option: "--interp-cycle-ms (or drop --every-cycle)",
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Reads, interprets, plans and travel-checks a program file, starting at `start_mm`.
 pub fn load_plan(
     path: &Path,
@@ -46,15 +137,30 @@ pub fn load_plan(
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|err| ProgramError::Io {
+    let text = read_text(path).map_err(|err| ProgramError::Io {
         file: file.clone(),
         err,
     })?;
     plan_source(&text, &file, machine, start_mm)
 }
 
-/// Interprets, plans and travel-checks program text; `file` names it in errors.
-pub fn plan_source(
+/// Reads, interprets and plans a program file without the travel check (for `check`, which
+/// reports every travel violation instead of stopping at the first).
+pub fn load_plan_unchecked(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
+    let file = path.display().to_string();
+    let text = read_text(path).map_err(|err| ProgramError::Io {
+        file: file.clone(),
+        err,
+    })?;
+    plan_source_unchecked(&text, &file, machine, start_mm)
+}
+
+/// Interprets and plans program text, without the travel check; `file` names it in errors.
+pub fn plan_source_unchecked(
     text: &str,
     file: &str,
     machine: &MachineSpec,
@@ -68,11 +174,24 @@ pub fn plan_source(
         file: file.to_string(),
         err,
     })?;
+    motion::plan(&moves, start_mm, &machine.motion).map_err(|err| ProgramError::Motion {
+        file: file.to_string(),
+        err,
+    })
+}
+
+/// Interprets, plans and travel-checks program text; `file` names it in errors.
+pub fn plan_source(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
+    let plan = plan_source_unchecked(text, file, machine, start_mm)?;
     let motion_err = |err| ProgramError::Motion {
         file: file.to_string(),
         err,
     };
-    let plan = motion::plan(&moves, start_mm, &machine.motion).map_err(motion_err)?;
     motion::check_travel(
         &plan,
         machine.axes.travel_min_mm,

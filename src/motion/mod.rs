@@ -42,7 +42,7 @@ mod tests;
 pub use geometry::{plane_axes, ArcGeometry, Geometry, MIN_ARC_RADIUS_MM};
 pub use profile::SpeedProfile;
 pub use sampling::{AxisActivity, DwellPoint, Sample, Samples, DEFAULT_INTERPOLATION_CYCLE_S};
-pub use travel::check_travel;
+pub use travel::{check_travel, segment_travel_violations};
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -110,6 +110,27 @@ pub enum MotionError {
         /// Requested period (s).
         dt_s: f64,
     },
+    /// A spindle speed above the machine's maximum.
+    #[error("line {line}: spindle speed {rpm} rpm is above the machine's maximum of {max_rpm} rpm (motion.max_spindle_rpm)")]
+    SpindleSpeedAboveMax {
+        /// Source line.
+        line: usize,
+        /// Programmed speed (rpm).
+        rpm: f64,
+        /// The machine's maximum (rpm).
+        max_rpm: f64,
+    },
+    /// The program's machine time exceeds [`MAX_PLAN_DURATION_S`] (huge dwells, absurdly slow
+    /// feeds or turn counts): refused rather than simulated for days.
+    #[error("line {line}: the program reaches {duration_s:.0} s of machine time, above the limit of {max_s:.0} s ({max_days} days)", max_days = max_s / 86400.0)]
+    ProgramTooLong {
+        /// Source line of the move that crosses the limit.
+        line: usize,
+        /// Machine time at the end of that move (s).
+        duration_s: f64,
+        /// The limit (s).
+        max_s: f64,
+    },
     /// A travel range whose minimum is not below its maximum (or not finite).
     #[error("travel range of axis {axis} is invalid: [{min_mm}, {max_mm}] mm")]
     InvalidTravel {
@@ -151,11 +172,24 @@ pub struct MotionLimits {
     /// Duration of an M6 tool change (s); optional, default `5.0` (a typical VMC carousel).
     #[serde(default = "default_tool_change_s")]
     pub tool_change_s: f64,
+    /// Highest spindle speed (rpm); an S word above it is an error. Optional, default
+    /// `12000.0` (a typical BT40 VMC spindle).
+    #[serde(default = "default_max_spindle_rpm")]
+    pub max_spindle_rpm: f64,
 }
 
 fn default_tool_change_s() -> f64 {
     5.0
 }
+
+fn default_max_spindle_rpm() -> f64 {
+    12_000.0
+}
+
+/// Longest machine time a program may take (s): 7 days. Longer plans (a G4 of 10⁸ s, a feed
+/// of 10⁻⁶ mm/min, 1000 turns of a slow helix) are refused with the line that crosses it, so
+/// that no simulation of them can run for hours.
+pub const MAX_PLAN_DURATION_S: f64 = 7.0 * 86_400.0;
 
 impl Default for MotionLimits {
     /// A mid-size VMC: 30 m/min rapids, 10 m/min max feed, 2 m/s² on every axis, 5 s tool change.
@@ -165,6 +199,7 @@ impl Default for MotionLimits {
             max_feed_mm_per_min: 10_000.0,
             max_accel_mm_per_s2: [2_000.0; 3],
             tool_change_s: default_tool_change_s(),
+            max_spindle_rpm: default_max_spindle_rpm(),
         }
     }
 }
@@ -187,6 +222,7 @@ impl MotionLimits {
             positive(format!("rapid_mm_per_min[{i}]"), v)?;
         }
         positive("max_feed_mm_per_min".into(), self.max_feed_mm_per_min)?;
+        positive("max_spindle_rpm".into(), self.max_spindle_rpm)?;
         for (i, &v) in self.max_accel_mm_per_s2.iter().enumerate() {
             positive(format!("max_accel_mm_per_s2[{i}]"), v)?;
         }
@@ -314,7 +350,15 @@ pub fn plan(
     };
     let mut program_end_line = None;
     for mv in moves {
-        if builder.apply(mv)? {
+        let end = builder.apply(mv)?;
+        if builder.t_s > MAX_PLAN_DURATION_S {
+            return Err(MotionError::ProgramTooLong {
+                line: mv.line,
+                duration_s: builder.t_s,
+                max_s: MAX_PLAN_DURATION_S,
+            });
+        }
+        if end {
             program_end_line = Some(mv.line);
             break;
         }
@@ -411,6 +455,13 @@ impl PlanBuilder<'_> {
             CanonKind::Spindle { dir, rpm } => {
                 if !(rpm.is_finite() && rpm >= 0.0) {
                     return Err(MotionError::InvalidSpindleSpeed { line, rpm });
+                }
+                if rpm > self.limits.max_spindle_rpm {
+                    return Err(MotionError::SpindleSpeedAboveMax {
+                        line,
+                        rpm,
+                        max_rpm: self.limits.max_spindle_rpm,
+                    });
                 }
                 self.spindle_dir = dir;
                 self.spindle_rpm = if dir == SpindleDir::Off { 0.0 } else { rpm };

@@ -162,6 +162,7 @@ fn diagonal_rapid_respects_every_axis_rapid_rate() {
         max_feed_mm_per_min: 10_000.0,
         max_accel_mm_per_s2: [2_000.0, 1_500.0, 1_000.0],
         tool_change_s: 5.0,
+        max_spindle_rpm: 12_000.0,
     };
     let p = plan(&[rapid(1, [300.0, 100.0, 50.0])], [0.0; 3], &limits).expect("valid program");
     let rapid_mm_per_s = limits.rapid_mm_per_min.map(|v| v / 60.0);

@@ -5,20 +5,14 @@
 //! limit while both its end points are inside. A tolerance of 1e-9 mm (1 pm) absorbs the
 //! rounding of `c + r·cos θ` on programs that touch a limit exactly.
 
-use super::{Geometry, MotionError, Plan};
+use super::{Geometry, MotionError, Plan, Segment};
 
 /// Overshoot tolerated before a position counts as outside the travel (mm).
 const TRAVEL_TOLERANCE_MM: f64 = 1e-9;
 
 const AXIS_NAMES: [char; 3] = ['X', 'Y', 'Z'];
 
-/// Checks that the whole plan stays within `[travel_min_mm, travel_max_mm]` on every axis;
-/// reports the first offending segment (in time order) with the extreme position it reaches.
-pub fn check_travel(
-    plan: &Plan,
-    travel_min_mm: [f64; 3],
-    travel_max_mm: [f64; 3],
-) -> Result<(), MotionError> {
+fn validate_travel(travel_min_mm: [f64; 3], travel_max_mm: [f64; 3]) -> Result<(), MotionError> {
     for i in 0..3 {
         let (min_mm, max_mm) = (travel_min_mm[i], travel_max_mm[i]);
         if !(min_mm.is_finite() && max_mm.is_finite() && min_mm < max_mm) {
@@ -29,44 +23,94 @@ pub fn check_travel(
             });
         }
     }
-    let check = |line: usize, lo: [f64; 3], hi: [f64; 3]| -> Result<(), MotionError> {
-        for i in 0..3 {
-            let (min_mm, max_mm) = (travel_min_mm[i], travel_max_mm[i]);
-            let outside = if lo[i] < min_mm - TRAVEL_TOLERANCE_MM {
-                Some(lo[i])
-            } else if hi[i] > max_mm + TRAVEL_TOLERANCE_MM {
-                Some(hi[i])
-            } else {
-                None
-            };
-            if let Some(pos_mm) = outside {
-                return Err(MotionError::AxisOutOfTravel {
-                    line,
-                    axis: AXIS_NAMES[i],
-                    pos_mm,
-                    min_mm,
-                    max_mm,
-                });
-            }
+    Ok(())
+}
+
+/// The axes of the box `[lo, hi]` (the reach of source line `line`) that leave the travel, as
+/// [`MotionError::AxisOutOfTravel`] errors in X, Y, Z order.
+fn box_violations(
+    line: usize,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    travel_min_mm: [f64; 3],
+    travel_max_mm: [f64; 3],
+) -> Vec<MotionError> {
+    let mut out = Vec::new();
+    for i in 0..3 {
+        let (min_mm, max_mm) = (travel_min_mm[i], travel_max_mm[i]);
+        let outside = if lo[i] < min_mm - TRAVEL_TOLERANCE_MM {
+            Some(lo[i])
+        } else if hi[i] > max_mm + TRAVEL_TOLERANCE_MM {
+            Some(hi[i])
+        } else {
+            None
+        };
+        if let Some(pos_mm) = outside {
+            out.push(MotionError::AxisOutOfTravel {
+                line,
+                axis: AXIS_NAMES[i],
+                pos_mm,
+                min_mm,
+                max_mm,
+            });
         }
-        Ok(())
+    }
+    out
+}
+
+/// Every axis on which `seg` leaves the travel `[travel_min_mm, travel_max_mm]`, as
+/// [`MotionError::AxisOutOfTravel`] errors (X, Y, Z order; empty when inside). Errors with
+/// [`MotionError::InvalidTravel`] when a travel range is not finite and increasing.
+pub fn segment_travel_violations(
+    seg: &Segment,
+    travel_min_mm: [f64; 3],
+    travel_max_mm: [f64; 3],
+) -> Result<Vec<MotionError>, MotionError> {
+    validate_travel(travel_min_mm, travel_max_mm)?;
+    let (lo, hi) = match &seg.geometry {
+        Geometry::Arc(arc) => arc.bounds_mm(),
+        Geometry::Point | Geometry::Line { .. } => {
+            let (a, b) = (seg.start_mm, seg.end_mm);
+            (
+                [a[0].min(b[0]), a[1].min(b[1]), a[2].min(b[2])],
+                [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])],
+            )
+        }
     };
+    Ok(box_violations(
+        seg.line,
+        lo,
+        hi,
+        travel_min_mm,
+        travel_max_mm,
+    ))
+}
+
+/// Checks that the whole plan stays within `[travel_min_mm, travel_max_mm]` on every axis;
+/// reports the first offending segment (in time order) with the extreme position it reaches.
+pub fn check_travel(
+    plan: &Plan,
+    travel_min_mm: [f64; 3],
+    travel_max_mm: [f64; 3],
+) -> Result<(), MotionError> {
+    validate_travel(travel_min_mm, travel_max_mm)?;
     if plan.segments().is_empty() {
         let p = plan.start_mm();
-        return check(0, p, p);
+        return match box_violations(0, p, p, travel_min_mm, travel_max_mm)
+            .into_iter()
+            .next()
+        {
+            Some(e) => Err(e),
+            None => Ok(()),
+        };
     }
     for seg in plan.segments() {
-        let (lo, hi) = match &seg.geometry {
-            Geometry::Arc(arc) => arc.bounds_mm(),
-            Geometry::Point | Geometry::Line { .. } => {
-                let (a, b) = (seg.start_mm, seg.end_mm);
-                (
-                    [a[0].min(b[0]), a[1].min(b[1]), a[2].min(b[2])],
-                    [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])],
-                )
-            }
-        };
-        check(seg.line, lo, hi)?;
+        if let Some(e) = segment_travel_violations(seg, travel_min_mm, travel_max_mm)?
+            .into_iter()
+            .next()
+        {
+            return Err(e);
+        }
     }
     Ok(())
 }

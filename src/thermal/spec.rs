@@ -332,7 +332,14 @@ pub struct ThermalSpec {
 impl ThermalSpec {
     /// Checks every field; the error names the first bad one by its path under `thermal.`.
     pub fn validate(&self) -> Result<(), ThermalError> {
-        positive("thermal.step_s", self.step_s)?;
+        // Bounded so that no thermal advance loops for ever (1e-300 s) or skips the dynamics.
+        if !(self.step_s.is_finite() && (1e-3..=3600.0).contains(&self.step_s)) {
+            return Err(invalid(
+                "thermal.step_s",
+                "in [0.001, 3600] s",
+                format!("{:e}", self.step_s),
+            ));
+        }
         self.ambient.validate("thermal.ambient")?;
         if self.nodes.is_empty() {
             return Err(invalid("thermal.nodes", "non-empty", "[]".into()));
