@@ -210,15 +210,16 @@ mod tests {
 
     #[test]
     fn more_calibration_cycles_than_the_set_repeat_it_under_new_names() {
-        let c = calibration_cycles(14);
-        assert_eq!(c.len(), 14);
+        let m = ThermalCycle::calibration_set().len();
+        let c = calibration_cycles(2 * m + 1);
+        assert_eq!(c.len(), 2 * m + 1);
         let names: std::collections::HashSet<_> = c.iter().map(|c| c.name.clone()).collect();
         assert_eq!(
             names.len(),
-            14,
+            c.len(),
             "names must stay unique (validation split by cycle)"
         );
-        assert_eq!(c[6].phases, c[0].phases);
-        assert!(c[13].name.ends_with("_day3"), "{}", c[13].name);
+        assert_eq!(c[m].phases, c[0].phases);
+        assert!(c[2 * m].name.ends_with("_day3"), "{}", c[2 * m].name);
     }
 }

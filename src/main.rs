@@ -659,13 +659,17 @@ fn bench(args: BenchArgs) -> Result<()> {
             "campaign (seed 1: calibration, 3 trainings, 147 held-out runs) vs calibration cycles:"
         )?;
         writeln!(out, "  {:>8} {:>8} {:>10}", "cycles", "runs", "wall s")?;
-        for n in [2, 4, 6, 12] {
+        let m = vmc_twin::campaign::ThermalCycle::calibration_set().len();
+        for n in [2, 4, m, 2 * m] {
             let (s, runs) =
                 benchmark::campaign_with(&spec, &benchmark::calibration_cycles(n), &[1])?;
             writeln!(out, "  {n:>8} {runs:>8} {s:>10.2}")?;
         }
-        let (s, runs) =
-            benchmark::campaign_with(&spec, &benchmark::calibration_cycles(6), &[1, 2, 3])?;
+        let (s, runs) = benchmark::campaign_with(
+            &spec,
+            &&vmc_twin::campaign::ThermalCycle::calibration_set(),
+            &[1, 2, 3],
+        )?;
         writeln!(out, "default campaign, seeds 1,2,3 ({runs} runs): {s:.2} s")?;
     }
     if let Some(m) = benchmark::peak_rss_mib() {
