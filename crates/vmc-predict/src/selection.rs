@@ -371,11 +371,27 @@ impl SelectionData {
 
     /// Leave-one-cycle-out score of the sensor columns `cols`, µm (see the module doc).
     pub fn score_um(&self, cols: &[usize]) -> f64 {
-        let mse: Vec<f64> = self.channel_mse(cols).into_iter().flatten().collect();
-        if mse.is_empty() {
+        // Mean MSE per error component (instrument + component, all positions together), then
+        // the RMS over components: a positioning error read at 15 positions counts once, as
+        // much as a spindle drift read at one.
+        let mut comps: Vec<(String, f64, usize)> = Vec::new();
+        for (g, mse) in self.groups.iter().zip(self.channel_mse(cols)) {
+            for (name, m) in g.channels.iter().zip(mse) {
+                let key = component_of(name);
+                match comps.iter_mut().find(|(k, _, _)| *k == key) {
+                    Some(c) => {
+                        c.1 += m;
+                        c.2 += 1;
+                    }
+                    None => comps.push((key, m, 1)),
+                }
+            }
+        }
+        if comps.is_empty() {
             return f64::NAN;
         }
-        (mse.iter().sum::<f64>() / mse.len() as f64).sqrt()
+        let sum: f64 = comps.iter().map(|(_, m, n)| m / *n as f64).sum();
+        (sum / comps.len() as f64).sqrt()
     }
 
     /// Keeps only the channels that `cols` predict with a cross-validated R² ≥ `min_r2`;
@@ -454,6 +470,15 @@ impl SelectionData {
             }
         }
         best
+    }
+}
+
+/// The error component of a channel name: `laser_x@160.0:dx_um` → `laser_x:dx_um` (the
+/// position dropped); other names are components already.
+fn component_of(channel: &str) -> String {
+    match (channel.find('@'), channel.find(':')) {
+        (Some(at), Some(colon)) if at < colon => format!("{}{}", &channel[..at], &channel[colon..]),
+        _ => channel.to_string(),
     }
 }
 
