@@ -396,7 +396,11 @@ pub fn run_at_state_observed(
         None => drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0)?,
         Some(every_s) => {
             observer.on_run_start(&RunStart {
-                label: format!("thermal history: {} up to {:.1} h", state.cycle.name, state.at_s / 3600.0),
+                label: format!(
+                    "thermal history: {} up to {:.1} h",
+                    state.cycle.name,
+                    state.at_s / 3600.0
+                ),
                 time_s: twin.time_s(),
                 duration_s: state.at_s,
                 measured: false,

@@ -250,7 +250,10 @@ pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>
             let mut ctrl = LoopController(ctrl);
             let noise = eval_noise_seed(seed, si, di);
             let points = campaign::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
-            progress.advance(units::RUN, &format!("seed {seed}: {name} {diag} at {}", state.name));
+            progress.advance(
+                units::RUN,
+                &format!("seed {seed}: {name} {diag} at {}", state.name),
+            );
             Ok(run_report(name, diag, &state.name, seed, &points))
         })
         .collect();
@@ -291,9 +294,8 @@ fn campaign_for_seed(
     let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
     progress.advance(units::TRAINING, &format!("seed {seed}: evaluation"));
     let states = campaign::evaluation_states(seed);
-    let mut runs = evaluate_predictor_with_progress(
-        spec, seed, "hybrid", &hybrid, &states, plans, progress,
-    )?;
+    let mut runs =
+        evaluate_predictor_with_progress(spec, seed, "hybrid", &hybrid, &states, plans, progress)?;
     runs.extend(evaluate_predictor_with_progress(
         spec,
         seed,

@@ -275,7 +275,11 @@ fn run(args: RunArgs) -> Result<()> {
                 args.program.display(),
                 machine.machine.name,
                 args.seed,
-                args.warmup.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+                args.warmup
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 controller.is_some()
             );
             let file = record::RrdFile::create(
@@ -377,7 +381,12 @@ fn run(args: RunArgs) -> Result<()> {
         rec.finish(Some(&md))?;
         let path = file.path().to_path_buf();
         let bytes = file.finish()?;
-        writeln!(out, "wrote {} ({:.2} MB)", path.display(), bytes as f64 / 1e6)?;
+        writeln!(
+            out,
+            "wrote {} ({:.2} MB)",
+            path.display(),
+            bytes as f64 / 1e6
+        )?;
     }
     if let Some((csv, json)) = out_files {
         report::write_atomic(&csv, log.samples_csv().as_bytes(), args.force)?;
@@ -448,7 +457,11 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
     evaluation::write_campaign_table(&rep, &mut out)?;
     if let Some((path, settings)) = rrd {
         let seeds: Vec<String> = args.seeds.iter().map(|s| s.to_string()).collect();
-        let id = format!("vmc-twin campaign on {} seeds {}", machine.machine.name, seeds.join(","));
+        let id = format!(
+            "vmc-twin campaign on {} seeds {}",
+            machine.machine.name,
+            seeds.join(",")
+        );
         let pick = record::campaign::pick_representative(&rep)
             .context("the campaign produced no hybrid runs to record")?;
         let file = record::RrdFile::create(
@@ -459,7 +472,13 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
         )?;
         record::campaign::record_campaign(&file, &machine, &rep, &models, settings)?;
         let bytes = file.finish()?;
-        writeln!(out, "wrote {} ({:.2} MB; representative run {})", path.display(), bytes as f64 / 1e6, pick.title())?;
+        writeln!(
+            out,
+            "wrote {} ({:.2} MB; representative run {})",
+            path.display(),
+            bytes as f64 / 1e6,
+            pick.title()
+        )?;
     }
     if let Some(dir) = out_files {
         let path = dir.join("report.json");

@@ -29,10 +29,8 @@ impl TempDir {
     fn new(tag: &str) -> Self {
         static COUNTER: AtomicUsize = AtomicUsize::new(0);
         let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-        let dir = std::env::temp_dir().join(format!(
-            "vmc-twin-rrd-{tag}-{}-{n}",
-            std::process::id()
-        ));
+        let dir =
+            std::env::temp_dir().join(format!("vmc-twin-rrd-{tag}-{}-{n}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("create temp dir");
         TempDir(dir)
@@ -148,24 +146,38 @@ fn assert_verified(file: &Path) {
     let (success, out) = rerun(&["rrd", "verify"], file);
     assert!(success, "rrd verify failed on {}:\n{out}", file.display());
     assert!(
-        out.lines().any(|l| l.trim() == "1 file verified without error."),
+        out.lines()
+            .any(|l| l.trim() == "1 file verified without error."),
         "rrd verify did not verify {}:\n{out}",
         file.display()
     );
 }
 
-/// `rerun rrd print --verbose` output (entity paths, timelines, component names).
-fn printed(file: &Path) -> String {
-    let (success, out) = rerun(&["rrd", "print", "--verbose"], file);
+/// `rerun rrd print` output at a verbosity: `-vv` shows every chunk's entity path and index
+/// (timeline) columns, `-vvv` the data too.
+fn printed(file: &Path, verbosity: &str) -> String {
+    let (success, out) = rerun(&["rrd", "print", verbosity], file);
     assert!(success, "rrd print failed:\n{out}");
     out
 }
 
-fn assert_contains_all(out: &str, items: &[&str], what: &str) {
-    let missing: Vec<&&str> = items.iter().filter(|i| !out.contains(*i)).collect();
+/// Every entity has a chunk (`Chunk(..) with N rows (..) - /path - …` headers) and every
+/// timeline is an index column (`index_name: …`).
+fn assert_has(out: &str, entities: &[&str], timelines: &[&str], what: &str) {
+    let mut missing: Vec<String> = entities
+        .iter()
+        .filter(|e| !out.contains(&format!(" - /{e} -")))
+        .map(|e| format!("entity /{e}"))
+        .collect();
+    missing.extend(
+        timelines
+            .iter()
+            .filter(|t| !out.contains(&format!("index_name: {t} ")))
+            .map(|t| format!("timeline {t}")),
+    );
     assert!(
         missing.is_empty(),
-        "{what}: missing {missing:?} in rrd print output (first 3000 chars):\n{}",
+        "{what}: missing {missing:?} in `rerun rrd print -vv` (first 3000 chars):\n{}",
         &out[..out.len().min(3000)]
     );
 }
@@ -178,7 +190,8 @@ fn the_rerun_cli_rejects_a_file_that_is_not_a_recording() {
     std::fs::write(&f, b"this is not a recording").unwrap();
     let (_, out) = rerun(&["rrd", "verify"], &f);
     assert!(
-        !out.lines().any(|l| l.trim() == "1 file verified without error."),
+        !out.lines()
+            .any(|l| l.trim() == "1 file verified without error."),
         "{out}"
     );
 }
@@ -198,7 +211,9 @@ fn a_compensated_diagonal_run_writes_a_recording_the_rerun_cli_verifies() {
     ok(
         vmc(
             d,
-            &["train", "--data", "cal.csv", "--kind", "linear", "-o", "m.json"],
+            &[
+                "train", "--data", "cal.csv", "--kind", "linear", "-o", "m.json",
+            ],
         ),
         "train",
     );
@@ -226,8 +241,8 @@ fn a_compensated_diagonal_run_writes_a_recording_the_rerun_cli_verifies() {
     assert!(out.contains("wrote xy.rrd"), "{out}");
     let rrd = d.join("xy.rrd");
     assert_verified(&rrd);
-    let p = printed(&rrd);
-    assert_contains_all(
+    let p = printed(&rrd, "-vv");
+    assert_has(
         &p,
         &[
             "machine/table",
@@ -246,17 +261,33 @@ fn a_compensated_diagonal_run_writes_a_recording_the_rerun_cli_verifies() {
             "thermal/sensors/Amb",
             "thermal/nodes",
             "events",
-            "/report",
-            "sim_time",
-            "sample",
-            "diagonal_mm",
+            "report",
+            "legend",
         ],
+        &["sim_time", "sample", "diagonal_mm"],
         "run recording",
     );
-    // The magnification is shown in the recording.
-    assert!(p.contains("1500"), "magnification not in the recording");
-    // Only the simulation's timelines.
-    assert!(!p.contains("log_time"), "wall-clock timeline present");
+    // Only the simulation's timelines in the data (the blueprint's own chunks carry the SDK's
+    // log_time).
+    let ours = [
+        "/machine", "/paths", "/errors", "/thermal", "/events", "/report", "/legend",
+    ];
+    for chunk in p.split("Chunk(").skip(1) {
+        let header = chunk.lines().next().unwrap_or("");
+        if ours.iter().any(|e| header.contains(&format!(" - {e}"))) {
+            assert!(
+                !chunk.contains("index_name: log_time") && !chunk.contains("index_name: log_tick"),
+                "wall-clock or tick timeline in {header}"
+            );
+        }
+    }
+    // The magnification is shown in the recording (path labels, legend, report).
+    let data = printed(&rrd, "-vvv");
+    assert!(data.contains("×1500"), "magnification not in the recording");
+    assert!(
+        !data.contains("×2000"),
+        "default magnification used instead of --magnify"
+    );
 }
 
 #[test]
@@ -271,16 +302,18 @@ fn a_one_seed_campaign_recording_holds_every_held_out_run_and_a_replayed_run() {
     let rrd = d.join("c.rrd");
     assert_verified(&rrd);
     let size = std::fs::metadata(&rrd).unwrap().len();
-    assert!(size < 20_000_000, "one-seed campaign recording {size} bytes");
-    let p = printed(&rrd);
+    assert!(
+        size < 20_000_000,
+        "one-seed campaign recording {size} bytes"
+    );
+    let p = printed(&rrd, "-vv");
     let mut want = vec![
         "machine/saddle".to_string(),
         "paths/actual_compensated".into(),
         "errors/after/norm".into(),
         "thermal/sensors/ZT".into(),
         "thermal/nodes".into(),
-        "/report".into(),
-        "diagonal_mm".into(),
+        "report".into(),
     ];
     // 7 diagonals × 7 held-out states, before and after.
     for diag in ["XY", "YZ", "XZ", "PPP", "NPP", "PNP", "PPN"] {
@@ -290,7 +323,12 @@ fn a_one_seed_campaign_recording_holds_every_held_out_run_and_a_replayed_run() {
         }
     }
     let want: Vec<&str> = want.iter().map(|s| s.as_str()).collect();
-    assert_contains_all(&p, &want, "campaign recording");
+    assert_has(
+        &p,
+        &want,
+        &["sim_time", "sample", "diagonal_mm"],
+        "campaign recording",
+    );
 }
 
 #[test]
@@ -309,11 +347,20 @@ fn bad_rrd_paths_fail_at_once_with_one_line() {
         assert!(out.is_empty(), "{args:?} printed {out:?}");
     };
     check(&["run", prog, "--rrd", "missing/x.rrd"], "does not exist");
-    check(&["campaign", "--seeds", "1", "--rrd", "missing/x.rrd"], "does not exist");
+    check(
+        &["campaign", "--seeds", "1", "--rrd", "missing/x.rrd"],
+        "does not exist",
+    );
     check(&["run", prog, "--rrd", "x.txt"], "must end in .rrd");
-    check(&["run", prog, "--rrd", "x.rrd", "--magnify", "0"], "--magnify");
+    check(
+        &["run", prog, "--rrd", "x.rrd", "--magnify", "0"],
+        "--magnify",
+    );
     std::fs::write(d.join("old.rrd"), b"keep me").unwrap();
-    check(&["run", prog, "--rrd", "old.rrd"], "already exists (pass --force");
+    check(
+        &["run", prog, "--rrd", "old.rrd"],
+        "already exists (pass --force",
+    );
     assert_eq!(std::fs::read(d.join("old.rrd")).unwrap(), b"keep me");
     // A folder without write permission (not testable as root, who may write anyway).
     #[cfg(unix)]
@@ -326,7 +373,10 @@ fn bad_rrd_paths_fail_at_once_with_one_line() {
         if writable_anyway {
             eprintln!("note: running with write access to read-only folders (root): permission case not checked");
         } else {
-            check(&["run", prog, "--rrd", "ro/x.rrd"], "cannot write in directory");
+            check(
+                &["run", prog, "--rrd", "ro/x.rrd"],
+                "cannot write in directory",
+            );
         }
         std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
     }

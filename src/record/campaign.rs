@@ -98,7 +98,12 @@ pub fn record_campaign(
     // Every held-out hybrid run: |E| before and after.
     rec.reset_time();
     for r in rep.runs.iter().filter(|r| r.predictor == "hybrid") {
-        let base = format!("runs/seed{}/{}/{}", r.seed, part(&r.thermal_state), part(&r.diagonal));
+        let base = format!(
+            "runs/seed{}/{}/{}",
+            r.seed,
+            part(&r.thermal_state),
+            part(&r.diagonal)
+        );
         let diag = diagonals
             .iter()
             .find(|(n, _)| *n == r.diagonal)

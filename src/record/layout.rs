@@ -33,8 +33,12 @@ fn scene_view(magnify: f64) -> Spatial3DView {
 
 fn text_panels() -> ContainerLike {
     Tabs::new([
-        TextDocumentView::new("Report").with_origin("/report").into(),
-        TextDocumentView::new("Legend").with_origin("/legend").into(),
+        TextDocumentView::new("Report")
+            .with_origin("/report")
+            .into(),
+        TextDocumentView::new("Legend")
+            .with_origin("/legend")
+            .into(),
         TextLogView::new("Events").with_origin("/events").into(),
     ])
     .into()
@@ -42,9 +46,11 @@ fn text_panels() -> ContainerLike {
 
 fn error_views(prefix: &str) -> [ContainerLike; 2] {
     [
-        TimeSeriesView::new(format!("{prefix}errors before compensation Ex, Ey, Ez, |E| (µm)"))
-            .with_origin("/errors/before")
-            .into(),
+        TimeSeriesView::new(format!(
+            "{prefix}errors before compensation Ex, Ey, Ez, |E| (µm)"
+        ))
+        .with_origin("/errors/before")
+        .into(),
         TimeSeriesView::new(format!("{prefix}errors after compensation (µm)"))
             .with_origin("/errors/after")
             .into(),
@@ -60,7 +66,8 @@ fn sensors_view() -> ContainerLike {
 /// Layout of a single run's recording.
 pub fn run_blueprint(magnify: f64) -> Blueprint {
     let [before, after] = error_views("");
-    let left = Vertical::new([scene_view(magnify).into(), text_panels()]).with_row_shares([3.0, 1.2]);
+    let left =
+        Vertical::new([scene_view(magnify).into(), text_panels()]).with_row_shares([3.0, 1.2]);
     let right = Vertical::new([before, after, sensors_view()]);
     Blueprint::new(Horizontal::new([left.into(), right.into()]).with_column_shares([1.3, 1.0]))
         .with_time_panel(TimePanel::new().with_timeline("sim_time"))
@@ -74,7 +81,8 @@ pub fn campaign_blueprint(magnify: f64, representative: &str) -> Blueprint {
     )
     .with_origin("/runs")
     .into();
-    let left = Vertical::new([scene_view(magnify).into(), text_panels()]).with_row_shares([3.0, 1.2]);
+    let left =
+        Vertical::new([scene_view(magnify).into(), text_panels()]).with_row_shares([3.0, 1.2]);
     let right = Vertical::new([all_runs, before, after, sensors_view()])
         .with_row_shares([1.4, 1.0, 1.0, 1.0]);
     Blueprint::new(Horizontal::new([left.into(), right.into()]).with_column_shares([1.2, 1.0]))

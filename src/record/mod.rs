@@ -95,7 +95,7 @@ pub fn check_rrd_path(path: &Path, force: bool) -> Result<(), RecordError> {
     };
     if path.extension().and_then(|e| e.to_str()) != Some("rrd") {
         return Err(bad(
-            "a Rerun recording file name must end in .rrd".to_string(),
+            "a Rerun recording file name must end in .rrd".to_string()
         ));
     }
     if path.is_dir() {
@@ -163,11 +163,7 @@ impl RrdFile {
         blueprint: rerun::blueprint::Blueprint,
     ) -> Result<Self, RecordError> {
         check_rrd_path(path, force)?;
-        let tmp = parent_dir(path).join(format!(
-            ".{}.tmp-{}",
-            file_name(path),
-            std::process::id()
-        ));
+        let tmp = parent_dir(path).join(format!(".{}.tmp-{}", file_name(path), std::process::id()));
         let rec = RecordingStreamBuilder::new(APP_ID)
             .recording_id(recording_id)
             .enabled(true)
@@ -495,11 +491,9 @@ impl Recorder {
                 boxes.iter().map(|b| mm_to_scene(b.center_mm)),
                 boxes.iter().map(|b| mm_to_scene(b.half_mm)),
             )
-            .with_colors(
-                boxes
-                    .iter()
-                    .map(|b| rerun::Color::from_unmultiplied_rgba(b.rgba[0], b.rgba[1], b.rgba[2], b.rgba[3])),
-            )
+            .with_colors(boxes.iter().map(|b| {
+                rerun::Color::from_unmultiplied_rgba(b.rgba[0], b.rgba[1], b.rgba[2], b.rgba[3])
+            }))
             .with_labels(boxes.iter().map(|b| b.label))
             .with_show_labels(false)
             .with_fill_mode(if body == Body::Head {
@@ -628,7 +622,11 @@ impl Recorder {
                 .with_colors([rerun::Color::from_unmultiplied_rgba(
                     color[0], color[1], color[2], color[3],
                 )])
-                .with_radii([rerun::Radius::new_ui_points(if color == GREY { 1.5 } else { 2.5 })])
+                .with_radii([rerun::Radius::new_ui_points(if color == GREY {
+                    1.5
+                } else {
+                    2.5
+                })])
                 .with_labels([label])
         };
         self.rec
@@ -696,15 +694,17 @@ impl Recorder {
         Ok(())
     }
 
-    fn record_point(&mut self, point: &PointRecord, readings: &SensorReadings) -> Result<(), RecordError> {
+    fn record_point(
+        &mut self,
+        point: &PointRecord,
+        readings: &SensorReadings,
+    ) -> Result<(), RecordError> {
         let k = self.settings.magnify;
         let p = point.commanded_mm;
         let row = PointRow {
             time_s: point.time_s,
             sample: self.next_sample,
-            diagonal_mm: self
-                .diagonal
-                .map(|d| d.position_mm(p).round() as i64),
+            diagonal_mm: self.diagonal.map(|d| d.position_mm(p).round() as i64),
             before_um: point.error_before_um,
             after_um: point.error_after_um,
             readings_degc: readings.values_degc.clone(),
@@ -780,7 +780,8 @@ impl Recorder {
             )
             .map_err(|e| self.err(e))?;
         if let Some(p) = ev.position_mm {
-            self.event_points.push((p, format!("{}: {}", ev.kind, ev.text)));
+            self.event_points
+                .push((p, format!("{}: {}", ev.kind, ev.text)));
             let (pts, labels): (Vec<[f32; 3]>, Vec<String>) = self
                 .event_points
                 .iter()
@@ -810,7 +811,8 @@ impl Recorder {
         rec.reset_time();
         // Machine motion (sim_time only).
         if !self.motion_t_s.is_empty() {
-            let times = rerun::TimeColumn::new_duration_secs("sim_time", self.motion_t_s.iter().copied());
+            let times =
+                rerun::TimeColumn::new_duration_secs("sim_time", self.motion_t_s.iter().copied());
             for (entity, body) in Body::MOVING
                 .iter()
                 .map(|b| (b.entity(), *b))
@@ -831,13 +833,20 @@ impl Recorder {
         }
         // Sensor readings every thermal step (sim_time only) …
         if !self.sensor_t_s.is_empty() {
-            let times = rerun::TimeColumn::new_duration_secs("sim_time", self.sensor_t_s.iter().copied());
+            let times =
+                rerun::TimeColumn::new_duration_secs("sim_time", self.sensor_t_s.iter().copied());
             for (i, name) in self.sensor_names.iter().enumerate() {
-                let vals: Vec<f64> = self.sensor_degc.iter().map(|v| v.get(i).copied().unwrap_or(f64::NAN)).collect();
+                let vals: Vec<f64> = self
+                    .sensor_degc
+                    .iter()
+                    .map(|v| v.get(i).copied().unwrap_or(f64::NAN))
+                    .collect();
                 rec.send_columns(
                     format!("thermal/sensors/{name}"),
                     [times.clone()],
-                    rerun::Scalars::new(vals).columns_of_unit_batches().map_err(|x| e(&x))?,
+                    rerun::Scalars::new(vals)
+                        .columns_of_unit_batches()
+                        .map_err(|x| e(&x))?,
                 )
                 .map_err(|x| e(&x))?;
             }
@@ -845,7 +854,10 @@ impl Recorder {
         // … and errors and sensors at the measurement points, on every timeline.
         if !self.points.is_empty() {
             let mut index = vec![
-                rerun::TimeColumn::new_duration_secs("sim_time", self.points.iter().map(|r| r.time_s)),
+                rerun::TimeColumn::new_duration_secs(
+                    "sim_time",
+                    self.points.iter().map(|r| r.time_s),
+                ),
                 rerun::TimeColumn::new_sequence("sample", self.points.iter().map(|r| r.sample)),
             ];
             if self.points.iter().all(|r| r.diagonal_mm.is_some()) {
@@ -861,7 +873,9 @@ impl Recorder {
                 rec.send_columns(
                     format!("errors/before/{comp}"),
                     index.clone(),
-                    rerun::Scalars::new(before).columns_of_unit_batches().map_err(|x| e(&x))?,
+                    rerun::Scalars::new(before)
+                        .columns_of_unit_batches()
+                        .map_err(|x| e(&x))?,
                 )
                 .map_err(|x| e(&x))?;
                 if self.points.iter().all(|r| r.after_um.is_some()) {
@@ -873,7 +887,9 @@ impl Recorder {
                     rec.send_columns(
                         format!("errors/after/{comp}"),
                         index.clone(),
-                        rerun::Scalars::new(after).columns_of_unit_batches().map_err(|x| e(&x))?,
+                        rerun::Scalars::new(after)
+                            .columns_of_unit_batches()
+                            .map_err(|x| e(&x))?,
                     )
                     .map_err(|x| e(&x))?;
                 }
@@ -887,7 +903,9 @@ impl Recorder {
                 rec.send_columns(
                     format!("thermal/sensors/{name}"),
                     index.clone(),
-                    rerun::Scalars::new(vals).columns_of_unit_batches().map_err(|x| e(&x))?,
+                    rerun::Scalars::new(vals)
+                        .columns_of_unit_batches()
+                        .map_err(|x| e(&x))?,
                 )
                 .map_err(|x| e(&x))?;
             }

@@ -256,7 +256,11 @@ impl Scene {
                 1 => {
                     let y0 = sy - (self.mid(1) - self.travel_min_mm[1]) - 0.5 * ly;
                     let y1 = self.column_front_y_mm - 20.0;
-                    (Body::Bed, [sx, y1, self.bed_top_mm], [sx, y0, self.bed_top_mm])
+                    (
+                        Body::Bed,
+                        [sx, y1, self.bed_top_mm],
+                        [sx, y0, self.bed_top_mm],
+                    )
                 }
                 _ => {
                     let y = self.column_front_y_mm - 10.0;
@@ -293,9 +297,7 @@ impl Scene {
         }
         let parts: Vec<&str> = name.split('_').collect();
         match parts.as_slice() {
-            ["column", level, face] => {
-                Some((Body::Column, [sx, col_y(face)?, col_z(level)?]))
-            }
+            ["column", level, face] => Some((Body::Column, [sx, col_y(face)?, col_z(level)?])),
             [a, "motor"] => {
                 let (b, motor, _) = drive(axis_of(a)?);
                 Some((b, motor))

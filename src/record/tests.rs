@@ -16,11 +16,15 @@ fn rrd_paths_are_checked_before_anything_runs() {
     let missing = d.join("no_such_dir").join("x.rrd");
     let e = check_rrd_path(&missing, false).unwrap_err().to_string();
     assert!(e.contains("does not exist"), "{e}");
-    let e = check_rrd_path(&d.join("x.txt"), false).unwrap_err().to_string();
+    let e = check_rrd_path(&d.join("x.txt"), false)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("must end in .rrd"), "{e}");
     let dir_named_rrd = d.join("dir.rrd");
     std::fs::create_dir_all(&dir_named_rrd).unwrap();
-    let e = check_rrd_path(&dir_named_rrd, true).unwrap_err().to_string();
+    let e = check_rrd_path(&dir_named_rrd, true)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("is a directory"), "{e}");
     let existing = d.join("old.rrd");
     std::fs::write(&existing, b"old").unwrap();
@@ -41,7 +45,11 @@ fn rrd_paths_are_checked_before_anything_runs() {
 
 #[test]
 fn a_diagonal_is_recognised_only_on_a_line() {
-    let pts = [[10.0, 60.0, -225.0], [70.0, 90.0, -225.0], [130.0, 120.0, -225.0]];
+    let pts = [
+        [10.0, 60.0, -225.0],
+        [70.0, 90.0, -225.0],
+        [130.0, 120.0, -225.0],
+    ];
     let d = Diagonal::through(&pts).unwrap();
     assert!((d.position_mm(pts[1]) - (60.0f64.powi(2) + 30.0f64.powi(2)).sqrt()).abs() < 1e-9);
     assert!((d.length_mm - 2.0 * (4500.0f64).sqrt()).abs() < 1e-9);
@@ -56,7 +64,10 @@ fn a_diagonal_is_recognised_only_on_a_line() {
     )
     .unwrap();
     let d = Diagonal::of_plan(&plan).unwrap();
-    assert!((d.length_mm - (520.0f64.powi(2) + 360.0f64.powi(2) + 400.0f64.powi(2)).sqrt()).abs() < 1e-6);
+    assert!(
+        (d.length_mm - (520.0f64.powi(2) + 360.0f64.powi(2) + 400.0f64.powi(2)).sqrt()).abs()
+            < 1e-6
+    );
 }
 
 #[test]
@@ -90,8 +101,13 @@ fn a_recording_is_written_atomically_and_an_unfinished_one_leaves_nothing() {
     let file = RrdFile::create(&path, false, "test xy", layout::run_blueprint(2000.0)).unwrap();
     // While writing, only the temporary file exists.
     assert!(!path.exists());
-    let mut rec =
-        Recorder::new(&file, &spec, RecordSettings::default(), Diagonal::of_plan(&plan)).unwrap();
+    let mut rec = Recorder::new(
+        &file,
+        &spec,
+        RecordSettings::default(),
+        Diagonal::of_plan(&plan),
+    )
+    .unwrap();
     let mut twin = Twin::new(&spec, 1).unwrap();
     rec.on_run_start(&RunStart {
         label: "diag_xy".into(),
