@@ -15,10 +15,24 @@
 //! representative run, with a first time-series panel of |E| before (red) and after (green) of
 //! every held-out hybrid run, all on one axis of position along the diagonal.
 
+use rerun::blueprint::components::{PanelState, PlayState};
 use rerun::blueprint::{
-    Blueprint, ContainerLike, Horizontal, Spatial3DView, Tabs, TextDocumentView, TextLogView,
-    TimePanel, TimeSeriesView, Vertical,
+    Blueprint, BlueprintPanel, ContainerLike, Horizontal, SelectionPanel, Spatial3DView, Tabs,
+    TextDocumentView, TextLogView, TimePanel, TimeSeriesView, Vertical,
 };
+
+/// Room for the views (blueprint and selection panels collapsed), the time cursor at the end of
+/// `timeline` (every path fully drawn).
+fn framed(root: Horizontal, timeline: &str) -> Blueprint {
+    Blueprint::new(root)
+        .with_blueprint_panel(BlueprintPanel::from_state(PanelState::Collapsed))
+        .with_selection_panel(SelectionPanel::from_state(PanelState::Collapsed))
+        .with_time_panel(
+            TimePanel::new()
+                .with_timeline(timeline)
+                .with_play_state(PlayState::Following),
+        )
+}
 
 fn scene_view(magnify: f64) -> Spatial3DView {
     Spatial3DView::new(format!("Machine and tool paths (errors ×{magnify:.0})"))
@@ -69,8 +83,10 @@ pub fn run_blueprint(magnify: f64) -> Blueprint {
     let left =
         Vertical::new([scene_view(magnify).into(), text_panels()]).with_row_shares([3.0, 1.2]);
     let right = Vertical::new([before, after, sensors_view()]);
-    Blueprint::new(Horizontal::new([left.into(), right.into()]).with_column_shares([1.3, 1.0]))
-        .with_time_panel(TimePanel::new().with_timeline("sim_time"))
+    framed(
+        Horizontal::new([left.into(), right.into()]).with_column_shares([1.3, 1.0]),
+        "sim_time",
+    )
 }
 
 /// Layout of a campaign recording (see the module docs).
@@ -85,6 +101,8 @@ pub fn campaign_blueprint(magnify: f64, representative: &str) -> Blueprint {
         Vertical::new([scene_view(magnify).into(), text_panels()]).with_row_shares([3.0, 1.2]);
     let right = Vertical::new([all_runs, before, after, sensors_view()])
         .with_row_shares([1.4, 1.0, 1.0, 1.0]);
-    Blueprint::new(Horizontal::new([left.into(), right.into()]).with_column_shares([1.2, 1.0]))
-        .with_time_panel(TimePanel::new().with_timeline("diagonal_mm"))
+    framed(
+        Horizontal::new([left.into(), right.into()]).with_column_shares([1.2, 1.0]),
+        "diagonal_mm",
+    )
 }

@@ -608,7 +608,7 @@ impl Recorder {
         }
         let stride = n.div_ceil(max);
         let mut out: Vec<[f32; 3]> = v.iter().step_by(stride).map(|p| mm_to_scene(*p)).collect();
-        if (n - 1) % stride != 0 {
+        if !(n - 1).is_multiple_of(stride) {
             out.push(mm_to_scene(v[n - 1]));
         }
         out
