@@ -18,6 +18,8 @@
 //! | `thermal/nodes` | `Points3D` | thermal nodes coloured by temperature (19 → 31 °C, blue → red) |
 //! | `events` | `TextLog` | run starts and events |
 //! | `report` | `TextDocument` | the run's report (markdown) |
+//! | `legend` | `TextDocument` | colours and magnification |
+//! | `runs/seed<s>/<state>/<diagonal>/{before,after}` | `Scalars` | campaign only: \|E\| of every held-out hybrid run (see [`campaign`]) |
 //!
 //! Timelines: `sim_time` (duration, s of twin time), `sample` (measurement point index) and, for
 //! straight-line tests such as the diagonals, `diagonal_mm` (position along the line from the
