@@ -1,6 +1,7 @@
 use super::*;
 use crate::machine::MachineSpec;
 use crate::sim::{self, SimConfig};
+use crate::sim::{Observer, PointRecord, RunStart};
 use crate::twin::Twin;
 
 fn temp_dir(tag: &str) -> PathBuf {
