@@ -177,7 +177,8 @@ pub fn campaign_with(
     seeds: &[u64],
 ) -> Result<(f64, usize), EvalError> {
     let t = Instant::now();
-    let (rep, _) = evaluation::run_campaign_with_cycles(spec, seeds, &Settings::default(), cycles)?;
+    let (rep, _) =
+        evaluation::run_campaign_with_cycles(spec, seeds, &Settings::default(), cycles, &())?;
     Ok((t.elapsed().as_secs_f64(), rep.runs.len()))
 }
 

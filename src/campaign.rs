@@ -17,6 +17,7 @@
 use crate::instruments::Instruments;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::{Dataset, Record};
+use crate::sim::{Observer, RunStart};
 use crate::thermal::{Activity, AmbientProfile};
 use crate::twin::{sub_seed, Twin, TwinError};
 
@@ -395,16 +396,71 @@ pub fn run_at_state(
     plan: &crate::motion::Plan,
     compensator: Option<&mut dyn crate::sim::Controller>,
 ) -> Result<Vec<crate::sim::PointRecord>, crate::sim::SimError> {
+    let mut log = crate::sim::CollectPoints::default();
+    run_at_state_observed(
+        spec,
+        machine_seed,
+        noise_seed,
+        state,
+        plan,
+        compensator,
+        &mut log,
+        None,
+    )?;
+    Ok(log.points)
+}
+
+/// [`run_at_state`] with an observer. The thermal history that leads to the state is reported
+/// every `history_every_s` (if given) through [`Observer::on_thermal_step`] and
+/// [`Observer::on_node_temps`]; the diagonal as usual. Both phases are announced with
+/// [`Observer::on_run_start`]. The twin's steps are the same with or without reporting, so the
+/// points are identical to [`run_at_state`]'s.
+#[allow(clippy::too_many_arguments)]
+pub fn run_at_state_observed(
+    spec: &MachineSpec,
+    machine_seed: u64,
+    noise_seed: u64,
+    state: &EvalState,
+    plan: &crate::motion::Plan,
+    compensator: Option<&mut dyn crate::sim::Controller>,
+    observer: &mut dyn Observer,
+    history_every_s: Option<f64>,
+) -> Result<(), crate::sim::SimError> {
     let mut twin = Twin::with_noise_seed(spec, machine_seed, noise_seed)?;
     twin.set_ambient(state.cycle.ambient.clone())?;
-    drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0)?;
-    let mut log = crate::sim::CollectPoints::default();
+    match history_every_s.filter(|dt| *dt > 0.0 && dt.is_finite()) {
+        None => drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0)?,
+        Some(every_s) => {
+            observer.on_run_start(&RunStart {
+                label: format!(
+                    "thermal history: {} up to {:.1} h",
+                    state.cycle.name,
+                    state.at_s / 3600.0
+                ),
+                time_s: twin.time_s(),
+                duration_s: state.at_s,
+                measured: false,
+            });
+            let mut to_s = 0.0;
+            while to_s < state.at_s - 1e-9 {
+                to_s = (to_s + every_s).min(state.at_s);
+                drive(&mut twin, &state.cycle, 0.0, to_s, 1.0)?;
+                observer.on_thermal_step(twin.time_s(), &twin.sensor_readings());
+                observer.on_node_temps(twin.time_s(), twin.node_temps_degc());
+            }
+        }
+    }
+    observer.on_run_start(&RunStart {
+        label: format!("diagonal at {}", state.name),
+        time_s: twin.time_s(),
+        duration_s: plan.duration_s(),
+        measured: true,
+    });
     crate::sim::execute(
         &mut twin,
         plan,
         &crate::sim::SimConfig::default(),
         compensator,
-        &mut log,
-    )?;
-    Ok(log.points)
+        observer,
+    )
 }

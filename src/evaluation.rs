@@ -106,6 +106,9 @@ pub struct RunReport {
     pub rmse_um: f64,
     /// Prediction: coefficient of determination.
     pub r2: Option<f64>,
+    /// The measurement points of the run (for recordings; not written to report.json).
+    #[serde(skip)]
+    pub samples: Vec<PointRecord>,
 }
 
 /// The whole campaign's result.
@@ -165,7 +168,36 @@ pub fn run_report(
         mape: m.mape,
         rmse_um: m.rmse,
         r2: m.r2,
+        samples: points.to_vec(),
     })
+}
+
+/// Seed of the evaluation noise (sensors, repeatability, reversal) of the run of diagonal
+/// `diagonal_index` at state `state_index` on machine `seed`: never the calibration's streams
+/// (those use 1000 + k).
+pub fn eval_noise_seed(seed: u64, state_index: usize, diagonal_index: usize) -> u64 {
+    sub_seed(seed, 5000 + (state_index * 100 + diagonal_index) as u64)
+}
+
+/// Receives the progress of a campaign in work units (see [`run_campaign_with_progress`]).
+pub trait CampaignProgress: Sync {
+    /// `units` more work units are planned.
+    fn add_total(&self, _units: u64) {}
+    /// `units` work units are done; `what` says what is running now.
+    fn advance(&self, _units: u64, _what: &str) {}
+}
+
+/// Progress that goes nowhere.
+impl CampaignProgress for () {}
+
+/// Work units of the campaign steps (rough relative costs measured on the reference machine).
+pub mod units {
+    /// Calibration campaign of one seed.
+    pub const CALIBRATION: u64 = 40;
+    /// Training one predictor.
+    pub const TRAINING: u64 = 20;
+    /// One evaluated run (one diagonal at one state, compensated).
+    pub const RUN: u64 = 1;
 }
 
 /// Plans the campaign's diagonal programs for a machine (from its home position).
@@ -193,6 +225,19 @@ pub fn evaluate_predictor<P: ErrorPredictor + Clone + Send + Sync>(
     states: &[EvalState],
     plans: &[(&str, Plan)],
 ) -> Result<Vec<RunReport>, EvalError> {
+    evaluate_predictor_with_progress(spec, seed, name, predictor, states, plans, &())
+}
+
+/// [`evaluate_predictor`], reporting each finished run to `progress`.
+pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>(
+    spec: &MachineSpec,
+    seed: u64,
+    name: &str,
+    predictor: &P,
+    states: &[EvalState],
+    plans: &[(&str, Plan)],
+    progress: &dyn CampaignProgress,
+) -> Result<Vec<RunReport>, EvalError> {
     let sensor_names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
     let jobs: Vec<(usize, usize)> = (0..states.len())
         .flat_map(|si| (0..plans.len()).map(move |di| (si, di)))
@@ -203,9 +248,12 @@ pub fn evaluate_predictor<P: ErrorPredictor + Clone + Send + Sync>(
             let (state, (diag, plan)) = (&states[si], &plans[di]);
             let ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
             let mut ctrl = LoopController(ctrl);
-            // Evaluation noise: never the calibration's streams (those use 1000 + k).
-            let noise = sub_seed(seed, 5000 + (si * 100 + di) as u64);
+            let noise = eval_noise_seed(seed, si, di);
             let points = campaign::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
+            progress.advance(
+                units::RUN,
+                &format!("seed {seed}: {name} {diag} at {}", state.name),
+            );
             Ok(run_report(name, diag, &state.name, seed, &points))
         })
         .collect();
@@ -229,28 +277,36 @@ fn campaign_for_seed(
     settings: &Settings,
     cal_cycles: &[ThermalCycle],
     plans: &[(&str, Plan)],
+    progress: &dyn CampaignProgress,
 ) -> Result<SeedResult, EvalError> {
     let geometry = spec.geometry();
+    progress.advance(0, &format!("seed {seed}: calibration campaign"));
     let data = campaign::calibrate(spec, cal_cycles, &CampaignConfig::new(seed))?;
     let s = Settings {
         seed,
         ..settings.clone()
     };
+    progress.advance(units::CALIBRATION, &format!("seed {seed}: training"));
     let (hybrid, hs) = predictor::train_hybrid(&data, &geometry, &s)?;
+    progress.advance(units::TRAINING, &format!("seed {seed}: training"));
     let (volumetric, vs) = predictor::train_volumetric(&data, &geometry, &s)?;
+    progress.advance(units::TRAINING, &format!("seed {seed}: training"));
     let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
+    progress.advance(units::TRAINING, &format!("seed {seed}: evaluation"));
     let states = campaign::evaluation_states(seed);
-    let mut runs = evaluate_predictor(spec, seed, "hybrid", &hybrid, &states, plans)?;
-    runs.extend(evaluate_predictor(
+    let mut runs =
+        evaluate_predictor_with_progress(spec, seed, "hybrid", &hybrid, &states, plans, progress)?;
+    runs.extend(evaluate_predictor_with_progress(
         spec,
         seed,
         "volumetric",
         &volumetric,
         &states,
         plans,
+        progress,
     )?);
-    runs.extend(evaluate_predictor(
-        spec, seed, "linear", &linear, &states, plans,
+    runs.extend(evaluate_predictor_with_progress(
+        spec, seed, "linear", &linear, &states, plans, progress,
     )?);
     Ok(SeedResult {
         training: vec![(seed, hs), (seed, vs), (seed, ls)],
@@ -270,19 +326,40 @@ pub fn run_campaign(
     seeds: &[u64],
     settings: &Settings,
 ) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
-    run_campaign_with_cycles(spec, seeds, settings, &ThermalCycle::calibration_set())
+    run_campaign_with_progress(spec, seeds, settings, &())
 }
 
-/// [`run_campaign`] calibrated on `cal_cycles` instead of the typical set (scaling studies, a
-/// user's own calibration plan).
+/// [`run_campaign`], reporting its progress (work units of [`units`]) to `progress`.
+pub fn run_campaign_with_progress(
+    spec: &MachineSpec,
+    seeds: &[u64],
+    settings: &Settings,
+    progress: &dyn CampaignProgress,
+) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
+    run_campaign_with_cycles(
+        spec,
+        seeds,
+        settings,
+        &ThermalCycle::calibration_set(),
+        progress,
+    )
+}
+
+/// [`run_campaign_with_progress`] calibrated on `cal_cycles` instead of the typical set
+/// (scaling studies, a user's own calibration plan).
 pub fn run_campaign_with_cycles(
     spec: &MachineSpec,
     seeds: &[u64],
     settings: &Settings,
     cal_cycles: &[ThermalCycle],
+    progress: &dyn CampaignProgress,
 ) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
     let cal_cycles = cal_cycles.to_vec();
     let plans = diagonal_plans(spec)?;
+    let n_runs = (campaign::evaluation_states(0).len() * plans.len()) as u64;
+    progress.add_total(
+        seeds.len() as u64 * (units::CALIBRATION + 3 * units::TRAINING + 3 * n_runs * units::RUN),
+    );
     let mut report = CampaignReport {
         machine: spec.machine.name.clone(),
         calibration_cycles: cal_cycles.iter().map(|c| c.name.clone()).collect(),
@@ -293,7 +370,7 @@ pub fn run_campaign_with_cycles(
     // Seeds are independent: run them in parallel, collect in seed order.
     let per_seed: Vec<Result<SeedResult, EvalError>> = seeds
         .par_iter()
-        .map(|&seed| campaign_for_seed(spec, seed, settings, &cal_cycles, &plans))
+        .map(|&seed| campaign_for_seed(spec, seed, settings, &cal_cycles, &plans, progress))
         .collect();
     let mut models = Vec::new();
     for r in per_seed {

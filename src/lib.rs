@@ -3,7 +3,7 @@
 //! Truth side (this crate): [`machine`] descriptions, [`kinematics`] (full HTM product),
 //! the geometric [`errors`] field, the [`thermal`] network, [`sensors`], the [`twin`] that ties
 //! them together, the G-code front end ([`gcode`] syntax, [`interp`] semantics), the [`motion`]
-//! planner, the [`sim`] loop and [`report`]s. Knowledge side: the `vmc-predict` crate, re-exported
+//! planner, the [`sim`] loop, [`report`]s, Rerun [`record`]ings and [`progress`] bars. Knowledge side: the `vmc-predict` crate, re-exported
 //! as [`predict`]; it does not depend on this crate (the information boundary of DESIGN §3).
 pub use vmc_predict as predict;
 
@@ -20,6 +20,8 @@ pub mod machine;
 pub mod motion;
 pub mod placement;
 pub mod program;
+pub mod progress;
+pub mod record;
 pub mod report;
 pub mod sensors;
 pub mod sim;

@@ -13,8 +13,10 @@ use vmc_twin::evaluation;
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::placement;
 use vmc_twin::program;
+use vmc_twin::progress::Progress;
+use vmc_twin::record;
 use vmc_twin::report::{self, RunLog};
-use vmc_twin::sim::{self, SampleMode, SimConfig};
+use vmc_twin::sim::{self, Observer, RunStart, SampleMode, SimConfig};
 use vmc_twin::twin::Twin;
 
 mod thermal_cli;
@@ -134,6 +136,38 @@ struct CampaignArgs {
     /// Overwrite existing output files.
     #[arg(long)]
     force: bool,
+    #[command(flatten)]
+    rrd: RrdArgs,
+}
+
+/// Rerun recording options (run and campaign).
+#[derive(clap::Args)]
+struct RrdArgs {
+    /// Write a Rerun recording (.rrd) of the run; open it with `rerun FILE.rrd`.
+    #[arg(long, value_name = "FILE.rrd")]
+    rrd: Option<PathBuf>,
+    /// Error magnification of the drawn paths and arrows in the recording (default 2000: a
+    /// 20 µm error is drawn as 40 mm).
+    #[arg(long, requires = "rrd", value_name = "K")]
+    magnify: Option<f64>,
+}
+
+impl RrdArgs {
+    /// Recording settings, checked; the output path checked before any simulation.
+    fn checked(&self, force: bool) -> Result<Option<(PathBuf, record::RecordSettings)>> {
+        let Some(path) = &self.rrd else {
+            return Ok(None);
+        };
+        let settings = record::RecordSettings {
+            magnify: self.magnify.unwrap_or(record::DEFAULT_MAGNIFY),
+            ..Default::default()
+        };
+        settings
+            .validate()
+            .context("--magnify must be a positive number")?;
+        record::check_rrd_path(path, force)?;
+        Ok(Some((path.clone(), settings)))
+    }
 }
 
 #[derive(clap::Args)]
@@ -220,6 +254,8 @@ struct RunArgs {
     /// Put the model in the control loop: each point is reported before and after compensation.
     #[arg(long, requires = "model")]
     compensate: bool,
+    #[command(flatten)]
+    rrd: RrdArgs,
 }
 
 fn main() -> ExitCode {
@@ -304,6 +340,7 @@ fn run(args: RunArgs) -> Result<()> {
         }
         None => None,
     };
+    let rrd = args.rrd.checked(args.force)?;
 
     let mut controller = match (&args.model, args.compensate) {
         (Some(path), true) => {
@@ -343,17 +380,72 @@ fn run(args: RunArgs) -> Result<()> {
         sample_mode: SampleMode::Dwells,
         ..cfg
     };
-    for p in &warmups {
-        sim::execute(&mut twin, p, &warm_cfg, None, &mut sim::NullObserver)?;
+    let total_s: f64 = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
+    let mut progress = Progress::new(total_s.ceil() as u64, "s");
+    let (mut recorder, rrd_file) = match &rrd {
+        Some((path, settings)) => {
+            let id = format!(
+                "vmc-twin run {} on {} seed {} warm-up [{}] compensated {}",
+                args.program.display(),
+                machine.machine.name,
+                args.seed,
+                args.warmup
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                controller.is_some()
+            );
+            let file = record::RrdFile::create(
+                path,
+                args.force,
+                &id,
+                record::layout::run_blueprint(settings.magnify),
+            )?;
+            let diagonal = record::Diagonal::of_plan(&plan);
+            let rec = record::Recorder::new(&file, &machine, *settings, diagonal)?;
+            (Some(rec), Some(file))
+        }
+        None => (None, None),
+    };
+    let mut null = sim::NullObserver;
+    for (p, name) in warmups.iter().zip(&args.warmup) {
+        let rec: &mut dyn Observer = match recorder.as_mut() {
+            Some(r) => r,
+            None => &mut null,
+        };
+        let mut obs = sim::Tee(rec, &mut progress);
+        obs.on_run_start(&RunStart {
+            label: format!("warm-up {}", name.display()),
+            time_s: twin.time_s(),
+            duration_s: p.duration_s(),
+            measured: false,
+        });
+        sim::execute(&mut twin, p, &warm_cfg, None, &mut obs)?;
     }
     let mut log = RunLog::default();
-    sim::execute(
-        &mut twin,
-        &plan,
-        &cfg,
-        controller.as_mut().map(|c| c as &mut dyn sim::Controller),
-        &mut log,
-    )?;
+    {
+        let rec: &mut dyn Observer = match recorder.as_mut() {
+            Some(r) => r,
+            None => &mut null,
+        };
+        let mut watch = sim::Tee(rec, &mut progress);
+        let mut obs = sim::Tee(&mut log, &mut watch);
+        obs.on_run_start(&RunStart {
+            label: args.program.display().to_string(),
+            time_s: twin.time_s(),
+            duration_s: plan.duration_s(),
+            measured: true,
+        });
+        sim::execute(
+            &mut twin,
+            &plan,
+            &cfg,
+            controller.as_mut().map(|c| c as &mut dyn sim::Controller),
+            &mut obs,
+        )?;
+    }
+    progress.finish();
 
     let warmup_names: Vec<String> = args
         .warmup
@@ -365,8 +457,8 @@ fn run(args: RunArgs) -> Result<()> {
         .summary(&program_name, &machine.machine.name, args.seed, &warmup_names)
         .with_context(|| format!("{program_name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion"))?;
 
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    // The report goes to stdout and, with --rrd, into the recording.
+    let mut out: Vec<u8> = Vec::new();
     writeln!(
         out,
         "vmc-twin run: {program_name} on {} (seed {})",
@@ -394,6 +486,22 @@ fn run(args: RunArgs) -> Result<()> {
     writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")?;
     log.write_table(&mut out)?;
     report::write_summary(&summary, &mut out)?;
+    let text = String::from_utf8_lossy(&out).to_string();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    out.write_all(text.as_bytes())?;
+    if let (Some(rec), Some(file), Some((_, settings))) = (recorder, rrd_file, &rrd) {
+        let md = record::run_markdown(&text, settings.magnify, controller.is_some());
+        rec.finish(Some(&md))?;
+        let path = file.path().to_path_buf();
+        let bytes = file.finish()?;
+        writeln!(
+            out,
+            "wrote {} ({:.2} MB)",
+            path.display(),
+            bytes as f64 / 1e6
+        )?;
+    }
     if let Some((csv, json)) = out_files {
         report::write_atomic(&csv, log.samples_csv().as_bytes(), args.force)?;
         let text = serde_json::to_string_pretty(&summary)?;
@@ -452,11 +560,40 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
         }
         None => None,
     };
+    let rrd = args.rrd.checked(args.force)?;
     let settings = vmc_twin::predict::predictor::Settings::default();
-    let (rep, models) = evaluation::run_campaign(&machine, &args.seeds, &settings)?;
+    let progress = Progress::new(0, "units");
+    let (rep, models) =
+        evaluation::run_campaign_with_progress(&machine, &args.seeds, &settings, &progress)?;
+    progress.finish();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     evaluation::write_campaign_table(&rep, &mut out)?;
+    if let Some((path, settings)) = rrd {
+        let seeds: Vec<String> = args.seeds.iter().map(|s| s.to_string()).collect();
+        let id = format!(
+            "vmc-twin campaign on {} seeds {}",
+            machine.machine.name,
+            seeds.join(",")
+        );
+        let pick = record::campaign::pick_representative(&rep)
+            .context("the campaign produced no hybrid runs to record")?;
+        let file = record::RrdFile::create(
+            &path,
+            args.force,
+            &id,
+            record::layout::campaign_blueprint(settings.magnify, &pick.title()),
+        )?;
+        record::campaign::record_campaign(&file, &machine, &rep, &models, settings)?;
+        let bytes = file.finish()?;
+        writeln!(
+            out,
+            "wrote {} ({:.2} MB; representative run {})",
+            path.display(),
+            bytes as f64 / 1e6,
+            pick.title()
+        )?;
+    }
     if let Some(dir) = out_files {
         let path = dir.join("report.json");
         report::write_atomic(

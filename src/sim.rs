@@ -85,12 +85,113 @@ pub struct PointRecord {
     pub at_dwell: bool,
 }
 
+/// The start of one executed program (or of a phase of a study, such as the thermal history
+/// that leads to an evaluation state).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunStart {
+    /// What runs, e.g. the program file name or `warm-up trajectories/warmup_4h_8000rpm.ngc`.
+    pub label: String,
+    /// Twin time at the start, s.
+    pub time_s: f64,
+    /// Expected duration, s.
+    pub duration_s: f64,
+    /// Whether measurement points are taken (false for warm-ups and thermal histories).
+    pub measured: bool,
+}
+
+/// How notable an [`SimEvent`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventLevel {
+    /// Information (phase changes, notes).
+    Info,
+    /// Something to look at (a near miss, a travel limit approached).
+    Warning,
+    /// A failure of the program on the machine (a collision, a contact).
+    Error,
+}
+
+/// Something notable that happened at one instant: a contact found by a collision check, a
+/// travel limit, a phase change. Observers draw or list it (the recorder shows a highlighted
+/// point and a text-log entry).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimEvent {
+    /// Twin time, s.
+    pub time_s: f64,
+    /// Severity.
+    pub level: EventLevel,
+    /// Short machine-readable kind, e.g. `contact`, `travel`.
+    pub kind: String,
+    /// Human-readable description.
+    pub text: String,
+    /// Where it happened, tool position in workpiece coordinates, mm (if it has a place).
+    pub position_mm: Option<[f64; 3]>,
+}
+
 /// Receives what happens during a run (report, recorder, progress bar).
+///
+/// Observers are on the truth side (reports, visualisation): they may see node temperatures.
+/// Controllers never do (they get only [`SensorReadings`], see [`Controller`]).
 pub trait Observer {
+    /// A program (or a phase) starts.
+    fn on_run_start(&mut self, _start: &RunStart) {}
     /// A measurement point was taken.
     fn on_point(&mut self, _point: &PointRecord, _readings: &SensorReadings) {}
     /// A thermal step ended at `time_s` with these (new) readings.
     fn on_thermal_step(&mut self, _time_s: f64, _readings: &SensorReadings) {}
+    /// Truth, for visualisation: the node temperatures (°C, in the thermal network's node
+    /// order) after the thermal step that ended at `time_s`. Called right after
+    /// [`Observer::on_thermal_step`].
+    fn on_node_temps(&mut self, _time_s: f64, _node_temps_degc: &[f64]) {}
+    /// The interval (s) at which this observer wants the commanded axis positions during the
+    /// run ([`Observer::on_motion_sample`]); `None` (default) for none.
+    fn motion_sample_interval_s(&self) -> Option<f64> {
+        None
+    }
+    /// The commanded axis position `axis_mm` (machine coordinates, mm) at twin time `time_s`,
+    /// every [`Observer::motion_sample_interval_s`] of plan time (dwells included).
+    fn on_motion_sample(&mut self, _time_s: f64, _axis_mm: [f64; 3]) {}
+    /// Something notable happened (see [`SimEvent`]).
+    fn on_event(&mut self, _event: &SimEvent) {}
+}
+
+/// Passes everything to two observers in turn (e.g. the run log and a recorder).
+pub struct Tee<'a>(pub &'a mut dyn Observer, pub &'a mut dyn Observer);
+
+impl Observer for Tee<'_> {
+    fn on_run_start(&mut self, start: &RunStart) {
+        self.0.on_run_start(start);
+        self.1.on_run_start(start);
+    }
+    fn on_point(&mut self, point: &PointRecord, readings: &SensorReadings) {
+        self.0.on_point(point, readings);
+        self.1.on_point(point, readings);
+    }
+    fn on_thermal_step(&mut self, time_s: f64, readings: &SensorReadings) {
+        self.0.on_thermal_step(time_s, readings);
+        self.1.on_thermal_step(time_s, readings);
+    }
+    fn on_node_temps(&mut self, time_s: f64, node_temps_degc: &[f64]) {
+        self.0.on_node_temps(time_s, node_temps_degc);
+        self.1.on_node_temps(time_s, node_temps_degc);
+    }
+    /// The finer of the two intervals.
+    fn motion_sample_interval_s(&self) -> Option<f64> {
+        match (
+            self.0.motion_sample_interval_s(),
+            self.1.motion_sample_interval_s(),
+        ) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+    fn on_motion_sample(&mut self, time_s: f64, axis_mm: [f64; 3]) {
+        self.0.on_motion_sample(time_s, axis_mm);
+        self.1.on_motion_sample(time_s, axis_mm);
+    }
+    fn on_event(&mut self, event: &SimEvent) {
+        self.0.on_event(event);
+        self.1.on_event(event);
+    }
 }
 
 /// An observer that ignores everything (warm-up programs).
@@ -156,12 +257,17 @@ pub fn execute(
             cfg.interp_cycle_s
         )));
     }
+    let motion_every_s = observer
+        .motion_sample_interval_s()
+        .filter(|dt| *dt > 0.0 && dt.is_finite());
     let mut clock = Clock {
         plan_t_s: 0.0,
         twin_t0_s: twin.time_s(),
         step_s: cfg.thermal_step_s,
         readings: twin.sensor_readings(),
         last_motion_segment: None,
+        motion_every_s,
+        next_motion_sample: 0,
     };
     let mut index = 0;
     for (si, seg) in plan.segments().iter().enumerate() {
@@ -219,7 +325,7 @@ pub fn execute(
     }
     clock.run_until(twin, plan, plan.duration_s(), observer)?;
     // The twin ends exactly at the plan's end, ready for what follows.
-    clock.finish_at(twin, plan, plan.duration_s())?;
+    clock.finish_at(twin, plan, plan.duration_s(), observer)?;
     Ok(())
 }
 
@@ -239,6 +345,10 @@ struct Clock {
     step_s: f64,
     readings: SensorReadings,
     last_motion_segment: Option<usize>,
+    /// Interval of [`Observer::on_motion_sample`] calls, s of plan time (None: no calls).
+    motion_every_s: Option<f64>,
+    /// Index of the next motion sample (its plan time is index × interval).
+    next_motion_sample: u64,
 }
 
 impl Clock {
@@ -257,13 +367,20 @@ impl Clock {
     }
 
     /// Advances the twin by a last partial step so that its time equals plan time `t_s`.
-    fn finish_at(&mut self, twin: &mut Twin, plan: &Plan, t_s: f64) -> Result<(), SimError> {
+    fn finish_at(
+        &mut self,
+        twin: &mut Twin,
+        plan: &Plan,
+        t_s: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<(), SimError> {
         let dt = t_s - self.plan_t_s;
         if dt > 1e-12 {
             let activity = activity_over(plan, self.plan_t_s, t_s);
             twin.advance(dt, &activity)?;
             self.plan_t_s = t_s;
         }
+        self.emit_motion_samples(plan, t_s, observer);
         Ok(())
     }
 
@@ -280,7 +397,24 @@ impl Clock {
         self.plan_t_s += dt_s;
         self.readings = twin.sensor_readings();
         observer.on_thermal_step(twin.time_s(), &self.readings);
+        observer.on_node_temps(twin.time_s(), twin.node_temps_degc());
+        self.emit_motion_samples(plan, self.plan_t_s, observer);
         Ok(())
+    }
+
+    /// Emits the motion samples due up to plan time `t_s` (inclusive).
+    fn emit_motion_samples(&mut self, plan: &Plan, t_s: f64, observer: &mut dyn Observer) {
+        let Some(every_s) = self.motion_every_s else {
+            return;
+        };
+        loop {
+            let t = self.next_motion_sample as f64 * every_s;
+            if t > t_s + 1e-9 || t > plan.duration_s() + 1e-9 {
+                break;
+            }
+            observer.on_motion_sample(self.twin_t0_s + t, plan.position_at(t));
+            self.next_motion_sample += 1;
+        }
     }
 
     /// Tells the twin the direction of the last motion (reversal error) before a dwell point.
@@ -342,4 +476,72 @@ fn measure(
         at_dwell,
     };
     observer.on_point(&point, readings);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::MachineSpec;
+
+    /// Wants poses every 0.5 s and keeps them.
+    #[derive(Default)]
+    struct Poses {
+        samples: Vec<(f64, [f64; 3])>,
+        node_steps: usize,
+        points: usize,
+    }
+
+    impl Observer for Poses {
+        fn motion_sample_interval_s(&self) -> Option<f64> {
+            Some(0.5)
+        }
+        fn on_motion_sample(&mut self, time_s: f64, axis_mm: [f64; 3]) {
+            self.samples.push((time_s, axis_mm));
+        }
+        fn on_node_temps(&mut self, _time_s: f64, temps: &[f64]) {
+            assert!(!temps.is_empty());
+            self.node_steps += 1;
+        }
+        fn on_point(&mut self, _p: &PointRecord, _r: &SensorReadings) {
+            self.points += 1;
+        }
+    }
+
+    #[test]
+    fn motion_samples_follow_the_plan_at_the_requested_interval() {
+        let spec = MachineSpec::reference();
+        let plan = crate::program::plan_source(
+            include_str!("../trajectories/diag_xy.ngc"),
+            "diag_xy.ngc",
+            &spec,
+            spec.axes.home_mm,
+        )
+        .unwrap();
+        let mut twin = Twin::new(&spec, 1).unwrap();
+        // Start later than 0 so the twin-time offset is exercised.
+        twin.advance(10.0, &activity_over(&plan, 0.0, 0.0)).unwrap();
+        let mut poses = Poses::default();
+        let mut other = CountPoints::default();
+        let mut tee = Tee(&mut poses, &mut other);
+        assert_eq!(tee.motion_sample_interval_s(), Some(0.5));
+        execute(&mut twin, &plan, &SimConfig::default(), None, &mut tee).unwrap();
+        assert_eq!(other.points, 10);
+        assert_eq!(poses.points, 10);
+        let n = (plan.duration_s() / 0.5).floor() as usize + 1;
+        assert_eq!(poses.samples.len(), n);
+        for (k, (t, q)) in poses.samples.iter().enumerate() {
+            let plan_t = k as f64 * 0.5;
+            assert!((t - (10.0 + plan_t)).abs() < 1e-9);
+            assert_eq!(*q, plan.position_at(plan_t));
+        }
+        // One node-temperature report per whole thermal step.
+        assert_eq!(poses.node_steps, plan.duration_s().floor() as usize);
+    }
+
+    #[test]
+    fn observers_that_want_no_poses_get_none() {
+        let mut a = NullObserver;
+        let mut b = CountPoints::default();
+        assert_eq!(Tee(&mut a, &mut b).motion_sample_interval_s(), None);
+    }
 }
