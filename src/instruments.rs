@@ -9,11 +9,13 @@
 //! - the 6-DOF interferometer is aligned to the machine frame and reads the six motion errors of
 //!   the swept axis at its reference point (Abbe offsets of the setup removed), plus noise:
 //!   linear σ = a + b·L (L = distance from the sweep start), straightness σ, angular σ;
-//! - laser sweeps are bidirectional (ISO 230-2): a forward run from the travel minimum to the
-//!   maximum, then a backward run through the same positions; each record carries its approach
-//!   direction (`dir` = 1 forward, −1 backward). The positioning reading includes the axis's
-//!   reversal (real motion, which the two runs separate) and its non-repeatability (which nothing
-//!   can predict);
+//! - laser sweeps are bidirectional over the campaign (ISO 230-2's forward and backward runs
+//!   through the same targets): successive sweeps of an axis alternate between a forward run
+//!   from the travel minimum to the maximum and a backward run from the maximum to the minimum,
+//!   so a measurement block takes the same time as a forward-only one; each record carries its
+//!   approach direction (`dir` = 1 forward, −1 backward). The positioning reading includes the
+//!   axis's reversal (real motion, which the two directions separate) and its
+//!   non-repeatability (which nothing can predict);
 //! - the volumetric grid approaches every point positively on every axis (`dir` = 1), as a
 //!   unidirectional tracker procedure would;
 //! - the 5-probe spindle test reads the spindle's own drifts (the axis errors at the test pose are
@@ -41,6 +43,8 @@ pub struct Instruments {
     travel_min_mm: [f64; 3],
     travel_max_mm: [f64; 3],
     rng: StdRng,
+    /// Laser sweeps run so far per axis (even: the next one runs forward).
+    sweeps_done: [usize; 3],
 }
 
 impl Instruments {
@@ -52,6 +56,7 @@ impl Instruments {
             travel_min_mm: spec.axes.travel_min_mm,
             travel_max_mm: spec.axes.travel_max_mm,
             rng: StdRng::seed_from_u64(seed),
+            sweeps_done: [0; 3],
         }
     }
 
@@ -122,10 +127,10 @@ impl Instruments {
         }
     }
 
-    /// A bidirectional 6-DOF laser sweep of `axis` with the other axes at `park_mm` (ISO 230-2):
-    /// forward from the travel minimum to the maximum, then backward through the same positions.
-    /// Appends one record per position and run (`dir` 1, then −1). `t0_s` is the cycle's start
-    /// (twin time).
+    /// A 6-DOF laser sweep of `axis` with the other axes at `park_mm`: the axis's first,
+    /// third, … sweep runs forward from the travel minimum to the maximum (`dir` 1), its second,
+    /// fourth, … backward through the same positions (`dir` −1). Appends one record per
+    /// position. `t0_s` is the cycle's start (twin time).
     pub fn laser_sweep(
         &mut self,
         twin: &mut Twin,
@@ -135,11 +140,14 @@ impl Instruments {
         t0_s: f64,
         out: &mut Vec<Record>,
     ) -> Result<(), TwinError> {
-        let forward = self.sweep_positions_mm(axis);
-        let start_mm = forward[0];
-        let backward: Vec<f64> = forward.iter().rev().copied().collect();
-        self.laser_run(twin, axis, park_mm, &forward, start_mm, 1, cycle, t0_s, out)?;
-        self.laser_run(twin, axis, park_mm, &backward, start_mm, -1, cycle, t0_s, out)
+        let mut positions = self.sweep_positions_mm(axis);
+        let start_mm = positions[0];
+        let dir = if self.sweeps_done[axis] % 2 == 0 { 1 } else { -1 };
+        self.sweeps_done[axis] += 1;
+        if dir < 0 {
+            positions.reverse();
+        }
+        self.laser_run(twin, axis, park_mm, &positions, start_mm, dir, cycle, t0_s, out)
     }
 
     /// One run of a laser sweep through `positions` approached in direction `dir` (±1); the
@@ -167,8 +175,8 @@ impl Instruments {
                 Some((axis, (s - prev).abs())),
                 self.spec.laser_point_s,
             )?;
-            // Each target is reached moving in the run's direction (the turnaround at the end
-            // of the forward run overruns the last target and comes back, as ISO 230-2 does).
+            // Each target is reached moving in the run's direction (the first target with an
+            // overrun, as ISO 230-2 does).
             let v = f64::from(dir);
             twin.note_motion([0, 1, 2].map(|a| if a == axis { v } else { 0.0 }));
             prev = s;
