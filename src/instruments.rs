@@ -106,6 +106,7 @@ impl Instruments {
         twin.advance(duration_s, &activity)
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn record(
         &self,
         twin: &Twin,
@@ -142,12 +143,18 @@ impl Instruments {
     ) -> Result<(), TwinError> {
         let mut positions = self.sweep_positions_mm(axis);
         let start_mm = positions[0];
-        let dir = if self.sweeps_done[axis] % 2 == 0 { 1 } else { -1 };
+        let dir = if self.sweeps_done[axis].is_multiple_of(2) {
+            1
+        } else {
+            -1
+        };
         self.sweeps_done[axis] += 1;
         if dir < 0 {
             positions.reverse();
         }
-        self.laser_run(twin, axis, park_mm, &positions, start_mm, dir, cycle, t0_s, out)
+        self.laser_run(
+            twin, axis, park_mm, &positions, start_mm, dir, cycle, t0_s, out,
+        )
     }
 
     /// One run of a laser sweep through `positions` approached in direction `dir` (±1); the

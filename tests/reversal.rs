@@ -58,13 +58,16 @@ fn the_inferred_approach_direction_is_the_twins_at_every_diagonal_point() {
         r.reversal_um = 0.0;
     }
     let half_reversal_um = with.errors.random.map(|r| 0.5 * r.reversal_um);
-    assert!(half_reversal_um.iter().all(|&h| h > 0.1), "the test needs a reversal");
+    assert!(
+        half_reversal_um.iter().all(|&h| h > 0.1),
+        "the test needs a reversal"
+    );
     let side = [-1.0, -1.0, 1.0];
     let names: Vec<String> = with.sensors.iter().map(|s| s.name.clone()).collect();
     let plans = evaluation::diagonal_plans(&with).unwrap();
     let mut negatives = [0usize; 3];
     for (diag, plan) in &plans {
-        let mut run = |spec: &MachineSpec, ctrl: Option<&mut dyn Controller>| {
+        let run = |spec: &MachineSpec, ctrl: Option<&mut dyn Controller>| {
             let mut twin = Twin::new(spec, 4).unwrap();
             let mut log = CollectPoints::default();
             sim::execute(&mut twin, plan, &SimConfig::default(), ctrl, &mut log).unwrap();

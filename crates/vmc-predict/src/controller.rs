@@ -303,7 +303,10 @@ mod tests {
         let shift = [-0.25e-3, -0.3e-3, 0.25e-3];
         let mut c = Compensator::new(ReversalOnly(vec!["T".into()], shift));
         // Before any motion every axis counts as positive: no reversal applied.
-        assert_eq!(c.axis_command_mm([100.0, 50.0, -10.0], &[20.0]), [100.0, 50.0, -10.0]);
+        assert_eq!(
+            c.axis_command_mm([100.0, 50.0, -10.0], &[20.0]),
+            [100.0, 50.0, -10.0]
+        );
         assert_eq!(c.approach_directions(), [1.0, 1.0, 1.0]);
         // X back, Y forward, Z back: X and Z get their shift subtracted (q = p − E).
         let q = c.axis_command_mm([90.0, 60.0, -20.0], &[20.0]);

@@ -7,8 +7,8 @@
 //! fitted on the forward records, and `R_k` = mean residual of the backward records − mean
 //! residual of the forward records (both runs visit the same positions, so the position profile
 //! the linear model misses cancels; the temperatures account for the machine drifting between
-//! the two runs). The networks are then trained on both runs, backward `δ_kk` minus `R_k`, i.e.
-//! twice the data of a forward-only sweep. At query time `R_k` enters as the positioning error
+//! the two runs). The networks are then trained on both runs, backward `δ_kk` minus `R_k`. At
+//! query time `R_k` enters as the positioning error
 //! `δ_kk` of an axis that approached negatively, mapped to the tool by the same first-order
 //! synthesis ([`ErrorPredictor::negative_approach_shift_mm`]). Without backward records the
 //! reversal is zero and the networks see the forward records only.
