@@ -430,6 +430,56 @@ mod tests {
     }
 
     #[test]
+    fn the_reversal_is_learned_from_alternating_sweeps_and_survives_the_model_file() {
+        // Every other measurement round sweeps backward: the positioning reading shifts by R.
+        let truth_um = [-0.5, -0.6, -0.4];
+        let mut ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        for r in &mut ds.records {
+            let k = match r.instrument {
+                Instrument::LaserX => 0,
+                Instrument::LaserY => 1,
+                Instrument::LaserZ => 2,
+                _ => continue,
+            };
+            if (r.time_s / 1200.0).round() as usize % 2 == 1 {
+                r.dir = -1;
+                r.values[k] += truth_um[k];
+            }
+        }
+        let quick = Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 20,
+            ..Settings::default()
+        };
+        let (p, _) = train_hybrid(&ds, &td::geometry(), &quick).unwrap();
+        let r = p.reversal_um();
+        for k in 0..3 {
+            // The laser noise is 0.1 µm per reading over ~150 backward readings per axis.
+            assert!((r[k] - truth_um[k]).abs() < 0.05, "axis {k}: {r:?}");
+        }
+        // At the tool: X and Y move the table (E = −δ), Z the head (E = +δ); mm.
+        let shift = p.negative_approach_shift_mm();
+        let expected = [-r[0] * 1e-3, -r[1] * 1e-3, r[2] * 1e-3];
+        for k in 0..3 {
+            assert!((shift[k] - expected[k]).abs() < 1e-12, "{shift:?}");
+        }
+        // The model file keeps it; a version 2 file (no `reversal_um`) reads with zero.
+        let text = p.to_json_string().unwrap();
+        let back = HybridPredictor::from_json_str(&text).unwrap();
+        assert_eq!(back.reversal_um(), r);
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["version"] = 2.into();
+        v["model"].as_object_mut().unwrap().remove("reversal_um");
+        let old = HybridPredictor::from_json_str(&v.to_string()).unwrap();
+        assert_eq!(old.reversal_um(), [0.0; 3]);
+        assert_eq!(old.negative_approach_shift_mm(), [0.0; 3]);
+        // Without backward runs the reversal is zero.
+        let forward_only = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let (p, _) = train_hybrid(&forward_only, &td::geometry(), &quick).unwrap();
+        assert_eq!(p.reversal_um(), [0.0; 3]);
+    }
+
+    #[test]
     fn hybrid_predicts_a_held_out_cycle_within_half_a_micrometre_rms() {
         let (mut p, summary) = trained();
         let (err, truth) = held_out_rms(&mut p, |t| t.to_vec());
