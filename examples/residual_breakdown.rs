@@ -40,6 +40,11 @@ fn main() {
             },
         )
         .unwrap();
+        let rev = h.reversal_um();
+        println!(
+            "seed {seed}: learned reversal X {:.3} Y {:.3} Z {:.3} µm (negative − positive approach)",
+            rev[0], rev[1], rev[2]
+        );
         println!("seed {seed}: max |prediction error| contribution, µm (Ex Ey Ez)");
         println!(
             "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17}",

@@ -56,12 +56,16 @@ pub enum EvalError {
 }
 
 /// Adapts a knowledge-side compensator to the simulation loop: it passes on the sensor
-/// readings' values and nothing else.
+/// readings' values and the commanded trajectory (for the approach directions), nothing else.
 pub struct LoopController<P: ErrorPredictor>(pub Compensator<P>);
 
 impl<P: ErrorPredictor> Controller for LoopController<P> {
     fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3] {
         self.0.axis_command_mm(p_mm, &readings.values_degc)
+    }
+
+    fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
+        self.0.note_motion_segment_mm(start_mm, end_mm);
     }
 }
 

@@ -9,8 +9,15 @@
 //! - the 6-DOF interferometer is aligned to the machine frame and reads the six motion errors of
 //!   the swept axis at its reference point (Abbe offsets of the setup removed), plus noise:
 //!   linear σ = a + b·L (L = distance from the sweep start), straightness σ, angular σ;
-//! - the positioning reading includes the axis's reversal and non-repeatability (they are real
-//!   motion), which the predictor cannot separate from noise;
+//! - laser sweeps are bidirectional over the campaign (ISO 230-2's forward and backward runs
+//!   through the same targets): successive sweeps of an axis alternate between a forward run
+//!   from the travel minimum to the maximum and a backward run from the maximum to the minimum,
+//!   so a measurement block takes the same time as a forward-only one; each record carries its
+//!   approach direction (`dir` = 1 forward, −1 backward). The positioning reading includes the
+//!   axis's reversal (real motion, which the two directions separate) and its
+//!   non-repeatability (which nothing can predict);
+//! - the volumetric grid approaches every point positively on every axis (`dir` = 1), as a
+//!   unidirectional tracker procedure would;
 //! - the 5-probe spindle test reads the spindle's own drifts (the axis errors at the test pose are
 //!   separated with the laser data), plus probe noise, with the spindle running (ISO 230-3), so
 //!   it logs continuously through the duty;
@@ -36,6 +43,8 @@ pub struct Instruments {
     travel_min_mm: [f64; 3],
     travel_max_mm: [f64; 3],
     rng: StdRng,
+    /// Laser sweeps run so far per axis (even: the next one runs forward).
+    sweeps_done: [usize; 3],
 }
 
 impl Instruments {
@@ -47,6 +56,7 @@ impl Instruments {
             travel_min_mm: spec.axes.travel_min_mm,
             travel_max_mm: spec.axes.travel_max_mm,
             rng: StdRng::seed_from_u64(seed),
+            sweeps_done: [0; 3],
         }
     }
 
@@ -96,6 +106,7 @@ impl Instruments {
         twin.advance(duration_s, &activity)
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn record(
         &self,
         twin: &Twin,
@@ -104,6 +115,7 @@ impl Instruments {
         instrument: Instrument,
         q_mm: [f64; 3],
         values: [f64; 6],
+        dir: i8,
     ) -> Record {
         Record {
             cycle: cycle.to_string(),
@@ -112,11 +124,14 @@ impl Instruments {
             pos_mm: q_mm,
             values,
             temps_degc: twin.sensor_readings().values_degc,
+            dir,
         }
     }
 
-    /// A 6-DOF laser sweep of `axis` with the other axes at `park_mm`, forward from the travel
-    /// minimum. Appends one record per position. `t0_s` is the cycle's start (twin time).
+    /// A 6-DOF laser sweep of `axis` with the other axes at `park_mm`: the axis's first,
+    /// third, … sweep runs forward from the travel minimum to the maximum (`dir` 1), its second,
+    /// fourth, … backward through the same positions (`dir` −1). Appends one record per
+    /// position. `t0_s` is the cycle's start (twin time).
     pub fn laser_sweep(
         &mut self,
         twin: &mut Twin,
@@ -126,9 +141,39 @@ impl Instruments {
         t0_s: f64,
         out: &mut Vec<Record>,
     ) -> Result<(), TwinError> {
-        let positions = self.sweep_positions_mm(axis);
+        let mut positions = self.sweep_positions_mm(axis);
+        let start_mm = positions[0];
+        let dir = if self.sweeps_done[axis].is_multiple_of(2) {
+            1
+        } else {
+            -1
+        };
+        self.sweeps_done[axis] += 1;
+        if dir < 0 {
+            positions.reverse();
+        }
+        self.laser_run(
+            twin, axis, park_mm, &positions, start_mm, dir, cycle, t0_s, out,
+        )
+    }
+
+    /// One run of a laser sweep through `positions` approached in direction `dir` (±1); the
+    /// laser's linear noise grows with the distance from `start_mm` (where it was zeroed).
+    #[allow(clippy::too_many_arguments)]
+    fn laser_run(
+        &mut self,
+        twin: &mut Twin,
+        axis: usize,
+        park_mm: [f64; 3],
+        positions: &[f64],
+        start_mm: f64,
+        dir: i8,
+        cycle: &str,
+        t0_s: f64,
+        out: &mut Vec<Record>,
+    ) -> Result<(), TwinError> {
         let mut prev = positions[0];
-        for &s in &positions {
+        for &s in positions {
             let mut q = park_mm;
             q[axis] = s;
             self.dwell(
@@ -137,12 +182,15 @@ impl Instruments {
                 Some((axis, (s - prev).abs())),
                 self.spec.laser_point_s,
             )?;
-            twin.note_motion([0, 1, 2].map(|a| if a == axis { 1.0 } else { 0.0 }));
+            // Each target is reached moving in the run's direction (the first target with an
+            // overrun, as ISO 230-2 does).
+            let v = f64::from(dir);
+            twin.note_motion([0, 1, 2].map(|a| if a == axis { v } else { 0.0 }));
             prev = s;
             let approach = twin.draw_approach_mm();
             let mut e = twin.elementary_errors(q).axes[axis];
             e.lin_mm[axis] += approach[axis];
-            let dist_m = (s - positions[0]).abs() * 1e-3;
+            let dist_m = (s - start_mm).abs() * 1e-3;
             let lin_sigma = self.spec.laser_noise_um + self.spec.laser_noise_um_per_m * dist_m;
             let mut values = [0.0; 6];
             for c in 0..3 {
@@ -154,7 +202,7 @@ impl Instruments {
                 values[c] = e.lin_mm[c] * 1e3 + self.gauss(sigma);
                 values[3 + c] = e.ang_rad[c] * 1e6 + self.gauss(self.spec.angular_noise_urad);
             }
-            let r = self.record(twin, cycle, t0_s, Instrument::laser(axis), q, values);
+            let r = self.record(twin, cycle, t0_s, Instrument::laser(axis), q, values, dir);
             out.push(r);
         }
         Ok(())
@@ -183,7 +231,7 @@ impl Instruments {
             d.tilt_rad[1] * 1e6 + self.gauss(tilt_sigma_urad),
             f64::NAN,
         ];
-        let r = self.record(twin, cycle, t0_s, Instrument::Spindle, q_mm, values);
+        let r = self.record(twin, cycle, t0_s, Instrument::Spindle, q_mm, values, 1);
         out.push(r);
     }
 
@@ -234,7 +282,7 @@ impl Instruments {
             s.xz_rad * 1e6 + self.gauss(a),
             s.xy_rad * 1e6 + self.gauss(a),
         ];
-        let r = self.record(twin, cycle, t0_s, Instrument::Squareness, q_mm, values);
+        let r = self.record(twin, cycle, t0_s, Instrument::Squareness, q_mm, values, 1);
         out.push(r);
         Ok(())
     }
@@ -250,6 +298,8 @@ impl Instruments {
     ) -> Result<(), TwinError> {
         for &p in points_mm {
             self.dwell(twin, p, None, self.spec.laser_point_s)?;
+            // Every point approached positively on every axis (unidirectional procedure).
+            twin.note_motion([1.0; 3]);
             let approach = twin.draw_approach_mm();
             let e = twin.tool_error_mm(p, p, approach);
             let sigma = self.spec.laser_noise_um + self.spec.laser_noise_um_per_m * 0.5;
@@ -261,7 +311,7 @@ impl Instruments {
                 f64::NAN,
                 f64::NAN,
             ];
-            let r = self.record(twin, cycle, t0_s, Instrument::Volumetric, p, values);
+            let r = self.record(twin, cycle, t0_s, Instrument::Volumetric, p, values, 1);
             out.push(r);
         }
         Ok(())

@@ -58,6 +58,12 @@ impl Default for SimConfig {
 pub trait Controller {
     /// Axis command `q` (mm) for the commanded tool position `p_mm`.
     fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3];
+
+    /// The commanded tool path ran one motion segment from `start_mm` to `end_mm` (mm), in
+    /// program order, after any points taken on it. Lets a controller follow the commanded
+    /// trajectory between the points it compensates (e.g. each axis's direction of motion, for
+    /// backlash compensation). Default: ignored.
+    fn on_commanded_motion(&mut self, _start_mm: [f64; 3], _end_mm: [f64; 3]) {}
 }
 
 /// One measurement point.
@@ -321,6 +327,9 @@ pub fn execute(
         }
         if moving {
             clock.last_motion_segment = Some(si);
+            if let Some(c) = compensator.as_mut() {
+                c.on_commanded_motion(seg.start_mm, seg.end_mm);
+            }
         }
     }
     clock.run_until(twin, plan, plan.duration_s(), observer)?;

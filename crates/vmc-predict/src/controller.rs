@@ -15,6 +15,17 @@
 //! nanometre. At the stopping point the residual `|q + E(q) − p| = |E(q_i) − E(q_{i+1})| ≤ L·tol`.
 //! The tool then really lands at `p + E_true(q) − E_pred(q)`.
 //!
+//! **Approach direction (reversal).** The positioning error of an axis depends on the direction
+//! in which it reached its position (backlash-like reversal). Like a CNC's backlash
+//! compensation, the compensator keys it on the *commanded* motion, which the controller knows:
+//! it keeps the last commanded position per axis, and a change of the commanded position gives
+//! that axis's direction of motion (a change below [`DIRECTION_DEADBAND_MM`] or none keeps the
+//! last direction; before any motion every axis counts as positive). Every commanded position
+//! passed to [`Compensator::axis_command_mm`] counts, and so does the commanded trajectory between
+//! them when the loop reports it ([`Compensator::note_commanded_mm`]). An axis whose last motion
+//! was negative gets the predictor's [`ErrorPredictor::negative_approach_shift_mm`] added to its
+//! component of `E_pred` (a constant, so the fixed-point iteration is unchanged).
+//!
 //! The compensator is generic over the predictor (static dispatch) and allocation-free; its
 //! cost is `iterations × (one predictor query)`.
 
@@ -28,6 +39,11 @@ use crate::predictor::{check_sensor_names, ErrorPredictor, PredictError};
 pub const DEFAULT_TOL_MM: f64 = 1e-6;
 /// Maximum predictor evaluations per solve (default: 5).
 pub const DEFAULT_MAX_ITERATIONS: usize = 5;
+/// Smallest change of a commanded axis position that counts as motion, mm (1e-9 mm = 1 pm).
+///
+/// Why: commanded positions computed along a path carry rounding at the 1e-13 mm level; a
+/// reversal must come from real motion, not from the last bit of a float.
+pub const DIRECTION_DEADBAND_MM: f64 = 1e-9;
 
 /// How the last solve went.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -47,6 +63,10 @@ pub struct Compensator<P: ErrorPredictor> {
     tol_mm: f64,
     max_iterations: usize,
     last: SolveInfo,
+    /// Last commanded tool position, mm (None before the first).
+    last_commanded_mm: Option<[f64; 3]>,
+    /// Whether each axis's last commanded motion was negative.
+    negative: [bool; 3],
 }
 
 impl<P: ErrorPredictor> Compensator<P> {
@@ -57,6 +77,8 @@ impl<P: ErrorPredictor> Compensator<P> {
             tol_mm: DEFAULT_TOL_MM,
             max_iterations: DEFAULT_MAX_ITERATIONS,
             last: SolveInfo::default(),
+            last_commanded_mm: None,
+            negative: [false; 3],
         }
     }
 
@@ -80,14 +102,70 @@ impl<P: ErrorPredictor> Compensator<P> {
         self
     }
 
+    /// Sets where the tool is commanded when the compensator takes over (e.g. the program's
+    /// start position), so the first motion already gives directions.
+    #[must_use]
+    pub fn with_start_mm(mut self, p_mm: [f64; 3]) -> Self {
+        self.last_commanded_mm = Some(p_mm);
+        self
+    }
+
+    /// Notes a commanded tool position `p_mm` (mm) on the trajectory without computing a
+    /// command: updates each axis's direction of motion (see the module doc).
+    #[inline]
+    pub fn note_commanded_mm(&mut self, p_mm: [f64; 3]) {
+        if let Some(last) = self.last_commanded_mm {
+            for k in 0..3 {
+                let d = p_mm[k] - last[k];
+                if d > DIRECTION_DEADBAND_MM {
+                    self.negative[k] = false;
+                } else if d < -DIRECTION_DEADBAND_MM {
+                    self.negative[k] = true;
+                } else {
+                    continue;
+                }
+                // Only a counted motion moves the reference, so slow creep adds up.
+                if let Some(l) = self.last_commanded_mm.as_mut() {
+                    l[k] = p_mm[k];
+                }
+            }
+        } else {
+            self.last_commanded_mm = Some(p_mm);
+        }
+    }
+
+    /// Notes one commanded motion segment from `start_mm` to `end_mm` (mm): the start counts
+    /// only if no position was known yet (the segments of a path join end to start).
+    #[inline]
+    pub fn note_motion_segment_mm(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
+        if self.last_commanded_mm.is_none() {
+            self.last_commanded_mm = Some(start_mm);
+        }
+        self.note_commanded_mm(end_mm);
+    }
+
+    /// Direction of each axis's last commanded motion: `1.0` positive (or none yet), `-1.0`
+    /// negative.
+    pub fn approach_directions(&self) -> [f64; 3] {
+        self.negative.map(|n| if n { -1.0 } else { 1.0 })
+    }
+
     /// Axis command `q` (mm) that should put the tool at `p_mm` under readings `temps_degc`
-    /// (model sensor order). Allocation-free; see the module doc for the iteration.
+    /// (model sensor order); `p_mm` also counts as commanded motion for the approach
+    /// directions. Allocation-free; see the module doc for the iteration.
     #[inline]
     pub fn axis_command_mm(&mut self, p_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+        self.note_commanded_mm(p_mm);
+        let shift = self.predictor.negative_approach_shift_mm();
+        let reversal_mm: [f64; 3] =
+            std::array::from_fn(|k| if self.negative[k] { shift[k] } else { 0.0 });
         let mut q = p_mm;
         let mut info = SolveInfo::default();
         while info.iterations < self.max_iterations {
-            let e = self.predictor.predict_error_mm(q, temps_degc);
+            let mut e = self.predictor.predict_error_mm(q, temps_degc);
+            for k in 0..3 {
+                e[k] += reversal_mm[k];
+            }
             let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
             let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
             info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
@@ -204,6 +282,56 @@ mod tests {
         let mut c = c.with_tolerance(1e-7, 2);
         c.axis_command_mm([100.0, 0.0, 0.0], &[20.0]);
         assert_eq!(c.last_solve().iterations, 2);
+    }
+
+    /// Zero error except a reversal: E_k shifts by `shift[k]` after a negative approach of k.
+    struct ReversalOnly(Vec<String>, [f64; 3]);
+    impl ErrorPredictor for ReversalOnly {
+        fn sensor_names(&self) -> &[String] {
+            &self.0
+        }
+        fn predict_error_mm(&mut self, _: [f64; 3], _: &[f64]) -> [f64; 3] {
+            [0.0; 3]
+        }
+        fn negative_approach_shift_mm(&self) -> [f64; 3] {
+            self.1
+        }
+    }
+
+    #[test]
+    fn the_approach_direction_follows_the_commanded_positions() {
+        let shift = [-0.25e-3, -0.3e-3, 0.25e-3];
+        let mut c = Compensator::new(ReversalOnly(vec!["T".into()], shift));
+        // Before any motion every axis counts as positive: no reversal applied.
+        assert_eq!(
+            c.axis_command_mm([100.0, 50.0, -10.0], &[20.0]),
+            [100.0, 50.0, -10.0]
+        );
+        assert_eq!(c.approach_directions(), [1.0, 1.0, 1.0]);
+        // X back, Y forward, Z back: X and Z get their shift subtracted (q = p − E).
+        let q = c.axis_command_mm([90.0, 60.0, -20.0], &[20.0]);
+        assert_eq!(c.approach_directions(), [-1.0, 1.0, -1.0]);
+        assert_eq!(q, [90.0 + 0.25e-3, 60.0, -20.0 - 0.25e-3]);
+        // No change keeps the last direction (a dwell re-commands the same point).
+        assert_eq!(c.axis_command_mm([90.0, 60.0, -20.0], &[20.0]), q);
+        // A change below the dead band (1 pm) is not motion.
+        c.note_commanded_mm([90.0 + 1e-12, 60.0, -20.0]);
+        assert_eq!(c.approach_directions(), [-1.0, 1.0, -1.0]);
+        // Motion between the points (reported by the loop) counts: X overshoots and comes back
+        // up to the same point, so it now approaches positively.
+        c.note_commanded_mm([80.0, 60.0, -20.0]);
+        let q = c.axis_command_mm([90.0, 60.0, -20.0], &[20.0]);
+        assert_eq!(c.approach_directions(), [1.0, 1.0, -1.0]);
+        assert_eq!(q, [90.0, 60.0, -20.0 - 0.25e-3]);
+    }
+
+    #[test]
+    fn a_start_position_gives_the_first_points_direction() {
+        let shift = [1e-3; 3];
+        let c = Compensator::new(ReversalOnly(vec!["T".into()], shift));
+        let mut c = c.with_start_mm([0.0, 0.0, 0.0]);
+        c.axis_command_mm([540.0, 20.0, -430.0], &[20.0]);
+        assert_eq!(c.approach_directions(), [1.0, 1.0, -1.0]);
     }
 
     #[test]

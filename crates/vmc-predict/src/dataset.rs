@@ -3,8 +3,14 @@
 //! the same format a user would produce from a real machine.
 //!
 //! Columns: `cycle, time_s, instrument, x_mm, y_mm, z_mm, dx_um, dy_um, dz_um, rx_urad, ry_urad,
-//! rz_urad`, then one `<sensor>_degc` column per temperature sensor. The measurement columns mean,
-//! per instrument:
+//! rz_urad`, optionally `dir`, then one `<sensor>_degc` column per temperature sensor.
+//!
+//! `dir` is the approach direction of the measured position: `1` when the axes reached it moving
+//! in the positive direction, `-1` when moving in the negative direction. For `laser_k` records it
+//! is the direction of the swept axis (a bidirectional sweep, ISO 230-2, has forward `1` and
+//! backward `-1` runs); for the other instruments it applies to every axis. A file without the
+//! `dir` column (older datasets, forward-only sweeps) reads as `1` everywhere; an empty cell reads
+//! as `1` too. The measurement columns mean, per instrument:
 //!
 //! | instrument   | dx, dy, dz (µm)               | rx, ry, rz (µrad)                    |
 //! |--------------|-------------------------------|--------------------------------------|
@@ -87,6 +93,9 @@ pub struct Record {
     pub values: [f64; 6],
     /// Sensor readings, °C, in the dataset's sensor order.
     pub temps_degc: Vec<f64>,
+    /// Approach direction of the measured position: `1` positive, `-1` negative (see the
+    /// module doc; default `1`).
+    pub dir: i8,
 }
 
 /// A calibration dataset.
@@ -131,6 +140,9 @@ pub enum DatasetError {
     },
 }
 
+/// The optional approach-direction column.
+const DIR_COLUMN: &str = "dir";
+
 const FIXED: [&str; 12] = [
     "cycle",
     "time_s",
@@ -166,6 +178,8 @@ impl Dataset {
     /// same bits).
     pub fn to_csv(&self) -> String {
         let mut s = FIXED.join(",");
+        s.push(',');
+        s.push_str(DIR_COLUMN);
         for n in &self.sensor_names {
             let _ = write!(s, ",{n}_degc");
         }
@@ -184,6 +198,7 @@ impl Dataset {
             for v in r.values {
                 let _ = write!(s, ",{}", cell(v));
             }
+            let _ = write!(s, ",{}", r.dir);
             for t in &r.temps_degc {
                 let _ = write!(s, ",{t}");
             }
@@ -213,6 +228,7 @@ impl Dataset {
                         column: name.to_string(),
                     })?;
         }
+        let dir_col = cols.iter().position(|c| *c == DIR_COLUMN);
         let sensor_cols: Vec<(usize, String)> = cols
             .iter()
             .enumerate()
@@ -278,6 +294,16 @@ impl Dataset {
                     })?;
                 temps.push(v);
             }
+            let dir = match dir_col.map(|i| cells[i]) {
+                None | Some("") | Some("1") | Some("+1") => 1,
+                Some("-1") => -1,
+                Some(c) => {
+                    return Err(bad(
+                        DIR_COLUMN,
+                        format!("approach direction must be 1 or -1, got \"{c}\""),
+                    ))
+                }
+            };
             records.push(Record {
                 cycle: cells[idx[0]].to_string(),
                 time_s: num(1, true)?,
@@ -285,6 +311,7 @@ impl Dataset {
                 pos_mm: [num(3, true)?, num(4, true)?, num(5, true)?],
                 values,
                 temps_degc: temps,
+                dir,
             });
         }
         if records.is_empty() {
@@ -315,6 +342,7 @@ mod tests {
                     pos_mm: [40.0, 200.0, -225.0],
                     values: [-1.25, 0.5, 0.1, 3.0, -2.0, 1.0],
                     temps_degc: vec![20.0625, 20.0],
+                    dir: -1,
                 },
                 Record {
                     cycle: "c1".into(),
@@ -323,6 +351,7 @@ mod tests {
                     pos_mm: [280.0, 200.0, -100.0],
                     values: [0.3, -0.2, -12.7, 1.5, 0.25, f64::NAN],
                     temps_degc: vec![25.125, 20.1],
+                    dir: 1,
                 },
             ],
         }
@@ -333,12 +362,40 @@ mod tests {
         let d = sample();
         let text = d.to_csv();
         assert!(text.starts_with("cycle,time_s,instrument,x_mm,y_mm,z_mm,dx_um"));
-        assert!(text.contains(",1.5,0.25,,25.125,20.1\n"));
+        assert!(text.contains(",1.5,0.25,,1,25.125,20.1\n"));
         let back = Dataset::from_csv(&text, "d.csv").unwrap();
         assert_eq!(back.sensor_names, d.sensor_names);
         assert_eq!(back.records.len(), 2);
         assert_eq!(back.records[0], d.records[0]);
         assert!(back.records[1].values[5].is_nan());
+    }
+
+    #[test]
+    fn a_file_without_the_dir_column_reads_as_forward_approach() {
+        let d = sample();
+        let text: String = d
+            .to_csv()
+            .lines()
+            .map(|l| {
+                let mut c: Vec<&str> = l.split(',').collect();
+                c.remove(12);
+                c.join(",") + "\n"
+            })
+            .collect();
+        assert!(!text.contains("dir"));
+        let back = Dataset::from_csv(&text, "old.csv").unwrap();
+        assert!(back.records.iter().all(|r| r.dir == 1));
+        assert_eq!(back.records[0].values, d.records[0].values);
+    }
+
+    #[test]
+    fn a_bad_direction_names_line_and_column() {
+        let text = sample().to_csv().replace(",-1,", ",0.5,");
+        let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "d.csv: line 2, column `dir`: approach direction must be 1 or -1, got \"0.5\""
+        );
     }
 
     #[test]

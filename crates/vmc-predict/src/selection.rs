@@ -713,6 +713,7 @@ mod tests {
                     pos_mm: [0.0; 3],
                     values: [0.0, 0.0, 10.0 * (b - 20.0), f64::NAN, f64::NAN, f64::NAN],
                     temps_degc: vec![20.0, a, b, c],
+                    dir: 1,
                 });
             }
         }

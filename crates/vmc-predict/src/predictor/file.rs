@@ -3,7 +3,7 @@
 //! ```text
 //! {
 //!   "format": "vmc-twin-model",
-//!   "version": 2,
+//!   "version": 3,
 //!   "kind": "hybrid" | "volumetric" | "linear",
 //!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
 //!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
@@ -15,7 +15,10 @@
 //! [dx, dy, dz µm, rx, ry, rz µrad]`), `spindle_net` (a part `temps → [dx, dy, dz µm, rx, ry
 //! µrad]`), `squareness` (linear model `temps → [α_yz, α_xz, α_xy] µrad`); a part is
 //! `{"linear": linear model, "net": regressor or null}` (the net models what the linear model
-//! leaves, see `part`; version 2 introduced the parts, version 1 held bare regressors). Of a
+//! leaves, see `part`; version 2 introduced the parts, version 1 held bare regressors), and
+//! `reversal_um` (`[X, Y, Z]`, µm: the mean positioning error of a negative approach minus that of
+//! a positive one, learned from bidirectional laser sweeps; version 3 added it — a version 2 file
+//! is still read, with zero reversal, i.e. the forward-approach model it was). Of a
 //! `volumetric`: `net` (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
 //! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
 //! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
@@ -43,8 +46,10 @@ use super::{ErrorPredictor, PredictError};
 
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
-/// The model file version this build writes and reads.
-pub const FORMAT_VERSION: u64 = 2;
+/// The model file version this build writes (and the newest it reads).
+pub const FORMAT_VERSION: u64 = 3;
+/// The oldest model file version this build reads (version 2: no `reversal_um`, read as zero).
+pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
 const TEMP_UNIT: &str = "degC";
 
@@ -156,10 +161,11 @@ fn read_header(text: &str) -> Result<ModelKind, PredictError> {
         .get("version")
         .ok_or_else(|| not_a_model("no `version` field".into()))?;
     match version.as_u64() {
-        Some(FORMAT_VERSION) => {}
+        Some(v) if (OLDEST_READ_VERSION..=FORMAT_VERSION).contains(&v) => {}
         Some(found) => {
             return Err(PredictError::UnsupportedVersion {
                 found,
+                oldest: OLDEST_READ_VERSION,
                 supported: FORMAT_VERSION,
             })
         }
@@ -433,6 +439,14 @@ impl ErrorPredictor for AnyPredictor {
             AnyPredictor::Linear(p) => p.predict_error_mm(q_mm, temps_degc),
         }
     }
+
+    fn negative_approach_shift_mm(&self) -> [f64; 3] {
+        match self {
+            AnyPredictor::Hybrid(p) => p.negative_approach_shift_mm(),
+            AnyPredictor::Volumetric(p) => p.negative_approach_shift_mm(),
+            AnyPredictor::Linear(p) => p.negative_approach_shift_mm(),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -524,10 +538,15 @@ mod tests {
     fn bad_version_format_and_kind_give_the_documented_messages() {
         let model = all_kinds().remove(2);
         let text = model.to_json_string().unwrap();
-        let v1 = text.replacen("\"version\": 2", "\"version\": 1", 1);
+        let v1 = text.replacen("\"version\": 3", "\"version\": 1", 1);
         assert_eq!(
             AnyPredictor::from_json_str(&v1).unwrap_err().to_string(),
-            "model file version 1 is not supported (this build reads version 2)"
+            "model file version 1 is not supported (this build reads versions 2 to 3)"
+        );
+        let v4 = text.replacen("\"version\": 3", "\"version\": 4", 1);
+        assert_eq!(
+            AnyPredictor::from_json_str(&v4).unwrap_err().to_string(),
+            "model file version 4 is not supported (this build reads versions 2 to 3)"
         );
         let other = text.replacen("vmc-twin-model", "something-else", 1);
         assert_eq!(

@@ -1,5 +1,17 @@
 //! The hybrid predictor: elementary-error networks + first-order kinematic synthesis
 //! (the study's method; model in the `predictor` module doc).
+//!
+//! Reversal: the axis networks model the *positive* approach. When the dataset also holds
+//! backward laser runs (`dir = -1`, ISO 230-2 bidirectional sweeps), each axis's reversal `R_k`
+//! (µm, a constant) is estimated first: a ridge linear model `(position, temperatures) → δ_kk` is
+//! fitted on the forward records, and `R_k` = mean residual of the backward records − mean
+//! residual of the forward records (both runs visit the same positions, so the position profile
+//! the linear model misses cancels; the temperatures account for the machine drifting between
+//! the two runs). The networks are then trained on both runs, backward `δ_kk` minus `R_k`. At
+//! query time `R_k` enters as the positioning error
+//! `δ_kk` of an axis that approached negatively, mapped to the tool by the same first-order
+//! synthesis ([`ErrorPredictor::negative_approach_shift_mm`]). Without backward records the
+//! reversal is zero and the networks see the forward records only.
 
 use serde::{Deserialize, Serialize};
 
@@ -31,6 +43,10 @@ pub(crate) struct HybridParts {
     pub spindle_net: LinearPlusNet,
     /// `temperatures °C → (α_yz, α_xz, α_xy) µrad`.
     pub squareness: LinearModel,
+    /// Reversal of X, Y, Z: positioning error δ_kk of a negative approach minus that of a
+    /// positive one, µm (zero in version 2 files, which have no such field).
+    #[serde(default)]
+    pub reversal_um: [f64; 3],
 }
 
 /// Query-time state: part evaluators with cached temperature-only results, scratch.
@@ -52,6 +68,9 @@ pub struct HybridPredictor {
     geometry: MachineGeometry,
     parts: HybridParts,
     rt: Runtime,
+    /// `reversal_um` as it shows at the tool (mm per E component), see
+    /// [`ErrorPredictor::negative_approach_shift_mm`].
+    neg_shift_mm: [f64; 3],
 }
 
 impl HybridPredictor {
@@ -67,6 +86,19 @@ impl HybridPredictor {
         }
         parts.spindle_net.check("spindle", 0, k, 5)?;
         check_linear_model("squareness", &parts.squareness, k, 3)?;
+        if let Some(r) = parts.reversal_um.iter().find(|r| !r.is_finite()) {
+            return Err(PredictError::Inconsistent {
+                reason: format!("reversal_um holds a non-finite value ({r})"),
+            });
+        }
+        // A positioning error δ_kk of axis k moves the tool by ±δ_kk along bed axis k (the sign
+        // is the carriage's side of the chain); the other first-order terms of a pure δ_kk are
+        // zero.
+        let neg_shift_mm: [f64; 3] = std::array::from_fn(|k| {
+            let mut e = ElementaryErrors::default();
+            e.axes[k].lin_mm[k] = parts.reversal_um[k] * 1e-3;
+            first_order_error_mm(&geometry, [0.0; 3], &e)[k]
+        });
         let axes = [
             PartRuntime::new(&parts.axis_nets[0], 1, AXIS_NETS[0])?,
             PartRuntime::new(&parts.axis_nets[1], 1, AXIS_NETS[1])?,
@@ -85,7 +117,14 @@ impl HybridPredictor {
             geometry,
             parts,
             rt,
+            neg_shift_mm,
         })
+    }
+
+    /// Learned reversal of X, Y, Z: positioning error of a negative approach minus that of a
+    /// positive one, µm (zero when the calibration had no backward runs).
+    pub fn reversal_um(&self) -> [f64; 3] {
+        self.parts.reversal_um
     }
 
     /// The machine geometry used by the synthesis.
@@ -164,6 +203,10 @@ impl ErrorPredictor for HybridPredictor {
         let e = first_order_error_mm(&self.geometry, q_mm, &errs);
         [e.x, e.y, e.z]
     }
+
+    fn negative_approach_shift_mm(&self) -> [f64; 3] {
+        self.neg_shift_mm
+    }
 }
 
 /// Trains the hybrid predictor on the `laser_x/y/z`, `spindle` and `squareness` records.
@@ -185,17 +228,26 @@ pub fn train_hybrid(
         "the Z-axis network",
     ];
     let mut axis_tables = Vec::with_capacity(3);
+    let mut reversal_um = [0.0; 3];
     for (k, needed_for) in NEEDED_FOR.iter().enumerate() {
         let instrument = Instrument::laser(k);
         let recs = records_of(ds, instrument, needed_for, settings.min_records)?;
-        axis_tables.push(table_of(
+        let mut table = table_of(
             &recs,
             &sel,
             &split,
             Some(k),
             &[0, 1, 2, 3, 4, 5],
             instrument,
-        )?);
+        )?;
+        reversal_um[k] = estimate_reversal_um(&recs, &table, k, &split, settings)?;
+        // Backward runs become samples of the positive approach.
+        for (r, y) in recs.iter().zip(&mut table.targets) {
+            if r.dir < 0 {
+                y[k] -= reversal_um[k];
+            }
+        }
+        axis_tables.push(table);
     }
     let recs = records_of(
         ds,
@@ -268,6 +320,7 @@ pub fn train_hybrid(
         axis_nets: [ax, ay, az],
         spindle_net,
         squareness,
+        reversal_um,
     };
     let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
     let summary = TrainSummary {
@@ -277,6 +330,53 @@ pub fn train_hybrid(
         nets,
     };
     Ok((predictor, summary))
+}
+
+/// Reversal of axis `k`, µm, from its laser records `recs` and their `table` (module doc): 0
+/// without backward records.
+fn estimate_reversal_um(
+    recs: &[&Record],
+    table: &Table,
+    k: usize,
+    split: &CycleSplit,
+    settings: &Settings,
+) -> Result<f64, PredictError> {
+    if !recs.iter().any(|r| r.dir < 0) {
+        return Ok(0.0);
+    }
+    let mut fwd = Table::new();
+    for ((r, x), (y, g)) in recs
+        .iter()
+        .zip(&table.inputs)
+        .zip(table.targets.iter().zip(&table.groups))
+    {
+        if r.dir >= 0 {
+            fwd.inputs.push(x.clone());
+            fwd.targets.push(vec![y[k]]);
+            fwd.groups.push(*g);
+        }
+    }
+    let (lin, _) = fit_linear(
+        "reversal",
+        &["positioning_um"],
+        &fwd,
+        split,
+        settings.part_ridge,
+    )?;
+    // Mean residual per direction: [forward, backward] sums and counts.
+    let (mut sum, mut n) = ([0.0; 2], [0usize; 2]);
+    let mut out = [0.0];
+    for ((r, x), y) in recs.iter().zip(&table.inputs).zip(&table.targets) {
+        lin.predict_into(x, &mut out)
+            .map_err(|source| PredictError::Linear {
+                model: "reversal",
+                source,
+            })?;
+        let d = usize::from(r.dir < 0);
+        sum[d] += y[k] - out[0];
+        n[d] += 1;
+    }
+    Ok(sum[1] / n[1] as f64 - sum[0] / n[0].max(1) as f64)
 }
 
 /// Rows `[position along axis `pos_axis` (if any), temperatures…] → values[cols]`.
@@ -327,6 +427,56 @@ mod tests {
             .map(|(q, t, e)| (p.predict_error_mm(q, &tweak(&t)), e))
             .collect();
         td::rms_um(&pairs)
+    }
+
+    #[test]
+    fn the_reversal_is_learned_from_alternating_sweeps_and_survives_the_model_file() {
+        // Every other measurement round sweeps backward: the positioning reading shifts by R.
+        let truth_um = [-0.5, -0.6, -0.4];
+        let mut ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        for r in &mut ds.records {
+            let k = match r.instrument {
+                Instrument::LaserX => 0,
+                Instrument::LaserY => 1,
+                Instrument::LaserZ => 2,
+                _ => continue,
+            };
+            if (r.time_s / 1200.0).round() as usize % 2 == 1 {
+                r.dir = -1;
+                r.values[k] += truth_um[k];
+            }
+        }
+        let quick = Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 20,
+            ..Settings::default()
+        };
+        let (p, _) = train_hybrid(&ds, &td::geometry(), &quick).unwrap();
+        let r = p.reversal_um();
+        for k in 0..3 {
+            // The laser noise is 0.1 µm per reading over ~150 backward readings per axis.
+            assert!((r[k] - truth_um[k]).abs() < 0.05, "axis {k}: {r:?}");
+        }
+        // At the tool: X and Y move the table (E = −δ), Z the head (E = +δ); mm.
+        let shift = p.negative_approach_shift_mm();
+        let expected = [-r[0] * 1e-3, -r[1] * 1e-3, r[2] * 1e-3];
+        for k in 0..3 {
+            assert!((shift[k] - expected[k]).abs() < 1e-12, "{shift:?}");
+        }
+        // The model file keeps it; a version 2 file (no `reversal_um`) reads with zero.
+        let text = p.to_json_string().unwrap();
+        let back = HybridPredictor::from_json_str(&text).unwrap();
+        assert_eq!(back.reversal_um(), r);
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["version"] = 2.into();
+        v["model"].as_object_mut().unwrap().remove("reversal_um");
+        let old = HybridPredictor::from_json_str(&v.to_string()).unwrap();
+        assert_eq!(old.reversal_um(), [0.0; 3]);
+        assert_eq!(old.negative_approach_shift_mm(), [0.0; 3]);
+        // Without backward runs the reversal is zero.
+        let forward_only = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let (p, _) = train_hybrid(&forward_only, &td::geometry(), &quick).unwrap();
+        assert_eq!(p.reversal_um(), [0.0; 3]);
     }
 
     #[test]

@@ -47,7 +47,9 @@ mod volumetric;
 #[cfg(test)]
 pub(crate) mod testdata;
 
-pub use file::{AnyPredictor, ModelKind, SensorInfo, FORMAT_NAME, FORMAT_VERSION};
+pub use file::{
+    AnyPredictor, ModelKind, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION,
+};
 pub use hybrid::{train_hybrid, HybridPredictor};
 pub use linear::{train_linear, LinearPredictor};
 pub use volumetric::{train_volumetric, VolumetricPredictor};
@@ -72,6 +74,15 @@ pub trait ErrorPredictor {
     /// assertion: the sensor set is validated once when the model is attached to a machine,
     /// see [`check_sensor_names`]).
     fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3];
+
+    /// Change of the volumetric error (mm), component `k`, when axis `k` reached its position
+    /// moving in the negative direction instead of the positive one that
+    /// [`Self::predict_error_mm`] assumes: the reversal (backlash) of each axis as it shows at
+    /// the tool. The default, zero, is a model that knows no reversal (trained on forward
+    /// approaches only).
+    fn negative_approach_shift_mm(&self) -> [f64; 3] {
+        [0.0; 3]
+    }
 }
 
 /// A mutable borrow predicts like the predictor itself (e.g. `Compensator::new(&mut model)`).
@@ -83,6 +94,10 @@ impl<P: ErrorPredictor + ?Sized> ErrorPredictor for &mut P {
     #[inline]
     fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
         (**self).predict_error_mm(q_mm, temps_degc)
+    }
+
+    fn negative_approach_shift_mm(&self) -> [f64; 3] {
+        (**self).negative_approach_shift_mm()
     }
 }
 
@@ -183,11 +198,16 @@ pub enum PredictError {
         reason: String,
     },
     /// The model file has a version this build cannot read.
-    #[error("model file version {found} is not supported (this build reads version {supported})")]
+    #[error(
+        "model file version {found} is not supported (this build reads versions {oldest} to \
+         {supported})"
+    )]
     UnsupportedVersion {
         /// Version in the file.
         found: u64,
-        /// The version this build reads.
+        /// The oldest version this build reads.
+        oldest: u64,
+        /// The version this build writes (the newest it reads).
         supported: u64,
     },
     /// The model file holds another kind of model than asked for.

@@ -153,6 +153,7 @@ pub fn dataset(amps_degc: &[f64], seed: u64) -> Dataset {
                     pos_mm,
                     values,
                     temps_degc: temps,
+                    dir: 1,
                 });
             };
             for k in 0..3 {
