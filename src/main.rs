@@ -117,6 +117,13 @@ struct CheckArgs {
     /// Fixture file (TOML): vise, clamps and stock on the table.
     #[arg(long)]
     fixture: Option<PathBuf>,
+    /// Also write a Rerun recording: the program's motion with every problem drawn at its time
+    /// and place (magenta points on `paths/events`, entries in the `events` log).
+    #[arg(long, value_name = "FILE.rrd")]
+    rrd: Option<PathBuf>,
+    /// Overwrite an existing recording.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(clap::Args)]
@@ -818,6 +825,9 @@ fn bench(args: BenchArgs) -> Result<()> {
 fn check(args: CheckArgs) -> Result<()> {
     use vmc_twin::collision::{self, FixtureSpec, Problem, Scene};
     let machine = load_machine(args.machine.as_deref(), None)?;
+    if let Some(path) = &args.rrd {
+        record::check_rrd_path(path, args.force)?;
+    }
     let fixture = args.fixture.as_deref().map(FixtureSpec::load).transpose()?;
     let scene = match (&machine.collision, &fixture) {
         (None, None) => None,
@@ -855,17 +865,36 @@ fn check(args: CheckArgs) -> Result<()> {
             "travel check only: the machine file has no [collision] section and no --fixture was given"
         )?,
     }
-    struct Print<'a, W: Write>(&'a mut W, &'a str, std::io::Result<()>);
+    struct Print<'a, W: Write>(&'a mut W, &'a str, std::io::Result<()>, Vec<Problem>);
     impl<W: Write> collision::CheckObserver for Print<'_, W> {
         fn on_problem(&mut self, p: &Problem) {
+            self.3.push(p.clone());
             if self.2.is_ok() {
                 self.2 = writeln!(self.0, "{}: {p}", self.1);
             }
         }
     }
-    let mut printer = Print(&mut out, &file, Ok(()));
+    let mut printer = Print(&mut out, &file, Ok(()), Vec::new());
     let sum = collision::check_plan(&plan, &machine, scene.as_ref(), &mut printer)?;
     printer.2?;
+    let problems = std::mem::take(&mut printer.3);
+    if let Some(path) = &args.rrd {
+        let bytes = record_check(
+            path,
+            args.force,
+            &machine,
+            fixture.as_ref(),
+            &plan,
+            &file,
+            &problems,
+        )?;
+        writeln!(
+            out,
+            "wrote {} ({:.2} MB)",
+            path.display(),
+            bytes as f64 / 1e6
+        )?;
+    }
     writeln!(
         out,
         "checked {} moves ({:.1} mm of path, {} poses): {} collision(s), {} travel violation(s)",
@@ -881,4 +910,118 @@ fn check(args: CheckArgs) -> Result<()> {
             sum.travel_violations
         )
     }
+}
+
+/// The recording of a `check`: the program's motion on a cold twin, every problem an event at
+/// its time and place (the contact point, or the tool position for a travel violation).
+fn record_check(
+    path: &Path,
+    force: bool,
+    machine: &MachineSpec,
+    fixture: Option<&vmc_twin::collision::FixtureSpec>,
+    plan: &vmc_twin::motion::Plan,
+    file: &str,
+    problems: &[vmc_twin::collision::Problem],
+) -> Result<u64> {
+    use vmc_twin::collision::Problem;
+    use vmc_twin::sim::{EventLevel, SimEvent};
+    let settings = record::RecordSettings::default();
+    let rrd = record::RrdFile::create(
+        path,
+        force,
+        &format!("vmc-twin check {file} on {}", machine.machine.name),
+        record::layout::run_blueprint(settings.magnify),
+    )?;
+    let mut rec = record::Recorder::new(&rrd, machine, settings, None)?;
+    let mut twin = Twin::new(machine, 1)?;
+    rec.on_run_start(&RunStart {
+        label: format!("check {file}"),
+        time_s: twin.time_s(),
+        duration_s: plan.duration_s(),
+        measured: false,
+    });
+    // Fixture and stock bodies ride on the table with the paths (`paths/fixture/<name>`), grey;
+    // a body that is hit turns red from the time of the contact.
+    let bodies: Vec<&vmc_twin::collision::BodySpec> = fixture
+        .map(|f| f.bodies.iter().collect())
+        .unwrap_or_default();
+    let draw = |name: &str, color: [u8; 3], t_s: f64| -> Result<()> {
+        let Some(b) = bodies.iter().find(|b| b.name == name) else {
+            return Ok(());
+        };
+        let (lo, hi) = match (
+            b.min_mm,
+            b.max_mm,
+            b.base_center_mm,
+            b.radius_mm,
+            b.height_mm,
+        ) {
+            (Some(lo), Some(hi), _, _, _) => (lo, hi),
+            // A vertical cylinder, drawn as its bounding box.
+            (_, _, Some(c), Some(r), Some(h)) => {
+                ([c[0] - r, c[1] - r, c[2]], [c[0] + r, c[1] + r, c[2] + h])
+            }
+            _ => return Ok(()),
+        };
+        let centre = record::scene::mm_to_scene([0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a])));
+        let half = record::scene::mm_to_scene([0, 1, 2].map(|a| 0.5 * (hi[a] - lo[a])));
+        let stream = rrd.stream();
+        stream.set_duration_secs("sim_time", t_s);
+        stream.log(
+            format!("paths/fixture/{name}"),
+            &rerun::Boxes3D::from_centers_and_half_sizes([centre], [half])
+                .with_colors([rerun::Color::from_rgb(color[0], color[1], color[2])])
+                .with_labels([name.to_string()]),
+        )?;
+        Ok(())
+    };
+    for b in &bodies {
+        draw(&b.name, [150, 150, 150], twin.time_s())?;
+    }
+    let mut lines = Vec::new();
+    for p in problems {
+        let (kind, time_s, place) = match p {
+            Problem::Collision(c) => ("collision", c.time_s, c.contact_point_mm),
+            Problem::Travel(t) => ("travel", t.time_s, plan.position_at(t.time_s)),
+        };
+        if let Problem::Collision(c) = p {
+            draw(
+                &c.other_body,
+                [230, 40, 40],
+                twin.time_s() + c.first_contact_time_s,
+            )?;
+        }
+        lines.push(format!("- {p}"));
+        rec.on_event(&SimEvent {
+            time_s: twin.time_s() + time_s,
+            level: EventLevel::Error,
+            kind: kind.into(),
+            text: p.to_string(),
+            position_mm: Some(place),
+        });
+    }
+    // The motion itself, sampled along the path (at most ~20,000 samples) so the commanded
+    // and actual paths are drawn; a program that leaves the travel still shows its problems
+    // even if the twin cannot follow it.
+    let cfg = SimConfig {
+        sample_mode: SampleMode::EveryCycle,
+        interp_cycle_s: (plan.duration_s() / 20_000.0).max(0.01),
+        ..SimConfig::default()
+    };
+    let motion = sim::execute(&mut twin, plan, &cfg, None, &mut rec);
+    let mut md = format!("# vmc-twin check: {file}\n\n");
+    if problems.is_empty() {
+        md.push_str("No problem found.\n");
+    } else {
+        md.push_str(&format!(
+            "{} problem(s), drawn as magenta points at their time (`paths/events`, `events` log):\n\n{}\n",
+            problems.len(),
+            lines.join("\n")
+        ));
+    }
+    if let Err(e) = &motion {
+        md.push_str(&format!("\nThe motion could not be simulated past: {e}\n"));
+    }
+    rec.finish(Some(&md))?;
+    Ok(rrd.finish()?)
 }

@@ -384,3 +384,48 @@ fn bad_rrd_paths_fail_at_once_with_one_line() {
     let o = vmc(d, &["run", prog, "--magnify", "100"]);
     assert!(!o.status.success());
 }
+
+#[test]
+fn a_crash_found_by_check_is_drawn_in_its_recording_at_its_time() {
+    let dir = TempDir::new("check");
+    let d = dir.path();
+    let program = repo_file("tests/data/collision/rapid_into_vise.ngc");
+    let fixture = repo_file("tests/data/collision/vise.toml");
+    let o = vmc(
+        d,
+        &[
+            "check",
+            program.to_str().unwrap(),
+            "--fixture",
+            fixture.to_str().unwrap(),
+            "--rrd",
+            "crash.rrd",
+        ],
+    );
+    // The check still fails (exit 1): the recording is written besides the report.
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}\n{err}");
+    assert!(out.contains("wrote crash.rrd"), "{out}\n{err}");
+    let file = d.join("crash.rrd");
+    assert_verified(&file);
+    let listing = printed(&file, "-vv");
+    assert_has(
+        &listing,
+        &[
+            "events",
+            "paths/events",
+            "paths/fixture/vise_fixed_jaw",
+            "paths/fixture/stock",
+            "paths/commanded",
+        ],
+        &["sim_time"],
+        "check recording",
+    );
+    // The event carries the crash's own line: the bodies and the depth.
+    let data = printed(&file, "-vvv");
+    assert!(
+        data.contains("tool hits vise_fixed_jaw"),
+        "no crash text in the recording:\n{}",
+        &data[..data.len().min(3000)]
+    );
+}
