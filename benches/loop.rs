@@ -9,6 +9,15 @@
 //! - `machine_8h_with_diagonals`: 8 h of machine time with an XY diagonal test every 30 min,
 //!   motion sampled at the 1 ms interpolation cycle (error evaluated at every sample).
 //! - `campaign_one_seed`: calibration + training of the three predictors + 147 held-out runs.
+//!
+//! Figures, release build, 2-core machine (before → after the profile-driven work of issue 5/6;
+//! "after" measured with `vmc-twin bench` on the idle machine, which runs the same workloads):
+//! - compensation query: 0.99 µs → 0.97 µs median (the hybrid grew linear parts and a reversal
+//!   lookup in between; the spindle MLP became a linear part).
+//! - 8 h with diagonals at 1 ms: 1.03 s → 0.34 s (the thermal network no longer steps to every
+//!   1 ms sample: 8.4 G → 3.9 G instructions under callgrind).
+//! - default campaign, 3 seeds: ≈ 23 s → 15.0 s wall (the campaign also grew a 7th calibration
+//!   cycle and bidirectional sweeps).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
