@@ -811,7 +811,7 @@ fn bench(args: BenchArgs) -> Result<()> {
         }
         let (s, runs) = benchmark::campaign_with(
             &spec,
-            &&vmc_twin::campaign::ThermalCycle::calibration_set(),
+            &vmc_twin::campaign::ThermalCycle::calibration_set(),
             &[1, 2, 3],
         )?;
         writeln!(out, "default campaign, seeds 1,2,3 ({runs} runs): {s:.2} s")?;
