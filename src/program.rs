@@ -136,12 +136,17 @@ pub fn load_plan(
     machine: &MachineSpec,
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
-    let file = path.display().to_string();
-    let text = read_text(path).map_err(|err| ProgramError::Io {
-        file: file.clone(),
-        err,
-    })?;
+    let (file, text) = read_program(path)?;
     plan_source(&text, &file, machine, start_mm)
+}
+
+/// The program file's display name and text.
+fn read_program(path: &Path) -> Result<(String, String), ProgramError> {
+    let file = path.display().to_string();
+    match read_text(path) {
+        Ok(text) => Ok((file, text)),
+        Err(err) => Err(ProgramError::Io { file, err }),
+    }
 }
 
 /// Reads, interprets and plans a program file without the travel check (for `check`, which
@@ -151,11 +156,7 @@ pub fn load_plan_unchecked(
     machine: &MachineSpec,
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
-    let file = path.display().to_string();
-    let text = read_text(path).map_err(|err| ProgramError::Io {
-        file: file.clone(),
-        err,
-    })?;
+    let (file, text) = read_program(path)?;
     plan_source_unchecked(&text, &file, machine, start_mm)
 }
 

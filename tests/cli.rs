@@ -5,21 +5,17 @@
 //! 4 decimals; the machine's non-repeatability is σ ≈ 0.25–0.3 µm per axis.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::Path;
+use std::process::Output;
 
-const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
+mod common;
+use common::*;
 
 /// The XY face diagonal's programmed points: X steps 60 mm from 10, Y steps 30 mm from 60, Z −225.
 fn diag_xy_points_mm() -> Vec<[f64; 3]> {
     (0..10)
         .map(|k| [10.0 + 60.0 * k as f64, 60.0 + 30.0 * k as f64, -225.0])
         .collect()
-}
-
-fn repo_file(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
 fn diag_xy() -> String {
@@ -30,40 +26,6 @@ fn warmup_4h() -> String {
     repo_file("trajectories/warmup_4h_8000rpm.ngc")
         .display()
         .to_string()
-}
-
-/// A fresh temporary folder, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-        let dir =
-            std::env::temp_dir().join(format!("vmc-twin-cli-{tag}-{}-{n}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("create temp dir");
-        TempDir(dir)
-    }
-
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-/// Runs `vmc-twin <args>` with `cwd` as working folder.
-fn vmc(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("the vmc-twin binary starts")
 }
 
 fn stdout(o: &Output) -> String {

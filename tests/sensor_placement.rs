@@ -2,25 +2,10 @@
 //! candidate locations, writes a sensor set that the other commands accept with `--sensors`,
 //! compares compensation quality on held-out runs, and rejects bad requests clearly.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vmc-twin-placement-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    dir
-}
-
-fn vmc(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("run vmc-twin")
-}
+mod common;
+use common::*;
 
 fn text(o: &Output) -> (String, String) {
     (
@@ -30,17 +15,15 @@ fn text(o: &Output) -> (String, String) {
 }
 
 fn diag_xy() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("trajectories/diag_xy.ngc")
-        .display()
-        .to_string()
+    repo_file("trajectories/diag_xy.ngc").display().to_string()
 }
 
 #[test]
 fn select_sensors_ranks_candidates_and_writes_a_set_that_run_accepts() {
-    let dir = temp_dir("select");
+    let tmp = TempDir::new("select");
+    let dir = tmp.path();
     let o = vmc(
-        &dir,
+        dir,
         &[
             "select-sensors",
             "--count",
@@ -64,14 +47,14 @@ fn select_sensors_ranks_candidates_and_writes_a_set_that_run_accepts() {
     assert_eq!(set.matches("[[sensors]]").count(), 5, "{set}");
     assert!(set.contains("node = \"ambient\""), "{set}");
     // The set drives a run: the sensor line names the chosen locations.
-    let o = vmc(&dir, &["run", &diag_xy(), "--sensors", "s.toml"]);
+    let o = vmc(dir, &["run", &diag_xy(), "--sensors", "s.toml"]);
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     let first_chosen = ranked[0].split_whitespace().nth(1).unwrap();
     assert!(out.contains(first_chosen), "{first_chosen} not in\n{out}");
     // Nothing is overwritten without --force.
     let o = vmc(
-        &dir,
+        dir,
         &[
             "select-sensors",
             "--count",
@@ -83,14 +66,14 @@ fn select_sensors_ranks_candidates_and_writes_a_set_that_run_accepts() {
     );
     assert!(!o.status.success());
     assert!(text(&o).1.contains("--force"), "{}", text(&o).1);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn the_comparison_reports_each_sensor_set_on_held_out_runs() {
-    let dir = temp_dir("compare");
+    let tmp = TempDir::new("compare");
+    let dir = tmp.path();
     let o = vmc(
-        &dir,
+        dir,
         &[
             "select-sensors",
             "--count",
@@ -124,14 +107,14 @@ fn the_comparison_reports_each_sensor_set_on_held_out_runs() {
     }
     assert_eq!(cmp[0]["sensors"].as_array().unwrap().len(), 4);
     assert_eq!(cmp[3]["sensors"].as_array().unwrap().len(), 40);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bad_selection_requests_are_clear_errors() {
-    let dir = temp_dir("bad");
+    let tmp = TempDir::new("bad");
+    let dir = tmp.path();
     let o = vmc(
-        &dir,
+        dir,
         &[
             "select-sensors",
             "--candidates",
@@ -147,7 +130,7 @@ fn bad_selection_requests_are_clear_errors() {
     );
 
     let o = vmc(
-        &dir,
+        dir,
         &[
             "select-sensors",
             "--candidates",
@@ -161,7 +144,7 @@ fn bad_selection_requests_are_clear_errors() {
     assert!(!o.status.success());
     assert!(err.contains("asked for 3 sensors"), "{err}");
 
-    let o = vmc(&dir, &["select-sensors", "--count", "0", "--no-compare"]);
+    let o = vmc(dir, &["select-sensors", "--count", "0", "--no-compare"]);
     assert!(
         text(&o).1.contains("--count must be at least 1"),
         "{}",
@@ -173,12 +156,11 @@ fn bad_selection_requests_are_clear_errors() {
         "[[sensors]]\nname = \"S1\"\nnode = \"spindle_nosee\"\n",
     )
     .unwrap();
-    let o = vmc(&dir, &["run", &diag_xy(), "--sensors", "bad.toml"]);
+    let o = vmc(dir, &["run", &diag_xy(), "--sensors", "bad.toml"]);
     let err = text(&o).1;
     assert!(!o.status.success());
     assert!(
         err.contains("bad.toml") && err.contains("spindle_nosee"),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
