@@ -196,6 +196,32 @@ pub fn drive(
     to_s: f64,
     step_s: f64,
 ) -> Result<(), TwinError> {
+    drive_with(twin, cycle, t0_s, to_s, step_s, None)
+}
+
+/// A shorter borrow of an optional controller (for a call that does not keep it).
+fn reborrow<'s>(
+    c: &'s mut Option<&mut dyn crate::sim::Controller>,
+) -> Option<&'s mut dyn crate::sim::Controller> {
+    match c {
+        Some(c) => Some(&mut **c),
+        None => None,
+    }
+}
+
+/// [`drive`], passing the readings after every step to `controller` (if any)
+/// ([`crate::sim::Controller::on_readings`]), as a controller logging its sensors sees them.
+pub fn drive_with(
+    twin: &mut Twin,
+    cycle: &ThermalCycle,
+    t0_s: f64,
+    to_s: f64,
+    step_s: f64,
+    mut controller: Option<&mut dyn crate::sim::Controller>,
+) -> Result<(), TwinError> {
+    if let Some(c) = controller.as_mut() {
+        c.on_readings(&twin.sensor_readings());
+    }
     let min = twin.spec().axes.travel_min_mm;
     let max = twin.spec().axes.travel_max_mm;
     while twin.time_s() - t0_s < to_s - 1e-9 {
@@ -221,6 +247,9 @@ pub fn drive(
             coolant: false,
         };
         twin.advance(dt, &activity)?;
+        if let Some(c) = controller.as_mut() {
+            c.on_readings(&twin.sensor_readings());
+        }
     }
     Ok(())
 }
@@ -422,14 +451,23 @@ pub fn run_at_state_observed(
     noise_seed: u64,
     state: &EvalState,
     plan: &crate::motion::Plan,
-    compensator: Option<&mut dyn crate::sim::Controller>,
+    mut compensator: Option<&mut dyn crate::sim::Controller>,
     observer: &mut dyn Observer,
     history_every_s: Option<f64>,
 ) -> Result<(), crate::sim::SimError> {
     let mut twin = Twin::with_noise_seed(spec, machine_seed, noise_seed)?;
     twin.set_ambient(state.cycle.ambient.clone())?;
+    // The controller follows the readings through the thermal history, as it would on the
+    // machine (it compensates nothing then).
     match history_every_s.filter(|dt| *dt > 0.0 && dt.is_finite()) {
-        None => drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0)?,
+        None => drive_with(
+            &mut twin,
+            &state.cycle,
+            0.0,
+            state.at_s,
+            1.0,
+            reborrow(&mut compensator),
+        )?,
         Some(every_s) => {
             observer.on_run_start(&RunStart {
                 label: format!(
@@ -444,7 +482,14 @@ pub fn run_at_state_observed(
             let mut to_s = 0.0;
             while to_s < state.at_s - 1e-9 {
                 to_s = (to_s + every_s).min(state.at_s);
-                drive(&mut twin, &state.cycle, 0.0, to_s, 1.0)?;
+                drive_with(
+                    &mut twin,
+                    &state.cycle,
+                    0.0,
+                    to_s,
+                    1.0,
+                    reborrow(&mut compensator),
+                )?;
                 observer.on_thermal_step(twin.time_s(), &twin.sensor_readings());
                 observer.on_node_temps(twin.time_s(), twin.node_temps_degc());
             }

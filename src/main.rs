@@ -428,7 +428,15 @@ fn run(args: RunArgs) -> Result<()> {
             duration_s: p.duration_s(),
             measured: false,
         });
-        sim::execute(&mut twin, p, &warm_cfg, None, &mut obs)?;
+        // The controller follows the readings (and the commanded motion) through the warm-up,
+        // as on the machine: a model with history features needs the thermal past.
+        sim::execute(
+            &mut twin,
+            p,
+            &warm_cfg,
+            controller.as_mut().map(|c| c as &mut dyn sim::Controller),
+            &mut obs,
+        )?;
     }
     let mut log = RunLog::default();
     {

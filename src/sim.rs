@@ -64,6 +64,12 @@ pub trait Controller {
     /// trajectory between the points it compensates (e.g. each axis's direction of motion, for
     /// backlash compensation). Default: ignored.
     fn on_commanded_motion(&mut self, _start_mm: [f64; 3], _end_mm: [f64; 3]) {}
+
+    /// New sensor readings, at every thermal step of the twin, also between compensated points
+    /// and while nothing is compensated (a warm-up, the thermal history before a test): what a
+    /// controller logging its sensors sees. Lets a model follow the readings' history.
+    /// Default: ignored.
+    fn on_readings(&mut self, _readings: &SensorReadings) {}
 }
 
 /// One measurement point.
@@ -275,6 +281,9 @@ pub fn execute(
         motion_every_s,
         next_motion_sample: 0,
     };
+    if let Some(c) = compensator.as_mut() {
+        c.on_readings(&clock.readings);
+    }
     let mut index = 0;
     for (si, seg) in plan.segments().iter().enumerate() {
         let moving = matches!(
@@ -284,7 +293,7 @@ pub fn execute(
         match (seg.kind, cfg.sample_mode) {
             (SegmentKind::Dwell, _) => {
                 let t = seg.t_start_s + 0.5 * seg.duration_s;
-                clock.run_until(twin, plan, t, observer)?;
+                clock.run_until(twin, plan, t, observer, &mut compensator)?;
                 clock.note_direction(twin, plan, si);
                 let p = seg.end_mm;
                 measure(
@@ -305,7 +314,7 @@ pub fn execute(
                 let n = (seg.duration_s / cfg.interp_cycle_s).ceil() as usize;
                 for k in 0..n {
                     let t = seg.t_start_s + k as f64 * cfg.interp_cycle_s;
-                    clock.run_until(twin, plan, t, observer)?;
+                    clock.run_until(twin, plan, t, observer, &mut compensator)?;
                     twin.note_motion(plan.velocity_at(t));
                     let p = plan.position_at(t);
                     measure(
@@ -332,7 +341,7 @@ pub fn execute(
             }
         }
     }
-    clock.run_until(twin, plan, plan.duration_s(), observer)?;
+    clock.run_until(twin, plan, plan.duration_s(), observer, &mut compensator)?;
     // The twin ends exactly at the plan's end, ready for what follows.
     clock.finish_at(twin, plan, plan.duration_s(), observer)?;
     Ok(())
@@ -368,9 +377,10 @@ impl Clock {
         plan: &Plan,
         t_s: f64,
         observer: &mut dyn Observer,
+        controller: &mut Option<&mut dyn Controller>,
     ) -> Result<(), SimError> {
         while self.plan_t_s + self.step_s <= t_s + 1e-9 {
-            self.advance(twin, plan, self.step_s, observer)?;
+            self.advance(twin, plan, self.step_s, observer, controller)?;
         }
         Ok(())
     }
@@ -400,11 +410,15 @@ impl Clock {
         plan: &Plan,
         dt_s: f64,
         observer: &mut dyn Observer,
+        controller: &mut Option<&mut dyn Controller>,
     ) -> Result<(), SimError> {
         let activity = activity_over(plan, self.plan_t_s, self.plan_t_s + dt_s);
         twin.advance(dt_s, &activity)?;
         self.plan_t_s += dt_s;
         self.readings = twin.sensor_readings();
+        if let Some(c) = controller.as_mut() {
+            c.on_readings(&self.readings);
+        }
         observer.on_thermal_step(twin.time_s(), &self.readings);
         observer.on_node_temps(twin.time_s(), twin.node_temps_degc());
         self.emit_motion_samples(plan, self.plan_t_s, observer);

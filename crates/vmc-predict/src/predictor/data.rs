@@ -1,7 +1,10 @@
 //! From dataset records to training tables: sensor selection, the validation split by cycle,
 //! and fitting one MLP with hidden-width selection.
 
+use std::collections::HashMap;
+
 use crate::dataset::{Dataset, Instrument, Record};
+use crate::history::ReadingHistory;
 use crate::linreg::LinearModel;
 use crate::nn::{Regressor, Samples, TrainConfig};
 
@@ -18,6 +21,11 @@ pub(crate) struct SensorSelection {
     pub names: Vec<String>,
     /// Index of each into `Record::temps_degc`.
     pub cols: Vec<usize>,
+    /// Time constants of the history features (s); empty: the present readings only.
+    pub taus_s: Vec<f64>,
+    /// History features (`x − y_τ` per filter, see [`crate::history`]) of each (cycle, time)
+    /// instant, computed over the cycle's readings in time order.
+    history: HashMap<(String, u64), Vec<f64>>,
 }
 
 impl SensorSelection {
@@ -53,12 +61,75 @@ impl SensorSelection {
             .iter()
             .filter_map(|n| ds.sensor_names.iter().position(|d| d == n))
             .collect();
-        Ok(Self { names, cols })
+        Ok(Self {
+            names,
+            cols,
+            taus_s: Vec::new(),
+            history: HashMap::new(),
+        })
     }
 
-    /// Appends the selected temperatures of `r` to `row`.
+    /// Adds history features with time constants `taus_s`: each cycle's readings (every record
+    /// of the cycle, whatever its instrument, in time order) run through the filters from the
+    /// cycle's first record on (steady state assumed there).
+    pub fn with_history(mut self, ds: &Dataset, taus_s: &[f64]) -> Result<Self, PredictError> {
+        if let Some(t) = taus_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+            return Err(PredictError::BadSettings {
+                field: "history_taus_s",
+                reason: format!("time constants must be > 0 s, got {t}"),
+            });
+        }
+        self.taus_s = taus_s.to_vec();
+        if taus_s.is_empty() {
+            return Ok(self);
+        }
+        let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
+        for r in &ds.records {
+            match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {
+                Some((_, v)) => v.push(r),
+                None => by_cycle.push((&r.cycle, vec![r])),
+            }
+        }
+        let n = self.cols.len();
+        let mut x = vec![0.0; n];
+        let mut f = vec![0.0; ReadingHistory::n_features(n, taus_s.len())];
+        for (cycle, mut recs) in by_cycle {
+            recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+            let mut h = ReadingHistory::new(taus_s, n);
+            for r in recs {
+                let key = (cycle.to_string(), r.time_s.to_bits());
+                if self.history.contains_key(&key) {
+                    continue;
+                }
+                for (xi, &c) in x.iter_mut().zip(&self.cols) {
+                    *xi = r.temps_degc[c];
+                }
+                h.observe(r.time_s, &x);
+                h.features_into(&x, &mut f);
+                self.history.insert(key, f[n..].to_vec());
+            }
+        }
+        Ok(self)
+    }
+
+    /// Model inputs per sensor set: the readings, then the history features.
+    pub fn n_inputs(&self) -> usize {
+        ReadingHistory::n_features(self.cols.len(), self.taus_s.len())
+    }
+
+    /// Appends the selected temperatures of `r` (then its history features, if any) to `row`.
     pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>) {
         row.extend(self.cols.iter().map(|&c| r.temps_degc[c]));
+        if !self.taus_s.is_empty() {
+            // Every record's instant was filled in `with_history`.
+            match self.history.get(&(r.cycle.clone(), r.time_s.to_bits())) {
+                Some(f) => row.extend_from_slice(f),
+                None => row.extend(std::iter::repeat_n(
+                    0.0,
+                    self.cols.len() * self.taus_s.len(),
+                )),
+            }
+        }
     }
 }
 

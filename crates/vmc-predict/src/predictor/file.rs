@@ -3,7 +3,7 @@
 //! ```text
 //! {
 //!   "format": "vmc-twin-model",
-//!   "version": 3,
+//!   "version": 4,
 //!   "kind": "hybrid" | "volumetric" | "linear",
 //!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
 //!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
@@ -18,7 +18,10 @@
 //! leaves, see `part`; version 2 introduced the parts, version 1 held bare regressors), and
 //! `reversal_um` (`[X, Y, Z]`, µm: the mean positioning error of a negative approach minus that of
 //! a positive one, learned from bidirectional laser sweeps; version 3 added it — a version 2 file
-//! is still read, with zero reversal, i.e. the forward-approach model it was). Of a
+//! is still read, with zero reversal, i.e. the forward-approach model it was), and
+//! `history_taus_s` (time constants, s, of the history features of the networks' inputs, see
+//! `crate::history`; version 4 added it — older files read as empty: present readings only; an
+//! older build would ignore it, hence the new version). Of a
 //! `volumetric`: `net` (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
 //! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
 //! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
@@ -47,7 +50,7 @@ use super::{ErrorPredictor, PredictError};
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
 /// The model file version this build writes (and the newest it reads).
-pub const FORMAT_VERSION: u64 = 3;
+pub const FORMAT_VERSION: u64 = 4;
 /// The oldest model file version this build reads (version 2: no `reversal_um`, read as zero).
 pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
@@ -447,6 +450,12 @@ impl ErrorPredictor for AnyPredictor {
             AnyPredictor::Linear(p) => p.negative_approach_shift_mm(),
         }
     }
+
+    fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
+        if let AnyPredictor::Hybrid(p) = self {
+            p.observe_readings(time_s, temps_degc);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -538,15 +547,15 @@ mod tests {
     fn bad_version_format_and_kind_give_the_documented_messages() {
         let model = all_kinds().remove(2);
         let text = model.to_json_string().unwrap();
-        let v1 = text.replacen("\"version\": 3", "\"version\": 1", 1);
+        let v1 = text.replacen("\"version\": 4", "\"version\": 1", 1);
         assert_eq!(
             AnyPredictor::from_json_str(&v1).unwrap_err().to_string(),
-            "model file version 1 is not supported (this build reads versions 2 to 3)"
+            "model file version 1 is not supported (this build reads versions 2 to 4)"
         );
-        let v4 = text.replacen("\"version\": 3", "\"version\": 4", 1);
+        let v4 = text.replacen("\"version\": 4", "\"version\": 5", 1);
         assert_eq!(
             AnyPredictor::from_json_str(&v4).unwrap_err().to_string(),
-            "model file version 4 is not supported (this build reads versions 2 to 3)"
+            "model file version 5 is not supported (this build reads versions 2 to 4)"
         );
         let other = text.replacen("vmc-twin-model", "something-else", 1);
         assert_eq!(

@@ -16,6 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::{Dataset, Instrument, Record};
+use crate::history::ReadingHistory;
 use crate::linreg::LinearModel;
 use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
 
@@ -47,6 +48,11 @@ pub(crate) struct HybridParts {
     /// positive one, µm (zero in version 2 files, which have no such field).
     #[serde(default)]
     pub reversal_um: [f64; 3],
+    /// Time constants of the history features, s (empty in version 2–3 files: the networks
+    /// see the present readings only). The networks' temperature inputs are the readings, then
+    /// per time constant the readings minus their low-pass filter (see [`crate::history`]).
+    #[serde(default)]
+    pub history_taus_s: Vec<f64>,
 }
 
 /// Query-time state: part evaluators with cached temperature-only results, scratch.
@@ -54,9 +60,14 @@ pub(crate) struct HybridParts {
 struct Runtime {
     axes: [PartRuntime<6>; 3],
     spindle: PartRuntime<5>,
-    /// Spindle and squareness fields hold the values for `last_temps`.
+    /// Spindle and squareness fields hold the values for `last_inputs`.
     errs: ElementaryErrors,
-    last_temps: Vec<f64>,
+    /// Filters over the readings seen by [`ErrorPredictor::observe_readings`].
+    history: ReadingHistory,
+    /// Temperature inputs of the networks (readings, then history features) and those of
+    /// the cached results.
+    inputs: Vec<f64>,
+    last_inputs: Vec<f64>,
     cache_valid: bool,
 }
 
@@ -80,7 +91,16 @@ impl HybridPredictor {
         geometry: MachineGeometry,
         parts: HybridParts,
     ) -> Result<Self, PredictError> {
-        let k = sensors.len();
+        if let Some(t) = parts
+            .history_taus_s
+            .iter()
+            .find(|t| !(t.is_finite() && **t > 0.0))
+        {
+            return Err(PredictError::Inconsistent {
+                reason: format!("history_taus_s holds {t}; time constants must be > 0 s"),
+            });
+        }
+        let k = ReadingHistory::n_features(sensors.len(), parts.history_taus_s.len());
         for (name, part) in AXIS_NETS.iter().zip(&parts.axis_nets) {
             part.check(name, 1, k, 6)?;
         }
@@ -109,7 +129,9 @@ impl HybridPredictor {
             axes,
             spindle,
             errs: ElementaryErrors::default(),
-            last_temps: vec![0.0; k],
+            history: ReadingHistory::new(&parts.history_taus_s, sensors.len()),
+            inputs: vec![0.0; k],
+            last_inputs: vec![0.0; k],
             cache_valid: false,
         };
         Ok(Self {
@@ -160,20 +182,23 @@ impl HybridPredictor {
         self.rt.errs
     }
 
-    /// Recomputes the temperature-only parts when the readings changed (bitwise).
-    fn update_temps(&mut self, temps: &[f64]) {
+    /// Recomputes the temperature-only parts when their inputs (readings and history features)
+    /// changed (bitwise).
+    fn update_temps(&mut self, readings: &[f64]) {
         let rt = &mut self.rt;
+        rt.history.features_into(readings, &mut rt.inputs);
         if rt.cache_valid
             && rt
-                .last_temps
+                .last_inputs
                 .iter()
-                .zip(temps)
+                .zip(&rt.inputs)
                 .all(|(a, b)| a.to_bits() == b.to_bits())
         {
             return;
         }
-        rt.last_temps.copy_from_slice(temps);
+        rt.last_inputs.copy_from_slice(&rt.inputs);
         rt.cache_valid = true;
+        let temps = &rt.inputs[..];
         for net in &mut rt.axes {
             net.set_temps(temps);
         }
@@ -207,6 +232,10 @@ impl ErrorPredictor for HybridPredictor {
     fn negative_approach_shift_mm(&self) -> [f64; 3] {
         self.neg_shift_mm
     }
+
+    fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
+        self.rt.history.observe(time_s, temps_degc);
+    }
 }
 
 /// Trains the hybrid predictor on the `laser_x/y/z`, `spindle` and `squareness` records.
@@ -219,7 +248,7 @@ pub fn train_hybrid(
     geometry: &MachineGeometry,
     settings: &Settings,
 ) -> Result<(HybridPredictor, TrainSummary), PredictError> {
-    let sel = SensorSelection::new(ds, settings)?;
+    let sel = SensorSelection::new(ds, settings)?.with_history(ds, &settings.history_taus_s)?;
     let split = CycleSplit::new(ds, settings)?;
     // Build every table before training anything, so data errors surface at once.
     const NEEDED_FOR: [&str; 3] = [
@@ -321,6 +350,7 @@ pub fn train_hybrid(
         spindle_net,
         squareness,
         reversal_um,
+        history_taus_s: sel.taus_s.clone(),
     };
     let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
     let summary = TrainSummary {
@@ -390,7 +420,7 @@ fn table_of(
 ) -> Result<Table, PredictError> {
     let mut table = Table::new();
     for r in recs {
-        let mut row = Vec::with_capacity(sel.names.len() + 1);
+        let mut row = Vec::with_capacity(sel.n_inputs() + 1);
         if let Some(k) = pos_axis {
             row.push(r.pos_mm[k]);
         }
@@ -477,6 +507,46 @@ mod tests {
         let forward_only = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
         let (p, _) = train_hybrid(&forward_only, &td::geometry(), &quick).unwrap();
         assert_eq!(p.reversal_um(), [0.0; 3]);
+    }
+
+    #[test]
+    fn history_features_follow_the_observed_readings_and_survive_the_model_file() {
+        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let settings = Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 20,
+            history_taus_s: vec![1800.0],
+            ..Settings::default()
+        };
+        let (mut p, _) = train_hybrid(&ds, &td::geometry(), &settings).unwrap();
+        assert_eq!(p.parts().history_taus_s, vec![1800.0]);
+        let mut back = HybridPredictor::from_json_str(&p.to_json_string().unwrap()).unwrap();
+        let q = [100.0, 50.0, -80.0];
+        let hot = td::temps_degc(6.0, 7200.0);
+        // Never observed: the filters sit at the present readings (steady state).
+        let steady = p.predict_error_mm(q, &hot);
+        // After a warm-up observed from cold, the history features are non-zero.
+        for k in 0..=120 {
+            let t = 60.0 * f64::from(k);
+            let temps = td::temps_degc(6.0, t);
+            p.observe_readings(t, &temps);
+            back.observe_readings(t, &temps);
+        }
+        let warmed = p.predict_error_mm(q, &hot);
+        assert_eq!(warmed, back.predict_error_mm(q, &hot));
+        assert_ne!(warmed, steady);
+        // A bad time constant in a file is refused.
+        let mut v: serde_json::Value = serde_json::from_str(&p.to_json_string().unwrap()).unwrap();
+        v["model"]["history_taus_s"] = serde_json::json!([-5.0]);
+        let err = HybridPredictor::from_json_str(&v.to_string()).unwrap_err();
+        assert!(err.to_string().contains("history_taus_s"), "{err}");
+        // So is one in the settings.
+        let bad = Settings {
+            history_taus_s: vec![0.0],
+            ..settings
+        };
+        let err = train_hybrid(&ds, &td::geometry(), &bad).unwrap_err();
+        assert!(err.to_string().contains("history_taus_s"), "{err}");
     }
 
     #[test]

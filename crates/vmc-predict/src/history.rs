@@ -1,0 +1,211 @@
+//! Features of the readings' history: what a compensator can know of the machine's thermal past
+//! from the sensor readings it has seen, beyond the present readings.
+//!
+//! Model: each sensor's reading `x(t)` feeds first-order low-pass filters
+//! `τ·dy/dt = x − y` with time constants `τ` (s). The feature of sensor `i` and filter `τ` is
+//! `x_i − y_{i,τ}`: zero at a thermal steady state, positive while the reading rises faster than
+//! the filter follows (heating), negative while it falls (cooling). A structure whose temperature
+//! lags a measured one by roughly `τ` (an unmeasured bearing seat, a screw under a swinging
+//! ambient) is seen through it. The readings are taken as linear between samples (first-order
+//! hold), so the exact update over a gap `h`, with `a = e^(−h/τ)` and slope `s = (x₁ − x₀)/h`, is
+//! `y₁ = a·y₀ + (1 − a)·x₀ + s·(h − τ(1 − a))`: the same features whether the readings arrive
+//! every second (in the loop) or every few minutes (in a calibration log), up to how linear the
+//! readings are between samples.
+//!
+//! The filters start at the first reading, i.e. the machine is assumed at a thermal steady state
+//! when logging starts (a calibration cycle from a cold machine, a controller switched on with
+//! the machine). Units: s and °C (features in K).
+
+/// Filter state over a stream of readings of `n` sensors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadingHistory {
+    taus_s: Vec<f64>,
+    n: usize,
+    /// Filter outputs, `[tau][sensor]` row-major.
+    filtered: Vec<f64>,
+    last_x: Vec<f64>,
+    last_t_s: f64,
+    started: bool,
+}
+
+impl ReadingHistory {
+    /// Filters with time constants `taus_s` (s, each > 0) over `n_sensors` readings.
+    pub fn new(taus_s: &[f64], n_sensors: usize) -> Self {
+        Self {
+            taus_s: taus_s.to_vec(),
+            n: n_sensors,
+            filtered: vec![0.0; taus_s.len() * n_sensors],
+            last_x: vec![0.0; n_sensors],
+            last_t_s: 0.0,
+            started: false,
+        }
+    }
+
+    /// Features per sensor set: `n × (1 + taus)` (the readings, then one block per filter).
+    pub fn n_features(n_sensors: usize, n_taus: usize) -> usize {
+        n_sensors * (1 + n_taus)
+    }
+
+    /// Forgets everything (the next reading starts the filters).
+    pub fn reset(&mut self) {
+        self.started = false;
+    }
+
+    /// Whether any reading has been seen.
+    pub fn started(&self) -> bool {
+        self.started
+    }
+
+    /// Takes the readings `x` (°C) at time `t_s`. Readings at or before the last one's time, or
+    /// with a non-finite value, are ignored (held readings are passed again and again).
+    pub fn observe(&mut self, t_s: f64, x: &[f64]) {
+        if x.len() != self.n || !t_s.is_finite() || x.iter().any(|v| !v.is_finite()) {
+            return;
+        }
+        if !self.started {
+            for row in self.filtered.chunks_exact_mut(self.n.max(1)) {
+                row.copy_from_slice(x);
+            }
+            self.last_x.copy_from_slice(x);
+            self.last_t_s = t_s;
+            self.started = true;
+            return;
+        }
+        let h = t_s - self.last_t_s;
+        if h <= 0.0 {
+            return;
+        }
+        for (k, &tau) in self.taus_s.iter().enumerate() {
+            let a = (-h / tau).exp();
+            let ramp = h - tau * (1.0 - a);
+            let row = &mut self.filtered[k * self.n..(k + 1) * self.n];
+            for ((y, &x1), &x0) in row.iter_mut().zip(x).zip(&self.last_x) {
+                let s = (x1 - x0) / h;
+                *y = a * *y + (1.0 - a) * x0 + s * ramp;
+            }
+        }
+        self.last_x.copy_from_slice(x);
+        self.last_t_s = t_s;
+    }
+
+    /// Writes the features of readings `x` (the present ones, °C) into `out`
+    /// ([`Self::n_features`] values): `x`, then `x − y_τ` per filter. Before any reading the
+    /// filters are taken at `x` (steady state).
+    pub fn features_into(&self, x: &[f64], out: &mut [f64]) {
+        let n = self.n;
+        out[..n].copy_from_slice(x);
+        for k in 0..self.taus_s.len() {
+            let o = &mut out[(k + 1) * n..(k + 2) * n];
+            if self.started {
+                let row = &self.filtered[k * n..(k + 1) * n];
+                for ((f, &xi), &yi) in o.iter_mut().zip(x).zip(row) {
+                    *f = xi - yi;
+                }
+            } else {
+                o.fill(0.0);
+            }
+        }
+    }
+}
+
+/// History features of a time series: for samples `(t_s, readings)` in time order, the feature
+/// rows ([`ReadingHistory::features_into`]) after each sample.
+pub fn features_of_series(taus_s: &[f64], series: &[(f64, &[f64])]) -> Vec<Vec<f64>> {
+    let n = series.first().map_or(0, |s| s.1.len());
+    let mut h = ReadingHistory::new(taus_s, n);
+    let mut out = Vec::with_capacity(series.len());
+    for (t, x) in series {
+        h.observe(*t, x);
+        let mut f = vec![0.0; ReadingHistory::n_features(n, taus_s.len())];
+        h.features_into(x, &mut f);
+        out.push(f);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_constant_reading_gives_zero_history_features() {
+        let mut h = ReadingHistory::new(&[600.0, 3600.0], 2);
+        let mut f = [1.0; 6];
+        for k in 0..100 {
+            h.observe(k as f64 * 17.0, &[21.0, 25.5]);
+        }
+        h.features_into(&[21.0, 25.5], &mut f);
+        assert_eq!(f, [21.0, 25.5, 0.0, 0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn a_ramp_settles_at_rate_times_tau_whatever_the_sampling() {
+        // x = 20 + r·t: the filter lags by r·τ once settled (after many τ).
+        let r = 1e-3;
+        let tau = 600.0;
+        for dt in [1.0, 60.0, 300.0, 1000.0] {
+            let mut h = ReadingHistory::new(&[tau], 1);
+            let mut t = 0.0;
+            while t <= 20.0 * tau {
+                h.observe(t, &[20.0 + r * t]);
+                t += dt;
+            }
+            let t_last = t - dt;
+            let mut f = [0.0; 2];
+            h.features_into(&[20.0 + r * t_last], &mut f);
+            assert!((f[1] - r * tau).abs() < 1e-8, "dt {dt}: {}", f[1]);
+        }
+    }
+
+    #[test]
+    fn a_step_decays_with_the_time_constant() {
+        // Samples 1 s apart: the step happens over the first second (linear between samples).
+        let tau = 100.0;
+        let mut h = ReadingHistory::new(&[tau], 1);
+        h.observe(0.0, &[0.0]);
+        h.observe(1.0, &[1.0]);
+        h.observe(1.0 + tau, &[1.0]);
+        let mut f = [0.0; 2];
+        h.features_into(&[1.0], &mut f);
+        // After the ramp over [0, 1] s the filter is ≈ 1/(2τ); then 1 − y decays by e^-1.
+        let y1 = 1.0 - tau * (1.0 - (-1.0 / tau).exp());
+        let expected = (1.0 - y1) * (-1.0f64).exp();
+        assert!((f[1] - expected).abs() < 1e-12, "{} vs {expected}", f[1]);
+    }
+
+    #[test]
+    fn stale_or_broken_readings_are_ignored_and_the_start_is_steady() {
+        let mut h = ReadingHistory::new(&[60.0], 1);
+        let mut f = [0.0; 2];
+        h.features_into(&[30.0], &mut f);
+        assert_eq!(f, [30.0, 0.0]);
+        h.observe(10.0, &[20.0]);
+        h.observe(10.0, &[50.0]);
+        h.observe(5.0, &[50.0]);
+        h.observe(20.0, &[f64::NAN]);
+        h.observe(20.0, &[20.0, 1.0]);
+        h.features_into(&[20.0], &mut f);
+        assert_eq!(f, [20.0, 0.0]);
+        assert!(h.started());
+        h.reset();
+        assert!(!h.started());
+    }
+
+    #[test]
+    fn series_features_match_streaming() {
+        let xs: Vec<[f64; 1]> = (0..50).map(|k| [20.0 + (k as f64 * 0.3).sin()]).collect();
+        let series: Vec<(f64, &[f64])> = xs
+            .iter()
+            .enumerate()
+            .map(|(k, x)| (k as f64 * 30.0, &x[..]))
+            .collect();
+        let rows = features_of_series(&[120.0, 900.0], &series);
+        let mut h = ReadingHistory::new(&[120.0, 900.0], 1);
+        for ((t, x), row) in series.iter().zip(&rows) {
+            h.observe(*t, x);
+            let mut f = [0.0; 3];
+            h.features_into(x, &mut f);
+            assert_eq!(&f[..], &row[..]);
+        }
+    }
+}

@@ -1,0 +1,53 @@
+//! Diagnosis: validation RMSE of each hybrid network for several history-feature settings.
+//! `cargo run --release --example history_probe -- SEED`
+use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::machine::MachineSpec;
+use vmc_twin::predict::predictor::{self, Settings};
+
+fn main() {
+    let seed: u64 = std::env::args()
+        .nth(1)
+        .map_or(1, |s| s.parse().expect("seed"));
+    let spec = MachineSpec::reference();
+    let geom = spec.geometry();
+    let data = campaign::calibrate(
+        &spec,
+        &ThermalCycle::calibration_set(),
+        &CampaignConfig::new(seed),
+    )
+    .unwrap();
+    for taus in [
+        vec![],
+        vec![1800.0],
+        vec![3600.0],
+        vec![1800.0, 7200.0],
+        vec![900.0, 3600.0, 10800.0],
+    ] {
+        let (_, sum) = predictor::train_hybrid(
+            &data,
+            &geom,
+            &Settings {
+                seed,
+                history_taus_s: taus.clone(),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        println!("taus {taus:?} val {:?}", sum.val_cycles);
+        for n in &sum.nets {
+            let f = |v: &Vec<f64>| {
+                v.iter()
+                    .map(|x| format!("{x:.3}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            println!(
+                "  {:<10} h {:?} val [{}] lin [{}]",
+                n.name,
+                n.hidden_units,
+                f(&n.val_rmse),
+                f(&n.linear_val_rmse)
+            );
+        }
+    }
+}

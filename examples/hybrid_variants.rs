@@ -1,0 +1,107 @@
+//! Diagnosis: the hybrid predictor alone over seeds 1–3 with training-setting variants.
+//! `cargo run --release --example hybrid_variants -- taus=1800,7200 seedoff=0`
+use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::evaluation::{self, diagonal_plans};
+use vmc_twin::machine::MachineSpec;
+use vmc_twin::predict::predictor::{self, Settings};
+
+fn main() {
+    let mut settings = Settings::default();
+    let mut seed_off = 0u64;
+    let mut members = 1u64;
+    let mut seeds = vec![1u64, 2, 3];
+    for a in std::env::args().skip(1) {
+        let (k, v) = a.split_once('=').expect("key=value");
+        let list = || -> Vec<f64> {
+            v.split(',')
+                .filter(|s| !s.is_empty())
+                .map(|s| s.parse().unwrap())
+                .collect()
+        };
+        match k {
+            "taus" => settings.history_taus_s = list(),
+            "seedoff" => seed_off = v.parse().unwrap(),
+            "seeds" => seeds = list().into_iter().map(|x| x as u64).collect(),
+            "gain" => settings.residual_net_min_gain = v.parse().unwrap(),
+            "ridge" => settings.part_ridge = v.parse().unwrap(),
+            "hidden" => {
+                settings.hidden_candidates = list().into_iter().map(|x| x as usize).collect()
+            }
+            "restarts" => settings.restarts = v.parse().unwrap(),
+            "members" => members = v.parse().unwrap(),
+            _ => panic!("unknown {k}"),
+        }
+    }
+    let spec = MachineSpec::reference();
+    let geom = spec.geometry();
+    let plans = diagonal_plans(&spec).unwrap();
+    let mut runs = Vec::new();
+    for &seed in &seeds {
+        let data = campaign::calibrate(
+            &spec,
+            &ThermalCycle::calibration_set(),
+            &CampaignConfig::new(seed),
+        )
+        .unwrap();
+        let mut hs = Vec::new();
+        let mut sum = None;
+        for m in 0..members {
+            let s = Settings {
+                seed: seed + seed_off + 100 * m,
+                ..settings.clone()
+            };
+            let (h, su) = predictor::train_hybrid(&data, &geom, &s).unwrap();
+            hs.push(h);
+            sum = Some(su);
+        }
+        let sum = sum.unwrap();
+        let h = Ensemble(hs);
+        let kept: Vec<String> = sum
+            .nets
+            .iter()
+            .map(|n| format!("{}:{:?}", n.name, n.hidden_units))
+            .collect();
+        let states = campaign::evaluation_states(seed);
+        let r = evaluation::evaluate_predictor(&spec, seed, "hybrid", &h, &states, &plans).unwrap();
+        let mx = r.iter().map(|x| x.max_after_um).fold(0.0, f64::max);
+        println!("seed {seed}: nets {kept:?} max {mx:.2}");
+        runs.extend(r);
+    }
+    let (med, worst, max, rmse) = evaluation::headline(&runs, "hybrid").unwrap();
+    let over = runs.iter().filter(|r| r.max_after_um > 2.0).count();
+    println!(
+        "{:?}: median {:.1} % worst {:.1} % max {:.2} µm rmse {:.2} µm, {over} runs > 2 µm",
+        std::env::args().skip(1).collect::<Vec<_>>(),
+        med * 100.0,
+        worst * 100.0,
+        max,
+        rmse
+    );
+}
+
+#[derive(Clone)]
+struct Ensemble(Vec<predictor::HybridPredictor>);
+impl predictor::ErrorPredictor for Ensemble {
+    fn sensor_names(&self) -> &[String] {
+        self.0[0].sensor_names()
+    }
+    fn predict_error_mm(&mut self, q: [f64; 3], t: &[f64]) -> [f64; 3] {
+        let n = self.0.len() as f64;
+        let mut e = [0.0; 3];
+        for p in &mut self.0 {
+            let v = p.predict_error_mm(q, t);
+            for k in 0..3 {
+                e[k] += v[k] / n;
+            }
+        }
+        e
+    }
+    fn negative_approach_shift_mm(&self) -> [f64; 3] {
+        self.0[0].negative_approach_shift_mm()
+    }
+    fn observe_readings(&mut self, t: f64, x: &[f64]) {
+        for p in &mut self.0 {
+            p.observe_readings(t, x);
+        }
+    }
+}
