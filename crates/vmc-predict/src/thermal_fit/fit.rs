@@ -366,8 +366,8 @@ pub fn fit(
         .iter()
         .map(|n| col(n, "output").map(<[f64]>::to_vec))
         .collect::<Result<_, _>>()?;
-    let width = inputs.len() * settings.features.per_input();
-    let feats = settings.features.compute(&table.time_s, &x_cols);
+    let width = settings.features.width(inputs);
+    let feats = settings.features.compute(&table.time_s, inputs, &x_cols);
     let mut rows = [Vec::new(), Vec::new(), Vec::new()];
     for (i, t) in table.time_s.iter().enumerate() {
         let k = match split.part(*t) {
@@ -569,6 +569,7 @@ mod tests {
             architecture: arch,
             features: FeatureSpec {
                 time_constants_s: taus,
+                speed_exponents: Vec::new(),
             },
             ridge_candidates: vec![1e-9],
             hidden_candidates: vec![2],
