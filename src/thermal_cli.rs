@@ -56,12 +56,16 @@ pub struct FitThermalArgs {
     /// (comma-separated; "none": speed inputs are filtered like temperatures).
     #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
     speed_exponents: Vec<String>,
+    /// Temperatures as differences to their mean at each row (gradients; blind to a uniform
+    /// change of all temperatures).
+    #[arg(long)]
+    relative_to_mean: bool,
     /// Hidden widths tried (comma-separated); the best on validation is kept.
     #[arg(long, value_delimiter = ',', default_values_t = [4usize, 8])]
     hidden: Vec<usize>,
     /// Ridge λ candidates of the linear part (on normalised slopes; comma-separated); the
     /// best on validation is kept.
-    #[arg(long, value_delimiter = ',', default_values_t = [0.01, 0.1, 1.0, 10.0, 100.0])]
+    #[arg(long, value_delimiter = ',', default_values_t = [0.01, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4])]
     ridge: Vec<f64>,
     /// Members of each MLP ensemble (their predictions are averaged).
     #[arg(long, default_value_t = 5)]
@@ -149,6 +153,7 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
         features: FeatureSpec {
             time_constants_s: args.tau_s.clone(),
             speed_exponents: parse_exponents(&args.speed_exponents)?,
+            relative_to_mean: args.relative_to_mean,
         },
         architecture: arch,
         hidden_candidates: args.hidden.clone(),

@@ -30,6 +30,14 @@
 //! (an output-error model with the gains fitted and the exponents and time constants taken from
 //! the banks), so fitting stays linear and convex. Feature layout per speed input: for each k,
 //! `q_k`, then `lowpass_τ(q_k)` for each τ. Unit: (krpm)^k.
+//!
+//! **Relative temperatures** ([`FeatureSpec::relative_to_mean`], off by default): every
+//! temperature input (every input that is not a speed with heat-input features) is replaced by
+//! its difference to the mean of those inputs at the same row, `x_j − x̄`, before the filter
+//! bank. The features then describe the machine's temperature *gradients* and are blind to a
+//! uniform change of all temperatures (e.g. the whole shop warming up), which a model fitted on
+//! a few cycles can otherwise mistake for a cause of a slow drift trend. Needs at least two
+//! temperature inputs.
 
 use serde::{Deserialize, Serialize};
 
@@ -47,6 +55,10 @@ pub struct FeatureSpec {
     /// > 0).
     #[serde(default)]
     pub speed_exponents: Vec<f64>,
+    /// Temperatures as differences to their mean at each row (see the module doc; default:
+    /// false).
+    #[serde(default)]
+    pub relative_to_mean: bool,
 }
 
 impl Default for FeatureSpec {
@@ -54,6 +66,7 @@ impl Default for FeatureSpec {
         Self {
             time_constants_s: vec![900.0, 3600.0, 10800.0],
             speed_exponents: vec![1.0, 2.0, 3.0],
+            relative_to_mean: false,
         }
     }
 }
@@ -84,6 +97,25 @@ impl FeatureSpec {
             return Err(ThermalFitError::BadSettings {
                 field: "speed_exponents",
                 reason: format!("every speed exponent must be finite and > 0, got {k}"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Checks the settings against the input names (relative temperatures need two).
+    pub fn validate_inputs<S: AsRef<str>>(&self, names: &[S]) -> Result<(), ThermalFitError> {
+        self.validate()?;
+        let temperatures = names
+            .iter()
+            .filter(|n| !self.heat_input(n.as_ref()))
+            .count();
+        if self.relative_to_mean && temperatures < 2 {
+            return Err(ThermalFitError::BadSettings {
+                field: "relative_to_mean",
+                reason: format!(
+                    "temperatures relative to their mean need at least two temperature inputs, \
+                     got {temperatures}"
+                ),
             });
         }
         Ok(())
@@ -124,7 +156,12 @@ impl FeatureSpec {
                     }
                 }
             } else {
-                out.push(n.to_string());
+                let n = if self.relative_to_mean {
+                    format!("({n}-mean)")
+                } else {
+                    n.to_string()
+                };
+                out.push(n.clone());
                 for t in &self.time_constants_s {
                     out.push(format!("{n}-lowpass{t}s"));
                 }
@@ -144,6 +181,20 @@ impl FeatureSpec {
         let n_rows = time_s.len();
         let width = self.width(names);
         let mut out = vec![0.0; n_rows * width];
+        // Mean of the temperature inputs per row, when they are taken relative to it.
+        let temperatures: Vec<&[f64]> = names
+            .iter()
+            .zip(inputs)
+            .filter(|(n, _)| !self.heat_input(n.as_ref()))
+            .map(|(_, x)| *x)
+            .collect();
+        let mean: Vec<f64> = if self.relative_to_mean && !temperatures.is_empty() {
+            (0..n_rows)
+                .map(|r| temperatures.iter().map(|x| x[r]).sum::<f64>() / temperatures.len() as f64)
+                .collect()
+        } else {
+            Vec::new()
+        };
         let mut base = 0;
         let mut column = |signal: &[f64], difference: bool, base: usize| {
             self.filter_bank(time_s, signal, difference, &mut out, width, base);
@@ -155,8 +206,12 @@ impl FeatureSpec {
                     column(&q, false, base);
                     base += 1 + self.time_constants_s.len();
                 }
-            } else {
+            } else if mean.is_empty() {
                 column(x, true, base);
+                base += 1 + self.time_constants_s.len();
+            } else {
+                let relative: Vec<f64> = x.iter().zip(&mean).map(|(v, m)| v - m).collect();
+                column(&relative, true, base);
                 base += 1 + self.time_constants_s.len();
             }
         }
@@ -203,6 +258,7 @@ mod tests {
         let spec = FeatureSpec {
             time_constants_s: vec![600.0],
             speed_exponents: Vec::new(),
+            relative_to_mean: false,
         };
         let t: Vec<f64> = (0..200).map(|i| 15.0 * f64::from(i)).collect();
         let x: Vec<f64> = (0..200).map(|i| if i == 0 { 20.0 } else { 30.0 }).collect();
@@ -233,9 +289,12 @@ mod tests {
         let spec = FeatureSpec {
             time_constants_s: vec![600.0],
             speed_exponents: vec![1.0, 2.0],
+            relative_to_mean: false,
         };
         let t: Vec<f64> = (0..100).map(|i| 15.0 * f64::from(i)).collect();
-        let rpm: Vec<f64> = (0..100).map(|i| if i == 0 { 0.0 } else { 2000.0 }).collect();
+        let rpm: Vec<f64> = (0..100)
+            .map(|i| if i == 0 { 0.0 } else { 2000.0 })
+            .collect();
         let temp = vec![20.0; 100];
         let names = ["t1_degc", "spindle_rpm"];
         assert_eq!(spec.width(&names), 2 + 2 * 2);
@@ -269,5 +328,32 @@ mod tests {
             ..plain
         };
         assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn relative_temperatures_are_blind_to_a_uniform_change_and_keep_speeds_apart() {
+        let spec = FeatureSpec {
+            time_constants_s: vec![600.0],
+            speed_exponents: vec![1.0],
+            relative_to_mean: true,
+        };
+        let t: Vec<f64> = (0..40).map(|i| 15.0 * f64::from(i)).collect();
+        let ramp: Vec<f64> = t.iter().map(|s| 20.0 + s / 600.0).collect();
+        let t1: Vec<f64> = ramp.iter().map(|v| v + 1.0).collect();
+        let t2: Vec<f64> = ramp.iter().map(|v| v - 1.0).collect();
+        let rpm = vec![1500.0; 40];
+        let names = ["t1_degc", "t2_degc", "spindle_rpm"];
+        let f = spec.compute(&t, &names, &[&t1, &t2, &rpm]);
+        assert_eq!(
+            spec.names(&names)[..2],
+            ["(t1_degc-mean)", "(t1_degc-mean)-lowpass600s"]
+        );
+        for n in 0..40 {
+            // Both sensors ramp together: ±1 °C about the mean, filters settled at it.
+            assert_eq!(f[6 * n..6 * n + 4], [1.0, 0.0, -1.0, 0.0], "row {n}");
+            assert!((f[6 * n + 4] - 1.5).abs() < 1e-12);
+        }
+        assert!(spec.validate_inputs(&names).is_ok());
+        assert!(spec.validate_inputs(&["t1_degc", "spindle_rpm"]).is_err());
     }
 }

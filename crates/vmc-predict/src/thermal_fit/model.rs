@@ -263,9 +263,7 @@ impl ThermalModel {
                 ),
             });
         }
-        let feats = self
-            .features
-            .compute(time_s, &self.input_names(), inputs);
+        let feats = self.features.compute(time_s, &self.input_names(), inputs);
         self.predict_features(&feats)
     }
 
@@ -308,7 +306,7 @@ impl ThermalModel {
         }
         let m: ThermalModel =
             serde_json::from_value(value).map_err(|e| bad(format!("malformed model: {e}")))?;
-        m.features.validate()?;
+        m.features.validate_inputs(&m.input_names())?;
         let width = m.feature_width();
         let n_out = m.outputs.len();
         let net_ok = |nets: &[Regressor], form: OutputModel| {
