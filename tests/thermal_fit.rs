@@ -379,3 +379,95 @@ fn too_few_rows_and_an_unknown_time_column_are_errors() {
     let o = fit_synthetic(dir.path(), &renamed);
     assert_error(&o, &["cannot tell the time column", "--time"]);
 }
+
+/// Held-out RMSE / raw RMS per output, as the fit recorded it in `model.json` of `dir`.
+fn held_out_ratios(dir: &Path, model: &str) -> Vec<f64> {
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(model)).unwrap()).unwrap();
+    v["evaluation"]["channels"]
+        .as_array()
+        .expect("channels")
+        .iter()
+        .map(|c| c["model_ratio"].as_f64().expect("ratio"))
+        .collect()
+}
+
+#[test]
+fn the_spindle_speed_as_a_heat_input_lowers_the_held_out_error_on_every_channel() {
+    // The same linear model with spindle_rpm as input, once through the heat-input features
+    // (|n|/1000)^k (default) and once filtered like a temperature (--speed-exponents none).
+    let dir = TempDir::new("speed");
+    let data = slice_csv().display().to_string();
+    let inputs = format!("{},spindle_rpm", temps());
+    let outputs = OUTPUTS.join(",");
+    for (model, extra) in [("heat.json", None), ("plain.json", Some("none"))] {
+        let mut args = vec![
+            "fit-thermal",
+            "--data",
+            &data,
+            "--inputs",
+            &inputs,
+            "--outputs",
+            &outputs,
+            "--arch",
+            "linear",
+            "-o",
+            model,
+        ];
+        if let Some(e) = extra {
+            args.extend(["--speed-exponents", e]);
+        }
+        let o = vmc(dir.path(), &args);
+        assert_success(&o, model);
+        if extra.is_none() {
+            assert!(text(&o.stdout).contains("17 inputs → 76 features"));
+        }
+    }
+    let heat = held_out_ratios(dir.path(), "heat.json");
+    let plain = held_out_ratios(dir.path(), "plain.json");
+    // Measured on this slice: 16.5, 16.1, 20.8, 21.8, 34.2 % vs 78.2, 79.7, 31.8, 31.6, 43.3 %.
+    for (k, (h, p)) in heat.iter().zip(&plain).enumerate() {
+        assert!(h < &(0.9 * p), "{}: {h} vs {p}", OUTPUTS[k]);
+    }
+    assert!(heat[..4].iter().all(|r| *r <= 0.25), "{heat:?}");
+}
+
+#[test]
+fn bad_feature_options_are_errors() {
+    let dir = TempDir::new("options");
+    std::fs::write(dir.path().join("data.csv"), synthetic_csv()).unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "fit-thermal",
+            "--data",
+            "data.csv",
+            "--outputs",
+            "ch1_um",
+            "-o",
+            "model.json",
+            "--arch",
+            "linear",
+        ];
+        args.extend_from_slice(extra);
+        vmc(dir.path(), &args)
+    };
+    let o = run(&[
+        "--inputs",
+        "t1_degc,spindle_rpm",
+        "--speed-exponents",
+        "2,x",
+    ]);
+    assert_error(&o, &["--speed-exponents", "\"x\" is not a number"]);
+    let o = run(&["--inputs", "t1_degc,spindle_rpm", "--speed-exponents=-1"]);
+    assert_error(&o, &["speed_exponents", "finite and > 0"]);
+    let o = run(&["--inputs", "t1_degc,spindle_rpm", "--relative-to-mean"]);
+    assert_error(
+        &o,
+        &["relative_to_mean", "at least two temperature inputs, got 1"],
+    );
+    assert!(!dir.path().join("model.json").exists());
+    // Two temperatures relative to their mean: fitted and saved.
+    let o = run(&["--inputs", "t1_degc,t2_degc", "--relative-to-mean"]);
+    assert_success(&o, "relative to the mean");
+    assert!(text(&o.stdout).contains("2 inputs → 8 features"));
+}
