@@ -51,12 +51,21 @@ pub struct FitThermalArgs {
     /// Time constants of the low-pass filter bank, s (comma-separated).
     #[arg(long, value_delimiter = ',', default_values_t = [900.0, 3600.0, 10800.0])]
     tau_s: Vec<f64>,
+    /// Exponents k of the heat-input features (|speed|/1000 rpm)^k of speed inputs (columns
+    /// whose unit is rpm, e.g. spindle_rpm): each as is and through the low-pass bank
+    /// (comma-separated; "none": speed inputs are filtered like temperatures).
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3")]
+    speed_exponents: Vec<String>,
+    /// Temperatures as differences to their mean at each row (gradients; blind to a uniform
+    /// change of all temperatures).
+    #[arg(long)]
+    relative_to_mean: bool,
     /// Hidden widths tried (comma-separated); the best on validation is kept.
     #[arg(long, value_delimiter = ',', default_values_t = [4usize, 8])]
     hidden: Vec<usize>,
     /// Ridge λ candidates of the linear part (on normalised slopes; comma-separated); the
     /// best on validation is kept.
-    #[arg(long, value_delimiter = ',', default_values_t = [0.01, 0.1, 1.0, 10.0, 100.0])]
+    #[arg(long, value_delimiter = ',', default_values_t = [0.01, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4])]
     ridge: Vec<f64>,
     /// Members of each MLP ensemble (their predictions are averaged).
     #[arg(long, default_value_t = 5)]
@@ -143,6 +152,8 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
     let settings = FitSettings {
         features: FeatureSpec {
             time_constants_s: args.tau_s.clone(),
+            speed_exponents: parse_exponents(&args.speed_exponents)?,
+            relative_to_mean: args.relative_to_mean,
         },
         architecture: arch,
         hidden_candidates: args.hidden.clone(),
@@ -159,6 +170,21 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--speed-exponents`: numbers, or the single word `none`.
+fn parse_exponents(values: &[String]) -> Result<Vec<f64>> {
+    if values.len() == 1 && values[0].trim() == "none" {
+        return Ok(Vec::new());
+    }
+    values
+        .iter()
+        .map(|v| {
+            v.trim().parse::<f64>().with_context(|| {
+                format!("--speed-exponents: \"{v}\" is not a number (or give \"none\")")
+            })
+        })
+        .collect()
+}
+
 /// The terminal report of a fit (the same figures are in the model's `evaluation`).
 fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) -> String {
     let mut s = String::new();
@@ -172,11 +198,11 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
     };
     let _ = writeln!(
         s,
-        "fit-thermal: {source}, {} rows, {} inputs × {} features, {} outputs; architecture {}: \
+        "fit-thermal: {source}, {} rows, {} inputs → {} features, {} outputs; architecture {}: \
          linear ridge {}, residual net {}, direct net {}",
         table.len(),
         model.inputs.len(),
-        model.features.per_input(),
+        model.features.width(&model.input_names()),
         model.outputs.len(),
         model.architecture.name(),
         ev.ridge,

@@ -36,7 +36,7 @@ pub struct FitSettings {
     /// Hidden widths tried per net; the best on validation is kept (default: 4, 8).
     pub hidden_candidates: Vec<usize>,
     /// Ridge λ candidates of the linear part, on normalised slopes; the best on validation is
-    /// kept (default: 0.01, 0.1, 1, 10, 100: the thermometers of a machine are strongly
+    /// kept (default: 0.01, 0.1, …, 10⁴ by decades: the thermometers of a machine are strongly
     /// correlated and a few cycles cannot pin dozens of slopes; how much to shrink them is a
     /// question for the validation cycle).
     pub ridge_candidates: Vec<f64>,
@@ -62,7 +62,7 @@ impl Default for FitSettings {
             features: FeatureSpec::default(),
             architecture: Architecture::LinearMlp,
             hidden_candidates: vec![4, 8],
-            ridge_candidates: vec![0.01, 0.1, 1.0, 10.0, 100.0],
+            ridge_candidates: vec![0.01, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4],
             val_fraction: 0.25,
             min_train_step_s: 60.0,
             seed: 0,
@@ -340,7 +340,7 @@ pub fn fit(
     split: &Split,
     settings: &FitSettings,
 ) -> Result<ThermalModel, ThermalFitError> {
-    settings.features.validate()?;
+    settings.features.validate_inputs(inputs)?;
     if inputs.is_empty() || outputs.is_empty() {
         return Err(ThermalFitError::BadSettings {
             field: "columns",
@@ -366,8 +366,8 @@ pub fn fit(
         .iter()
         .map(|n| col(n, "output").map(<[f64]>::to_vec))
         .collect::<Result<_, _>>()?;
-    let width = inputs.len() * settings.features.per_input();
-    let feats = settings.features.compute(&table.time_s, &x_cols);
+    let width = settings.features.width(inputs);
+    let feats = settings.features.compute(&table.time_s, inputs, &x_cols);
     let mut rows = [Vec::new(), Vec::new(), Vec::new()];
     for (i, t) in table.time_s.iter().enumerate() {
         let k = match split.part(*t) {
@@ -569,6 +569,8 @@ mod tests {
             architecture: arch,
             features: FeatureSpec {
                 time_constants_s: taus,
+                speed_exponents: Vec::new(),
+                relative_to_mean: false,
             },
             ridge_candidates: vec![1e-9],
             hidden_candidates: vec![2],

@@ -6,7 +6,9 @@
 //!
 //! - features ([`FeatureSpec`]): each named input as read and its differences to a bank of
 //!   first-order low-pass filters (time constants 15 min, 1 h, 3 h by default), all computed
-//!   causally (row n uses rows 0…n only) with the filter state set to the first reading;
+//!   causally (row n uses rows 0…n only) with the filter state set to the first reading; a speed
+//!   input (unit `rpm`) becomes a grey-box heat-input bank `(|n|/1000)^k`, as is and low-passed;
+//!   optionally temperatures relative to their mean (gradients);
 //! - model ([`ThermalModel`]): per output, a linear regression on the features, the same plus an
 //!   MLP fitted to its residual, or an MLP on the features (Levenberg–Marquardt, normalisation,
 //!   early stopping, seeded initialisation: the predictor's [`crate::nn`] machinery), chosen on

@@ -198,7 +198,12 @@ pub struct ThermalModel {
 impl ThermalModel {
     /// Width of a feature row.
     pub(crate) fn feature_width(&self) -> usize {
-        self.inputs.len() * self.features.per_input()
+        self.features.width(&self.input_names())
+    }
+
+    /// The input column names, in feature order.
+    pub fn input_names(&self) -> Vec<&str> {
+        self.inputs.iter().map(|c| c.name.as_str()).collect()
     }
 
     /// Predictions (output-major: one column per output) from row-major feature rows.
@@ -258,7 +263,7 @@ impl ThermalModel {
                 ),
             });
         }
-        let feats = self.features.compute(time_s, inputs);
+        let feats = self.features.compute(time_s, &self.input_names(), inputs);
         self.predict_features(&feats)
     }
 
@@ -301,7 +306,7 @@ impl ThermalModel {
         }
         let m: ThermalModel =
             serde_json::from_value(value).map_err(|e| bad(format!("malformed model: {e}")))?;
-        m.features.validate()?;
+        m.features.validate_inputs(&m.input_names())?;
         let width = m.feature_width();
         let n_out = m.outputs.len();
         let net_ok = |nets: &[Regressor], form: OutputModel| {
@@ -317,10 +322,9 @@ impl ThermalModel {
             || !net_ok(&m.direct_mlp, OutputModel::Mlp)
         {
             return Err(bad(format!(
-                "inconsistent model: {} inputs × {} features each and {n_out} outputs do not \
+                "inconsistent model: {} inputs ({width} features) and {n_out} outputs do not \
                  match its linear part, nets or per-output forms",
                 m.inputs.len(),
-                m.features.per_input(),
             )));
         }
         Ok(m)
