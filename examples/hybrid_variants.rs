@@ -29,6 +29,7 @@ fn main() {
             }
             "restarts" => settings.restarts = v.parse().unwrap(),
             "members" => members = v.parse().unwrap(),
+            "hist" => settings.history_sensors = v.split(',').map(String::from).collect(),
             _ => panic!("unknown {k}"),
         }
     }

@@ -16,12 +16,14 @@
 //! when logging starts (a calibration cycle from a cold machine, a controller switched on with
 //! the machine). Units: s and °C (features in K).
 
-/// Filter state over a stream of readings of `n` sensors.
+/// Filter state over a stream of readings of `n` sensors, of which some are filtered.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReadingHistory {
     taus_s: Vec<f64>,
     n: usize,
-    /// Filter outputs, `[tau][sensor]` row-major.
+    /// Indices of the filtered sensors.
+    idx: Vec<usize>,
+    /// Filter outputs, `[tau][filtered sensor]` row-major.
     filtered: Vec<f64>,
     last_x: Vec<f64>,
     last_t_s: f64,
@@ -29,21 +31,40 @@ pub struct ReadingHistory {
 }
 
 impl ReadingHistory {
-    /// Filters with time constants `taus_s` (s, each > 0) over `n_sensors` readings.
+    /// Filters with time constants `taus_s` (s, each > 0) over every one of `n_sensors`
+    /// readings.
     pub fn new(taus_s: &[f64], n_sensors: usize) -> Self {
+        Self::of_sensors(taus_s, n_sensors, &(0..n_sensors).collect::<Vec<_>>())
+    }
+
+    /// Filters with time constants `taus_s` over the readings `filtered` (indices < `n_sensors`,
+    /// others ignored) of `n_sensors`.
+    pub fn of_sensors(taus_s: &[f64], n_sensors: usize, filtered: &[usize]) -> Self {
+        let idx: Vec<usize> = filtered.iter().copied().filter(|&i| i < n_sensors).collect();
         Self {
             taus_s: taus_s.to_vec(),
             n: n_sensors,
-            filtered: vec![0.0; taus_s.len() * n_sensors],
+            filtered: vec![0.0; taus_s.len() * idx.len()],
+            idx,
             last_x: vec![0.0; n_sensors],
             last_t_s: 0.0,
             started: false,
         }
     }
 
-    /// Features per sensor set: `n × (1 + taus)` (the readings, then one block per filter).
-    pub fn n_features(n_sensors: usize, n_taus: usize) -> usize {
-        n_sensors * (1 + n_taus)
+    /// Features: `n_sensors + n_filtered × n_taus` (the readings, then one block per filter).
+    pub fn n_features(n_sensors: usize, n_filtered: usize, n_taus: usize) -> usize {
+        n_sensors + n_filtered * n_taus
+    }
+
+    /// Features of this history ([`Self::n_features`]).
+    pub fn len(&self) -> usize {
+        Self::n_features(self.n, self.idx.len(), self.taus_s.len())
+    }
+
+    /// Whether there are no features at all (no sensor).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
     }
 
     /// Forgets everything (the next reading starts the filters).
@@ -62,9 +83,12 @@ impl ReadingHistory {
         if x.len() != self.n || !t_s.is_finite() || x.iter().any(|v| !v.is_finite()) {
             return;
         }
+        let m = self.idx.len();
         if !self.started {
-            for row in self.filtered.chunks_exact_mut(self.n.max(1)) {
-                row.copy_from_slice(x);
+            for row in self.filtered.chunks_exact_mut(m.max(1)) {
+                for (y, &i) in row.iter_mut().zip(&self.idx) {
+                    *y = x[i];
+                }
             }
             self.last_x.copy_from_slice(x);
             self.last_t_s = t_s;
@@ -78,8 +102,9 @@ impl ReadingHistory {
         for (k, &tau) in self.taus_s.iter().enumerate() {
             let a = (-h / tau).exp();
             let ramp = h - tau * (1.0 - a);
-            let row = &mut self.filtered[k * self.n..(k + 1) * self.n];
-            for ((y, &x1), &x0) in row.iter_mut().zip(x).zip(&self.last_x) {
+            let row = &mut self.filtered[k * m..(k + 1) * m];
+            for (y, &i) in row.iter_mut().zip(&self.idx) {
+                let (x0, x1) = (self.last_x[i], x[i]);
                 let s = (x1 - x0) / h;
                 *y = a * *y + (1.0 - a) * x0 + s * ramp;
             }
@@ -89,17 +114,18 @@ impl ReadingHistory {
     }
 
     /// Writes the features of readings `x` (the present ones, °C) into `out`
-    /// ([`Self::n_features`] values): `x`, then `x − y_τ` per filter. Before any reading the
-    /// filters are taken at `x` (steady state).
+    /// ([`Self::len`] values): `x`, then `x_i − y_{i,τ}` of the filtered sensors per filter.
+    /// Before any reading the filters are taken at `x` (steady state).
     pub fn features_into(&self, x: &[f64], out: &mut [f64]) {
         let n = self.n;
+        let m = self.idx.len();
         out[..n].copy_from_slice(x);
         for k in 0..self.taus_s.len() {
-            let o = &mut out[(k + 1) * n..(k + 2) * n];
+            let o = &mut out[n + k * m..n + (k + 1) * m];
             if self.started {
-                let row = &self.filtered[k * n..(k + 1) * n];
-                for ((f, &xi), &yi) in o.iter_mut().zip(x).zip(row) {
-                    *f = xi - yi;
+                let row = &self.filtered[k * m..(k + 1) * m];
+                for ((f, &i), &yi) in o.iter_mut().zip(&self.idx).zip(row) {
+                    *f = x[i] - yi;
                 }
             } else {
                 o.fill(0.0);
@@ -116,7 +142,7 @@ pub fn features_of_series(taus_s: &[f64], series: &[(f64, &[f64])]) -> Vec<Vec<f
     let mut out = Vec::with_capacity(series.len());
     for (t, x) in series {
         h.observe(*t, x);
-        let mut f = vec![0.0; ReadingHistory::n_features(n, taus_s.len())];
+        let mut f = vec![0.0; h.len()];
         h.features_into(x, &mut f);
         out.push(f);
     }
@@ -189,6 +215,20 @@ mod tests {
         assert!(h.started());
         h.reset();
         assert!(!h.started());
+    }
+
+    #[test]
+    fn only_the_chosen_sensors_are_filtered() {
+        let mut h = ReadingHistory::of_sensors(&[100.0], 3, &[2, 7]);
+        assert_eq!(h.len(), 4);
+        h.observe(0.0, &[1.0, 2.0, 3.0]);
+        h.observe(100.0, &[1.0, 2.0, 5.0]);
+        let mut f = [0.0; 4];
+        h.features_into(&[1.0, 2.0, 5.0], &mut f);
+        assert_eq!(&f[..3], &[1.0, 2.0, 5.0]);
+        // A ramp of 2 K over τ: y = 3 + 2·(1 − (1 − e^-1)) = 3 + 2/e.
+        let expected = 2.0 - 2.0 * (-1.0f64).exp();
+        assert!((f[3] - expected).abs() < 1e-12, "{f:?}");
     }
 
     #[test]

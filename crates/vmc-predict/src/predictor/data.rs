@@ -23,6 +23,8 @@ pub(crate) struct SensorSelection {
     pub cols: Vec<usize>,
     /// Time constants of the history features (s); empty: the present readings only.
     pub taus_s: Vec<f64>,
+    /// Indices (into `names`) of the sensors with history features.
+    pub history_idx: Vec<usize>,
     /// History features (`x − y_τ` per filter, see [`crate::history`]) of each (cycle, time)
     /// instant, computed over the cycle's readings in time order.
     history: HashMap<(String, u64), Vec<f64>>,
@@ -65,6 +67,7 @@ impl SensorSelection {
             names,
             cols,
             taus_s: Vec::new(),
+            history_idx: Vec::new(),
             history: HashMap::new(),
         })
     }
@@ -72,7 +75,13 @@ impl SensorSelection {
     /// Adds history features with time constants `taus_s`: each cycle's readings (every record
     /// of the cycle, whatever its instrument, in time order) run through the filters from the
     /// cycle's first record on (steady state assumed there).
-    pub fn with_history(mut self, ds: &Dataset, taus_s: &[f64]) -> Result<Self, PredictError> {
+    /// `of_sensors` names the sensors that get them (empty: all).
+    pub fn with_history(
+        mut self,
+        ds: &Dataset,
+        taus_s: &[f64],
+        of_sensors: &[String],
+    ) -> Result<Self, PredictError> {
         if let Some(t) = taus_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
             return Err(PredictError::BadSettings {
                 field: "history_taus_s",
@@ -83,6 +92,26 @@ impl SensorSelection {
         if taus_s.is_empty() {
             return Ok(self);
         }
+        self.history_idx = if of_sensors.is_empty() {
+            (0..self.names.len()).collect()
+        } else {
+            let mut idx = Vec::new();
+            for s in of_sensors {
+                match self.names.iter().position(|n| n == s) {
+                    Some(i) => idx.push(i),
+                    None => {
+                        return Err(PredictError::BadSettings {
+                            field: "history_sensors",
+                            reason: format!(
+                                "`{s}` is not among the model's sensors {:?}",
+                                self.names
+                            ),
+                        })
+                    }
+                }
+            }
+            idx
+        };
         let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
         for r in &ds.records {
             match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {
@@ -92,10 +121,10 @@ impl SensorSelection {
         }
         let n = self.cols.len();
         let mut x = vec![0.0; n];
-        let mut f = vec![0.0; ReadingHistory::n_features(n, taus_s.len())];
+        let mut f = vec![0.0; self.n_inputs()];
         for (cycle, mut recs) in by_cycle {
             recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-            let mut h = ReadingHistory::new(taus_s, n);
+            let mut h = ReadingHistory::of_sensors(taus_s, n, &self.history_idx);
             for r in recs {
                 let key = (cycle.to_string(), r.time_s.to_bits());
                 if self.history.contains_key(&key) {
@@ -114,7 +143,7 @@ impl SensorSelection {
 
     /// Model inputs per sensor set: the readings, then the history features.
     pub fn n_inputs(&self) -> usize {
-        ReadingHistory::n_features(self.cols.len(), self.taus_s.len())
+        ReadingHistory::n_features(self.cols.len(), self.history_idx.len(), self.taus_s.len())
     }
 
     /// Appends the selected temperatures of `r` (then its history features, if any) to `row`.
@@ -126,7 +155,7 @@ impl SensorSelection {
                 Some(f) => row.extend_from_slice(f),
                 None => row.extend(std::iter::repeat_n(
                     0.0,
-                    self.cols.len() * self.taus_s.len(),
+                    self.history_idx.len() * self.taus_s.len(),
                 )),
             }
         }

@@ -53,6 +53,10 @@ pub(crate) struct HybridParts {
     /// per time constant the readings minus their low-pass filter (see [`crate::history`]).
     #[serde(default)]
     pub history_taus_s: Vec<f64>,
+    /// Indices (model sensor order) of the sensors with history features; empty with time
+    /// constants means all of them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub history_sensors: Vec<usize>,
 }
 
 /// Query-time state: part evaluators with cached temperature-only results, scratch.
@@ -100,7 +104,22 @@ impl HybridPredictor {
                 reason: format!("history_taus_s holds {t}; time constants must be > 0 s"),
             });
         }
-        let k = ReadingHistory::n_features(sensors.len(), parts.history_taus_s.len());
+        if let Some(i) = parts.history_sensors.iter().find(|&&i| i >= sensors.len()) {
+            return Err(PredictError::Inconsistent {
+                reason: format!(
+                    "history_sensors holds sensor index {i}; the model has {} sensors",
+                    sensors.len()
+                ),
+            });
+        }
+        let history_idx: Vec<usize> = if parts.history_sensors.is_empty() {
+            (0..sensors.len()).collect()
+        } else {
+            parts.history_sensors.clone()
+        };
+        let history =
+            ReadingHistory::of_sensors(&parts.history_taus_s, sensors.len(), &history_idx);
+        let k = history.len();
         for (name, part) in AXIS_NETS.iter().zip(&parts.axis_nets) {
             part.check(name, 1, k, 6)?;
         }
@@ -129,7 +148,7 @@ impl HybridPredictor {
             axes,
             spindle,
             errs: ElementaryErrors::default(),
-            history: ReadingHistory::new(&parts.history_taus_s, sensors.len()),
+            history,
             inputs: vec![0.0; k],
             last_inputs: vec![0.0; k],
             cache_valid: false,
@@ -248,7 +267,11 @@ pub fn train_hybrid(
     geometry: &MachineGeometry,
     settings: &Settings,
 ) -> Result<(HybridPredictor, TrainSummary), PredictError> {
-    let sel = SensorSelection::new(ds, settings)?.with_history(ds, &settings.history_taus_s)?;
+    let sel = SensorSelection::new(ds, settings)?.with_history(
+        ds,
+        &settings.history_taus_s,
+        &settings.history_sensors,
+    )?;
     let split = CycleSplit::new(ds, settings)?;
     // Build every table before training anything, so data errors surface at once.
     const NEEDED_FOR: [&str; 3] = [
@@ -351,6 +374,11 @@ pub fn train_hybrid(
         squareness,
         reversal_um,
         history_taus_s: sel.taus_s.clone(),
+        history_sensors: if sel.history_idx.len() == sel.names.len() {
+            Vec::new()
+        } else {
+            sel.history_idx.clone()
+        },
     };
     let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
     let summary = TrainSummary {

@@ -290,6 +290,8 @@ pub struct Settings {
     /// always use the present readings only. Measured (README, "history features"): with 30 min
     /// and 2 h the held-out max residual got worse (2.31 → 3.30 µm), so it is off by default.
     pub history_taus_s: Vec<f64>,
+    /// Sensors that get history features (default: empty = all the model's sensors).
+    pub history_sensors: Vec<String>,
 }
 
 impl Default for Settings {
@@ -309,6 +311,7 @@ impl Default for Settings {
             part_ridge: 1e-3,
             residual_net_min_gain: 0.2,
             history_taus_s: Vec::new(),
+            history_sensors: Vec::new(),
         }
     }
 }
