@@ -38,6 +38,9 @@ use thiserror::Error;
 
 use crate::dataset::{Dataset, Instrument};
 
+mod proposals;
+pub use proposals::{CorrBasis, Proposal, RankedSensor, Rule};
+
 /// Settings of the selection.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SelectionConfig {
@@ -193,6 +196,8 @@ pub struct Selection {
     pub n_channels_dropped: usize,
     /// Number of rows used (blocks + spindle records).
     pub n_rows: usize,
+    /// The candidate sets proposed by each rule ([`Rule`]), ranked with evidence.
+    pub proposals: Vec<Proposal>,
 }
 
 impl Selection {
@@ -680,7 +685,21 @@ pub fn select_sensors(ds: &Dataset, cfg: &SelectionConfig) -> Result<Selection, 
         });
         score = s;
     }
+    let reference: Vec<usize> = chosen[..cfg.reference.len()].to_vec();
+    let pool: Vec<usize> = (0..names.len())
+        .filter(|i| !reference.contains(i))
+        .collect();
+    let relevance: Vec<f64> = candidates.iter().map(|c| c.max_abs_corr).collect();
+    let proposals = proposals::build(
+        &data,
+        &reference,
+        &pool,
+        &relevance,
+        &chosen[reference.len()..],
+        cfg.count,
+    );
     Ok(Selection {
+        proposals,
         reference: cfg.reference.clone(),
         reference_score_um,
         steps,
