@@ -562,21 +562,49 @@ pub fn write_report(
     )?;
     writeln!(
         out,
-        "procedure: greedy forward selection from the cold reference (ambient) on the leave-one-cycle-out RMS error of a linear model (information phase) until no candidate gains {:.0} % of the reference score, then, among candidates with |r| ≥ {} to a thermal error, the one least correlated with the chosen ones (coverage phase); a candidate with |r| ≥ {} to a chosen one is redundant",
-        100.0 * cfg.selection.min_gain_fraction,
-        cfg.selection.min_relevance,
-        cfg.selection.redundancy_corr
+        "procedure: candidates grouped into {k} clusters of similar thermal behaviour (average-linkage correlation clustering, distance 1 − |r|, of the readings or of their rise above ambient); one sensor per cluster by relevance (strongest |r| with a thermal error) or by greedy forward selection on the leave-one-cycle-out error of a linear model; plus the linear forward selection (information, then coverage). Each proposal is validated with the hybrid predictor trained on the typical cycles, compensating every diagonal at {n} selection-only states; the lowest quadratic-mean RMS |E| after wins",
+        k = cfg.selection.count,
+        n = validation_states(cfg.seed).len()
     )?;
     writeln!(
         out,
-        "score, µm: reference only {:.3}, all {} candidates {:.3}",
+        "linear score, µm: reference only {:.3}, all {} candidates {:.3}",
         sel.reference_score_um,
         sel.candidates.len(),
         sel.all_score_um
     )?;
     writeln!(
         out,
-        "{:>4}  {:<22} {:>9} {:>8} {:>7}  {:<28} {:>7}  phase",
+        "proposals (validation: selection-only states, machine seed {}):",
+        cfg.seed
+    )?;
+    writeln!(
+        out,
+        "  {:<30} {:>9} {:>12} {:>10} {:>14}  sensors",
+        "rule", "lin. µm", "median red.", "worst run", "qmean RMS' µm"
+    )?;
+    for (i, (p, v)) in sel.proposals.iter().zip(&rep.validation).enumerate() {
+        writeln!(
+            out,
+            "{} {:<30} {:>9.3} {:>11.1}% {:>9.1}% {:>14.3}  {}",
+            if i == rep.chosen { "*" } else { " " },
+            p.rule.name(),
+            p.score_um,
+            100.0 * v.median_reduction,
+            100.0 * v.worst_reduction,
+            v.qmean_rms_after_um,
+            p.sensors[sel.reference.len()..].join(",")
+        )?;
+    }
+    let chosen = &sel.proposals[rep.chosen];
+    writeln!(
+        out,
+        "chosen: {} (*), ranked by forward selection on the linear score within the set:",
+        chosen.rule.name()
+    )?;
+    writeln!(
+        out,
+        "{:>4}  {:<22} {:>9} {:>8} {:>7}  {:<28} {:>7}",
         "rank", "location", "score_um", "gain_um", "max|r|", "strongest error channel", "cluster"
     )?;
     let ev = |name: &str| sel.candidates.iter().find(|c| c.name == name);
@@ -591,27 +619,35 @@ pub fn write_report(
                 "-",
                 c.max_abs_corr,
                 c.best_channel,
-                c.cluster
+                "-"
             )?;
         }
     }
-    for (i, s) in sel.steps.iter().enumerate() {
+    for (i, s) in chosen.ranking.iter().enumerate() {
         let c = ev(&s.name);
         writeln!(
             out,
-            "{:>4}  {:<22} {:>9.3} {:>8.3} {:>7.3}  {:<28} {:>7}  {}",
+            "{:>4}  {:<22} {:>9.3} {:>8.3} {:>7.3}  {:<28} {:>7}",
             i + 1,
             s.name,
             s.score_um,
             s.gain_um,
             c.map_or(f64::NAN, |c| c.max_abs_corr),
             c.map_or("", |c| c.best_channel.as_str()),
-            c.map_or(0, |c| c.cluster),
-            s.phase.name()
+            s.cluster.map_or("-".to_string(), |k| (k + 1).to_string()),
         )?;
     }
+    if !chosen.clusters.is_empty() {
+        let cl: Vec<String> = chosen
+            .clusters
+            .iter()
+            .enumerate()
+            .map(|(k, c)| format!("{}: {{{}}}", k + 1, c.join(", ")))
+            .collect();
+        writeln!(out, "clusters: {}", cl.join(" "))?;
+    }
     let mut groups: Vec<(String, usize)> = Vec::new();
-    for n in sel.sensor_names() {
+    for n in chosen.sensors.clone() {
         let g = group_of(&n).to_string();
         match groups.iter_mut().find(|(k, _)| *k == g) {
             Some(e) => e.1 += 1,
@@ -640,7 +676,7 @@ pub fn write_report(
     }
     writeln!(
         out,
-        "redundant clusters (|r| ≥ {}): {}",
+        "near-copies (|r| ≥ {}): {}",
         cfg.selection.redundancy_corr,
         if multi.is_empty() {
             "none".to_string()
@@ -701,6 +737,15 @@ pub fn report_json(rep: &PlacementReport) -> Result<String, serde_json::Error> {
             "name": c.name, "cluster": c.cluster, "max_abs_corr": c.max_abs_corr,
             "best_channel": c.best_channel, "alone_score_um": c.alone_score_um,
         })).collect::<Vec<_>>(),
+        "proposals": sel.proposals.iter().zip(&rep.validation).map(|(p, v)| serde_json::json!({
+            "rule": p.rule.name(), "sensors": p.sensors, "linear_score_um": p.score_um,
+            "clusters": p.clusters,
+            "ranking": p.ranking.iter().map(|r| serde_json::json!({
+                "name": r.name, "cluster": r.cluster, "score_um": r.score_um, "gain_um": r.gain_um,
+            })).collect::<Vec<_>>(),
+            "validation": v,
+        })).collect::<Vec<_>>(),
+        "chosen": sel.proposals[rep.chosen].rule.name(),
         "comparison": rep.comparison,
     });
     serde_json::to_string_pretty(&v)
