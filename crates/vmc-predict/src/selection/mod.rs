@@ -210,7 +210,7 @@ pub struct Selection {
 }
 
 impl Selection {
-    /// Reference sensors followed by the chosen ones.
+    /// Reference sensors followed by those of the linear forward selection ([`Selection::steps`]).
     pub fn sensor_names(&self) -> Vec<String> {
         self.reference
             .iter()
