@@ -213,7 +213,7 @@ pub fn report_json(rep: &PlacementReport) -> Result<String, serde_json::Error> {
         "reference": sel.reference,
         "reference_score_um": sel.reference_score_um,
         "all_score_um": sel.all_score_um,
-        "selected": sel.steps.iter().map(|s| serde_json::json!({
+        "linear_forward": sel.steps.iter().map(|s| serde_json::json!({
             "name": s.name, "score_um": s.score_um, "gain_um": s.gain_um, "phase": s.phase.name(),
         })).collect::<Vec<_>>(),
         "candidates": sel.candidates.iter().map(|c| serde_json::json!({
