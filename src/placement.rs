@@ -7,11 +7,18 @@
 //!    first non-ambient sensor) — never the node temperatures themselves.
 //! 2. **Selection data**: the virtual calibration campaign (laser sweeps, squareness, 5-probe
 //!    spindle test; [`crate::campaign::calibrate`]) over *varied* scenarios: the typical
-//!    calibration cycles (constant and progressive duty, axis-heavy, slow ambient drift) plus
-//!    selection-only cycles with random duty and ambient steps, drawn from their own seed stream.
-//!    None of the held-out evaluation states is among them.
-//! 3. **Procedure**: correlation clustering + greedy forward selection on the leave-one-cycle-out
-//!    error of a linear model ([`crate::predict::selection`], where the procedure is stated).
+//!    calibration cycles (constant and progressive duty, axis-heavy, slow ambient drift, ambient
+//!    steps) plus four selection-only cycles ([`validation_cycles`]: random duty, ambient steps,
+//!    a sinusoidal ambient swing, a restart), drawn from their own seed stream. None of the
+//!    held-out evaluation states is among them.
+//! 3. **Proposals**: correlation clustering into K clusters, one sensor per cluster by relevance
+//!    or by greedy selection on a linear model's leave-one-cycle-out error, and the linear
+//!    forward selection ([`crate::predict::selection`], where the rules are stated).
+//! 4. **Validation**: each proposal trains the hybrid predictor on the typical cycles of the
+//!    selection campaign and compensates every diagonal at the selection-validation states
+//!    ([`validation_states`]: the selection-only cycles after 2, 4 and 6 h, and a cold machine;
+//!    the selection's machine seed). The proposal with the lowest quadratic mean over runs of
+//!    RMS |E| after compensation is chosen. Only selection scenarios are used to choose.
 //!
 //! The comparison then calibrates the hybrid predictor on the typical cycles with each sensor
 //! set — the selected K, the study's default locations, K random locations (several seeded
@@ -24,7 +31,7 @@ use rand::SeedableRng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::{self, CampaignConfig, ThermalCycle};
+use crate::campaign::{self, CampaignConfig, EvalState, ThermalCycle};
 use crate::evaluation::{self, EvalError, RunReport};
 use crate::machine::{MachineError, MachineSpec};
 use crate::predict::dataset::Dataset;
@@ -33,6 +40,9 @@ use crate::predict::selection::{self, Selection, SelectionConfig, SelectionError
 use crate::sensors::SensorSpec;
 use crate::thermal::{AmbientProfile, AMBIENT_NODE};
 use crate::twin::sub_seed;
+
+mod report;
+pub use report::{report_json, write_report};
 
 /// Settings of the placement study.
 #[derive(Debug, Clone)]
@@ -137,61 +147,119 @@ pub fn default_locations(spec: &MachineSpec) -> Vec<String> {
     v
 }
 
-/// Scenarios of the selection campaign: the typical calibration cycles plus selection-only
-/// cycles (random duty, ambient steps) drawn from `seed`'s own stream (not the evaluation's).
+/// Scenarios of the selection campaign: the typical calibration cycles (what the predictor is
+/// trained on) followed by the selection-validation cycles of [`validation_cycles`].
 pub fn selection_cycles(seed: u64) -> Vec<ThermalCycle> {
     let mut v = ThermalCycle::calibration_set();
-    let mut state = sub_seed(seed, 9001);
+    v.extend(validation_cycles(seed, VALIDATION_STREAM));
+    v
+}
+
+/// Atypical cycles the selection validates sensor sets on, drawn from stream `stream` of
+/// `seed` (the selection uses stream 9001; never the evaluation's stream): random duty steps,
+/// ambient steps, a sinusoidal ambient swing and a restart after a pause — the kinds of
+/// variation the machine meets in service, with random speeds, durations, amplitudes and phases.
+pub fn validation_cycles(seed: u64, stream: u64) -> Vec<ThermalCycle> {
+    let mut state = sub_seed(seed, stream);
     let mut next = || {
         state = sub_seed(state, 1);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    let phases = (0..8)
+    let phase = |hours: f64, rpm: f64, duty: f64| campaign::Phase {
+        duration_s: hours * 3600.0,
+        spindle_rpm: rpm,
+        axis_speed_mm_per_min: [5000.0 * duty, 4000.0 * duty, 2500.0 * duty],
+    };
+    let rpm = |u: f64| 1000.0 + (u * 9.0).floor() * 1000.0;
+    let mut v = Vec::new();
+    // Random duty: 8 steps of 30 min, then 3 h of cooling.
+    let mut phases: Vec<campaign::Phase> = (0..8)
         .map(|_| {
-            let rpm = 1000.0 + (next() * 9.0).floor() * 1000.0;
-            let duty = next();
-            campaign::Phase {
-                duration_s: 1800.0,
-                spindle_rpm: rpm,
-                axis_speed_mm_per_min: [5000.0 * duty, 4000.0 * duty, 2500.0 * duty],
-            }
+            let r = rpm(next());
+            phase(0.5, r, next())
         })
-        .chain(std::iter::once(campaign::Phase {
-            duration_s: 3.0 * 3600.0,
-            spindle_rpm: 0.0,
-            axis_speed_mm_per_min: [0.0; 3],
-        }))
         .collect();
+    phases.push(phase(3.0, 0.0, 0.0));
     v.push(ThermalCycle {
         name: "sel_random_duty".into(),
         ambient: AmbientProfile::Constant { temp_degc: 20.0 },
         phases,
     });
+    // Ambient steps (air conditioning set points) over a heating and a cooling half.
+    let up = 1.0 + 1.5 * next();
+    let down = 1.0 + 2.0 * next();
+    let r = rpm(next());
+    let d = 0.3 + 0.7 * next();
     v.push(ThermalCycle {
         name: "sel_ambient_steps".into(),
         ambient: AmbientProfile::Table {
             points: vec![
                 [0.0, 20.0],
                 [2.0 * 3600.0, 20.0],
-                [2.5 * 3600.0, 22.0],
-                [5.0 * 3600.0, 22.0],
-                [5.5 * 3600.0, 19.0],
-                [8.0 * 3600.0, 19.0],
+                [2.5 * 3600.0, 20.0 + up],
+                [5.0 * 3600.0, 20.0 + up],
+                [5.5 * 3600.0, 20.0 - down],
+                [8.0 * 3600.0, 20.0 - down],
             ],
         },
+        phases: vec![phase(4.0, r, d), phase(4.0, 0.0, 0.0)],
+    });
+    // Sinusoidal ambient swing (day/night or a door), random amplitude, period and phase.
+    let amplitude_degc = 1.0 + 1.5 * next();
+    let period_s = (6.0 + 8.0 * next()) * 3600.0;
+    let phase_rad = std::f64::consts::TAU * next();
+    let r = rpm(next());
+    let d = 0.3 + 0.7 * next();
+    let hours_on = 3.0 + 2.0 * next();
+    v.push(ThermalCycle {
+        name: "sel_ambient_swing".into(),
+        ambient: AmbientProfile::Sinusoid {
+            mean_degc: 19.5 + next(),
+            amplitude_degc,
+            period_s,
+            phase_rad,
+        },
+        phases: vec![phase(hours_on, r, d), phase(8.0 - hours_on, 0.0, 0.0)],
+    });
+    // Restart: heat, pause while still warm, restart at another speed, cool.
+    let (r1, d1, h1) = (rpm(next()), 0.3 + 0.7 * next(), 1.5 + next());
+    let h2 = 1.0 + next();
+    let (r2, d2, h3) = (rpm(next()), 0.3 + 0.7 * next(), 1.5 + next());
+    v.push(ThermalCycle {
+        name: "sel_restart".into(),
+        ambient: AmbientProfile::Constant { temp_degc: 20.0 },
         phases: vec![
-            campaign::Phase {
-                duration_s: 4.0 * 3600.0,
-                spindle_rpm: 5000.0,
-                axis_speed_mm_per_min: [3000.0, 2000.0, 1000.0],
-            },
-            campaign::Phase {
-                duration_s: 4.0 * 3600.0,
-                spindle_rpm: 0.0,
-                axis_speed_mm_per_min: [0.0; 3],
-            },
+            phase(h1, r1, d1),
+            phase(h2, 0.0, 0.0),
+            phase(h3, r2, d2),
+            phase(2.0, 0.0, 0.0),
         ],
     });
+    v
+}
+
+/// Stream of the selection-validation cycles (never the evaluation's).
+const VALIDATION_STREAM: u64 = 9001;
+
+/// The states at which the selection validates each proposed set: a cold machine, and each
+/// selection-validation cycle ([`validation_cycles`] of the selection seed) after 2, 4 and 6 h.
+/// None is a held-out evaluation state.
+pub fn validation_states(seed: u64) -> Vec<EvalState> {
+    let cycles = validation_cycles(seed, VALIDATION_STREAM);
+    let mut v = vec![EvalState {
+        name: "cold".into(),
+        cycle: cycles[0].clone(),
+        at_s: 0.0,
+    }];
+    for c in cycles {
+        for h in [2.0, 4.0, 6.0] {
+            v.push(EvalState {
+                name: format!("{}@{h}h", c.name),
+                cycle: c.clone(),
+                at_s: h * 3600.0,
+            });
+        }
+    }
     v
 }
 
@@ -212,6 +280,9 @@ pub struct SetResult {
     pub max_residual_um: f64,
     /// Mean over runs of RMS|E| after compensation, µm.
     pub mean_rms_after_um: f64,
+    /// Quadratic mean over runs of RMS|E| after compensation, µm: the selection's validation
+    /// score (a bad run weighs more than in the mean).
+    pub qmean_rms_after_um: f64,
 }
 
 /// The whole study.
@@ -221,6 +292,11 @@ pub struct PlacementReport {
     pub scenarios: Vec<String>,
     /// The selection with its evidence.
     pub selection: Selection,
+    /// Validation of each proposal ([`Selection::proposals`], same order) on the
+    /// selection-validation states ([`validation_states`]).
+    pub validation: Vec<SetResult>,
+    /// Index of the chosen proposal: the lowest validation score.
+    pub chosen: usize,
     /// The sensor specs of the selected set (reference first), ready for a machine file.
     pub selected_sensors: Vec<SensorSpec>,
     /// The comparison (empty without compare seeds).
@@ -253,7 +329,43 @@ pub fn study_among(
     let data = campaign::calibrate(&cand_spec, &scenarios, &CampaignConfig::new(cfg.seed))
         .map_err(EvalError::from)?;
     let selection = selection::select_sensors(&data, &cfg.selection)?;
-    let names = selection.sensor_names();
+    let typical = typical_part(&data);
+    let plans = evaluation::diagonal_plans(&cand_spec)?;
+    let states = validation_states(cfg.seed);
+    let mut validation: Vec<SetResult> = Vec::new();
+    for p in &selection.proposals {
+        let mut key = p.sensors.clone();
+        key.sort();
+        let earlier = validation.iter().find(|v| {
+            let mut k = v.sensors.clone();
+            k.sort();
+            k == key
+        });
+        let result = match earlier {
+            Some(v) => SetResult {
+                label: p.rule.name().into(),
+                sensors: p.sensors.clone(),
+                ..v.clone()
+            },
+            None => {
+                let runs = evaluate_set(
+                    &cand_spec,
+                    &candidates,
+                    &p.sensors,
+                    cfg.seed,
+                    &typical,
+                    &states,
+                    &plans,
+                    &cfg.settings,
+                    p.rule.name(),
+                )?;
+                summarise(p.rule.name(), &p.sensors, &runs)
+            }
+        };
+        validation.push(result);
+    }
+    let chosen = choose(&validation);
+    let names = selection.proposals[chosen].sensors.clone();
     let selected_sensors: Vec<SensorSpec> = names
         .iter()
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
@@ -289,14 +401,67 @@ pub fn study_among(
     let comparison = if cfg.compare_seeds.is_empty() {
         Vec::new()
     } else {
-        compare(&cand_spec, &candidates, &sets, cfg, &data)?
+        compare(&cand_spec, &candidates, &sets, cfg, &typical)?
     };
     Ok(PlacementReport {
         scenarios: scenarios.iter().map(|c| c.name.clone()).collect(),
         selection,
+        validation,
+        chosen,
         selected_sensors,
         comparison,
     })
+}
+
+/// The typical (calibration) cycles of a selection dataset: what the predictor trains on.
+fn typical_part(data: &Dataset) -> Dataset {
+    let cal: Vec<String> = ThermalCycle::calibration_set()
+        .into_iter()
+        .map(|c| c.name)
+        .collect();
+    let mut d = data.clone();
+    d.records.retain(|r| cal.contains(&r.cycle));
+    d
+}
+
+/// The proposal with the lowest validation score (the first of equals).
+fn choose(validation: &[SetResult]) -> usize {
+    validation
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.qmean_rms_after_um.total_cmp(&b.1.qmean_rms_after_um))
+        .map_or(0, |(i, _)| i)
+}
+
+/// Trains the hybrid predictor with the sensors `names` on `data` (machine `seed`) and runs
+/// every diagonal of `plans` at every state with compensation.
+#[allow(clippy::too_many_arguments)]
+fn evaluate_set(
+    cand_spec: &MachineSpec,
+    candidates: &[SensorSpec],
+    names: &[String],
+    seed: u64,
+    data: &Dataset,
+    states: &[EvalState],
+    plans: &[(&str, crate::motion::Plan)],
+    settings: &Settings,
+    label: &str,
+) -> Result<Vec<RunReport>, PlacementError> {
+    let sensors: Vec<SensorSpec> = names
+        .iter()
+        .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
+        .collect();
+    let set_spec = with_sensors(cand_spec, sensors)?;
+    let settings = Settings {
+        seed,
+        sensors: names.to_vec(),
+        ..settings.clone()
+    };
+    let (hybrid, _) =
+        predictor::train_hybrid(data, &set_spec.geometry(), &settings).map_err(EvalError::from)?;
+    Ok(evaluation::evaluate_predictor(
+        &set_spec, seed, label, &hybrid, states, plans,
+    )?)
 }
 
 /// Trains the hybrid predictor with each set on the typical cycles and evaluates it on every
@@ -306,21 +471,18 @@ fn compare(
     candidates: &[SensorSpec],
     sets: &[(String, Vec<String>)],
     cfg: &PlacementConfig,
-    selection_data: &Dataset,
+    selection_typical: &Dataset,
 ) -> Result<Vec<SetResult>, PlacementError> {
     let cal = ThermalCycle::calibration_set();
-    let cal_names: Vec<&str> = cal.iter().map(|c| c.name.as_str()).collect();
     let plans = evaluation::diagonal_plans(cand_spec)?;
     // One calibration dataset per seed, with every candidate logged; each set trains on its
-    // columns. The selection seed's typical cycles are the first cycles of the selection data.
+    // columns. The selection seed's typical cycles are part of the selection data.
     let datasets: Vec<Dataset> = cfg
         .compare_seeds
         .par_iter()
         .map(|&seed| {
             if seed == cfg.seed {
-                let mut d = selection_data.clone();
-                d.records.retain(|r| cal_names.contains(&r.cycle.as_str()));
-                Ok(d)
+                Ok(selection_typical.clone())
             } else {
                 campaign::calibrate(cand_spec, &cal, &CampaignConfig::new(seed))
                     .map_err(EvalError::from)
@@ -329,23 +491,19 @@ fn compare(
         .collect::<Result<_, EvalError>>()?;
     let mut out = Vec::new();
     for (label, names) in sets {
-        let sensors: Vec<SensorSpec> = names
-            .iter()
-            .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
-            .collect();
-        let set_spec = with_sensors(cand_spec, sensors)?;
         let mut runs: Vec<RunReport> = Vec::new();
         for (seed, data) in cfg.compare_seeds.iter().zip(&datasets) {
-            let settings = Settings {
-                seed: *seed,
-                sensors: names.clone(),
-                ..cfg.settings.clone()
-            };
-            let (hybrid, _) = predictor::train_hybrid(data, &set_spec.geometry(), &settings)
-                .map_err(EvalError::from)?;
             let states = campaign::evaluation_states(*seed);
-            runs.extend(evaluation::evaluate_predictor(
-                &set_spec, *seed, label, &hybrid, &states, &plans,
+            runs.extend(evaluate_set(
+                cand_spec,
+                candidates,
+                names,
+                *seed,
+                data,
+                &states,
+                &plans,
+                &cfg.settings,
+                label,
             )?);
         }
         out.push(summarise(label, names, &runs));
@@ -367,192 +525,10 @@ fn summarise(label: &str, names: &[String], runs: &[RunReport]) -> SetResult {
         max_residual_um: runs.iter().map(|r| r.max_after_um).fold(0.0, f64::max),
         mean_rms_after_um: runs.iter().map(|r| r.rms_after_um).sum::<f64>()
             / runs.len().max(1) as f64,
+        qmean_rms_after_um: (runs.iter().map(|r| r.rms_after_um.powi(2)).sum::<f64>()
+            / runs.len().max(1) as f64)
+            .sqrt(),
     }
-}
-
-/// The structural group of a node, from its name (`spindle`, `headstock`, `column`, `x`, …):
-/// what the coverage line of the report counts.
-fn group_of(name: &str) -> &str {
-    name.split('_').next().unwrap_or(name)
-}
-
-/// Prints the study: candidates, ranking with evidence, clusters, comparison.
-///
-/// # Errors
-/// Write errors.
-pub fn write_report(
-    rep: &PlacementReport,
-    spec: &MachineSpec,
-    cfg: &PlacementConfig,
-    out: &mut dyn std::io::Write,
-) -> std::io::Result<()> {
-    let sel = &rep.selection;
-    let t = spec.sensors.iter().find(|s| s.node != AMBIENT_NODE);
-    writeln!(
-        out,
-        "vmc-twin select-sensors on {}: {} candidate locations (thermal nodes + ambient), read as thermistors{}",
-        spec.machine.name,
-        sel.candidates.len(),
-        t.map(|t| format!(
-            " (σ {} °C, τ {} s, {} °C steps)",
-            t.noise_sigma_degc, t.time_constant_s, t.resolution_degc
-        ))
-        .unwrap_or_default()
-    )?;
-    writeln!(
-        out,
-        "selection campaign (machine seed {}): {}; {} rows, {} thermal error channels (laser sweeps, squareness, spindle drifts; rotations × {} mm; {} channels without predictable thermal signal dropped)",
-        cfg.seed,
-        rep.scenarios.join(", "),
-        sel.n_rows,
-        sel.n_channels,
-        cfg.selection.arm_mm,
-        sel.n_channels_dropped
-    )?;
-    writeln!(
-        out,
-        "procedure: greedy forward selection from the cold reference (ambient) on the leave-one-cycle-out RMS error of a linear model (information phase) until no candidate gains {:.0} % of the reference score, then, among candidates with |r| ≥ {} to a thermal error, the one least correlated with the chosen ones (coverage phase); a candidate with |r| ≥ {} to a chosen one is redundant",
-        100.0 * cfg.selection.min_gain_fraction,
-        cfg.selection.min_relevance,
-        cfg.selection.redundancy_corr
-    )?;
-    writeln!(
-        out,
-        "score, µm: reference only {:.3}, all {} candidates {:.3}",
-        sel.reference_score_um,
-        sel.candidates.len(),
-        sel.all_score_um
-    )?;
-    writeln!(
-        out,
-        "{:>4}  {:<22} {:>9} {:>8} {:>7}  {:<28} {:>7}  phase",
-        "rank", "location", "score_um", "gain_um", "max|r|", "strongest error channel", "cluster"
-    )?;
-    let ev = |name: &str| sel.candidates.iter().find(|c| c.name == name);
-    for (i, r) in sel.reference.iter().enumerate() {
-        if let Some(c) = ev(r) {
-            writeln!(
-                out,
-                "{:>4}  {:<22} {:>9.3} {:>8} {:>7.3}  {:<28} {:>7}",
-                format!("ref{}", i),
-                c.name,
-                sel.reference_score_um,
-                "-",
-                c.max_abs_corr,
-                c.best_channel,
-                c.cluster
-            )?;
-        }
-    }
-    for (i, s) in sel.steps.iter().enumerate() {
-        let c = ev(&s.name);
-        writeln!(
-            out,
-            "{:>4}  {:<22} {:>9.3} {:>8.3} {:>7.3}  {:<28} {:>7}  {}",
-            i + 1,
-            s.name,
-            s.score_um,
-            s.gain_um,
-            c.map_or(f64::NAN, |c| c.max_abs_corr),
-            c.map_or("", |c| c.best_channel.as_str()),
-            c.map_or(0, |c| c.cluster),
-            s.phase.name()
-        )?;
-    }
-    let mut groups: Vec<(String, usize)> = Vec::new();
-    for n in sel.sensor_names() {
-        let g = group_of(&n).to_string();
-        match groups.iter_mut().find(|(k, _)| *k == g) {
-            Some(e) => e.1 += 1,
-            None => groups.push((g, 1)),
-        }
-    }
-    let cov: Vec<String> = groups.iter().map(|(g, n)| format!("{g} ×{n}")).collect();
-    writeln!(out, "coverage by structure: {}", cov.join(", "))?;
-    let n_clusters = sel
-        .candidates
-        .iter()
-        .map(|c| c.cluster)
-        .max()
-        .map_or(0, |m| m + 1);
-    let mut multi = Vec::new();
-    for k in 0..n_clusters {
-        let members: Vec<&str> = sel
-            .candidates
-            .iter()
-            .filter(|c| c.cluster == k)
-            .map(|c| c.name.as_str())
-            .collect();
-        if members.len() > 1 {
-            multi.push(format!("{{{}}}", members.join(", ")));
-        }
-    }
-    writeln!(
-        out,
-        "redundant clusters (|r| ≥ {}): {}",
-        cfg.selection.redundancy_corr,
-        if multi.is_empty() {
-            "none".to_string()
-        } else {
-            multi.join(" ")
-        }
-    )?;
-    if !rep.comparison.is_empty() {
-        let seeds: Vec<String> = cfg.compare_seeds.iter().map(u64::to_string).collect();
-        writeln!(
-            out,
-            "compensation on held-out runs (hybrid predictor trained on the typical cycles with each set; every diagonal × held-out state; machine seeds {}):",
-            seeds.join(",")
-        )?;
-        writeln!(
-            out,
-            "  {:<16} {:>7} {:>5} {:>12} {:>10} {:>13} {:>15}",
-            "sensor set",
-            "sensors",
-            "runs",
-            "median red.",
-            "worst run",
-            "max resid um",
-            "mean RMS' um"
-        )?;
-        for r in &rep.comparison {
-            writeln!(
-                out,
-                "  {:<16} {:>7} {:>5} {:>11.1}% {:>9.1}% {:>13.2} {:>15.2}",
-                r.label,
-                r.sensors.len(),
-                r.runs,
-                100.0 * r.median_reduction,
-                100.0 * r.worst_reduction,
-                r.max_residual_um,
-                r.mean_rms_after_um
-            )?;
-        }
-    }
-    Ok(())
-}
-
-/// The study as JSON (selection steps, evidence, comparison).
-///
-/// # Errors
-/// Serialisation errors.
-pub fn report_json(rep: &PlacementReport) -> Result<String, serde_json::Error> {
-    let sel = &rep.selection;
-    let v = serde_json::json!({
-        "scenarios": rep.scenarios,
-        "reference": sel.reference,
-        "reference_score_um": sel.reference_score_um,
-        "all_score_um": sel.all_score_um,
-        "selected": sel.steps.iter().map(|s| serde_json::json!({
-            "name": s.name, "score_um": s.score_um, "gain_um": s.gain_um, "phase": s.phase.name(),
-        })).collect::<Vec<_>>(),
-        "candidates": sel.candidates.iter().map(|c| serde_json::json!({
-            "name": c.name, "cluster": c.cluster, "max_abs_corr": c.max_abs_corr,
-            "best_channel": c.best_channel, "alone_score_um": c.alone_score_um,
-        })).collect::<Vec<_>>(),
-        "comparison": rep.comparison,
-    });
-    serde_json::to_string_pretty(&v)
 }
 
 /// A sensor set file: `[[sensors]]` entries, as in a machine file.
@@ -619,6 +595,33 @@ mod tests {
         for s in campaign::evaluation_states(1) {
             assert!(!sel.contains(&s.cycle.name), "{} is held out", s.cycle.name);
         }
+    }
+
+    #[test]
+    fn validation_states_are_selection_only_and_the_lowest_score_is_chosen() {
+        let held_out: Vec<String> = campaign::evaluation_states(1)
+            .into_iter()
+            .map(|s| s.cycle.name)
+            .collect();
+        let states = validation_states(1);
+        assert_eq!(states.len(), 13);
+        for s in &states {
+            assert!(s.cycle.name.starts_with("sel_"), "{}", s.name);
+            assert!(!held_out.contains(&s.cycle.name));
+        }
+        // Another seed draws other speeds, amplitudes and durations.
+        assert_ne!(validation_cycles(1, 9001), validation_cycles(2, 9001));
+        let r = |q: f64| SetResult {
+            label: String::new(),
+            sensors: Vec::new(),
+            runs: 1,
+            median_reduction: 0.9,
+            worst_reduction: 0.9,
+            max_residual_um: 1.0,
+            mean_rms_after_um: q,
+            qmean_rms_after_um: q,
+        };
+        assert_eq!(choose(&[r(1.2), r(0.8), r(0.9), r(0.8)]), 1);
     }
 
     #[test]

@@ -36,13 +36,37 @@ fn select_sensors_ranks_candidates_and_writes_a_set_that_run_accepts() {
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     assert!(out.contains("40 candidate locations"), "{out}");
-    // Reference first, then 4 ranked locations with their evidence.
-    let ranked: Vec<&str> = out
+    // Five proposals, validated on selection-only states; exactly one is chosen.
+    let head = out.find("proposals (").expect("proposals table");
+    let proposals: Vec<&str> = out[head..]
         .lines()
+        .skip(2)
+        .take_while(|l| !l.starts_with("chosen:"))
+        .collect();
+    assert_eq!(proposals.len(), 5, "{out}");
+    assert_eq!(
+        proposals.iter().filter(|l| l.starts_with('*')).count(),
+        1,
+        "{out}"
+    );
+    // Reference first, then 4 ranked locations with their evidence.
+    let start = out.find("chosen:").expect("chosen line");
+    let ranked: Vec<&str> = out[start..]
+        .lines()
+        .take_while(|l| !l.starts_with("clusters:"))
         .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
-        .filter(|l| l.contains("information") || l.contains("coverage"))
         .collect();
     assert_eq!(ranked.len(), 4, "{out}");
+    let chosen_rule = out[start..].lines().next().unwrap();
+    if chosen_rule.contains("clusters(") {
+        // One sensor per cluster: the cluster column holds 1..=4, each once.
+        let mut cl: Vec<&str> = ranked
+            .iter()
+            .map(|l| l.split_whitespace().last().unwrap())
+            .collect();
+        cl.sort();
+        assert_eq!(cl, ["1", "2", "3", "4"], "{out}");
+    }
     let set = std::fs::read_to_string(dir.join("s.toml")).unwrap();
     assert_eq!(set.matches("[[sensors]]").count(), 5, "{set}");
     assert!(set.contains("node = \"ambient\""), "{set}");

@@ -17,15 +17,24 @@
 //!    dense time series across every cycle). A candidate whose |r| with an already chosen sensor
 //!    is ≥ [`SelectionConfig::redundancy_corr`] is not eligible: it would add a copy, not
 //!    information. Candidates are also reported in clusters of mutually redundant locations.
-//! 4. **Greedy forward selection**: start from the reference sensors (the cold reference,
+//! 4. **Linear forward selection**: start from the reference sensors (the cold reference,
 //!    ambient), then repeatedly add the eligible candidate that lowers the score most
 //!    (*information phase*) while it lowers it by at least
 //!    [`SelectionConfig::min_gain_fraction`] of the reference score; after that, add the
 //!    candidate least correlated with every chosen one among those strongly linked to a thermal
-//!    error (|r| ≥ [`SelectionConfig::min_relevance`]) (*coverage phase*: gradients the linear
-//!    score cannot rank), until K are chosen. The ranking is the order of addition, with the score after
-//!    each step and each candidate's strongest correlation with a thermal error channel as
-//!    evidence.
+//!    error (|r| ≥ [`SelectionConfig::min_relevance`]) (*coverage phase*), until K are chosen.
+//! 5. **Proposals** ([`Proposal`], `proposals`): the candidates besides the reference are
+//!    grouped into K clusters of similar thermal behaviour — average-linkage agglomerative
+//!    clustering with distance `1 − |r|`, on the readings or on their rise above the reference
+//!    ([`CorrBasis`]) — so that the set covers every structure (spindle, headstock, column,
+//!    X, Y, Z drives, bed…) as the study did; one sensor per cluster is taken by relevance
+//!    (strongest |r| with a thermal error channel) or by greedy forward selection on the score
+//!    (at most one per cluster). With the linear forward selection of step 4 that makes five
+//!    proposals ([`Rule`]). Each is ranked by forward selection on the score within the set:
+//!    the score after each sensor and its gain are the evidence. Which proposal to keep is not
+//!    decided here: the linear score cannot see what the non-linear predictor gains from a
+//!    location under conditions the calibration cycles did not excite, so the caller validates
+//!    each proposal with the predictor itself (`vmc-twin`'s `placement` module).
 //!
 //! Channels: only those that all candidates together predict with a cross-validated R² ≥
 //! [`SelectionConfig::min_channel_r2`] count as thermal errors; the rest is instrument noise.
@@ -37,6 +46,9 @@ use nalgebra::{DMatrix, DVector};
 use thiserror::Error;
 
 use crate::dataset::{Dataset, Instrument};
+
+mod proposals;
+pub use proposals::{CorrBasis, Proposal, RankedSensor, Rule};
 
 /// Settings of the selection.
 #[derive(Debug, Clone, PartialEq)]
@@ -193,10 +205,12 @@ pub struct Selection {
     pub n_channels_dropped: usize,
     /// Number of rows used (blocks + spindle records).
     pub n_rows: usize,
+    /// The candidate sets proposed by each rule ([`Rule`]), ranked with evidence.
+    pub proposals: Vec<Proposal>,
 }
 
 impl Selection {
-    /// Reference sensors followed by the chosen ones.
+    /// Reference sensors followed by those of the linear forward selection ([`Selection::steps`]).
     pub fn sensor_names(&self) -> Vec<String> {
         self.reference
             .iter()
@@ -680,7 +694,21 @@ pub fn select_sensors(ds: &Dataset, cfg: &SelectionConfig) -> Result<Selection, 
         });
         score = s;
     }
+    let reference: Vec<usize> = chosen[..cfg.reference.len()].to_vec();
+    let pool: Vec<usize> = (0..names.len())
+        .filter(|i| !reference.contains(i))
+        .collect();
+    let relevance: Vec<f64> = candidates.iter().map(|c| c.max_abs_corr).collect();
+    let proposals = proposals::build(
+        &data,
+        &reference,
+        &pool,
+        &relevance,
+        &chosen[reference.len()..],
+        cfg.count,
+    );
     Ok(Selection {
+        proposals,
         reference: cfg.reference.clone(),
         reference_score_um,
         steps,
@@ -693,115 +721,4 @@ pub fn select_sensors(ds: &Dataset, cfg: &SelectionConfig) -> Result<Selection, 
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::dataset::Record;
-
-    /// Two cycles; the error follows sensor `b` exactly, `c` is a near-copy of `b`, `a` is noise.
-    fn toy() -> Dataset {
-        let mut records = Vec::new();
-        for (cyc, amp) in [("c1", 1.0), ("c2", 2.0), ("c3", 1.5)] {
-            for i in 0..40 {
-                let t = i as f64 * 60.0;
-                let b = 20.0 + amp * (1.0 - (-t / 900.0).exp());
-                let a = 20.0 + 0.3 * ((i * 7 % 11) as f64 / 11.0);
-                let c = b + 1e-4 * i as f64;
-                records.push(Record {
-                    cycle: cyc.into(),
-                    time_s: t,
-                    instrument: Instrument::Spindle,
-                    pos_mm: [0.0; 3],
-                    values: [0.0, 0.0, 10.0 * (b - 20.0), f64::NAN, f64::NAN, f64::NAN],
-                    temps_degc: vec![20.0, a, b, c],
-                    dir: 1,
-                });
-            }
-        }
-        Dataset {
-            sensor_names: vec!["ambient".into(), "a".into(), "b".into(), "c".into()],
-            records,
-        }
-    }
-
-    #[test]
-    fn the_sensor_that_drives_the_error_is_chosen_first() {
-        let cfg = SelectionConfig {
-            count: 1,
-            ..Default::default()
-        };
-        let s = select_sensors(&toy(), &cfg).unwrap();
-        assert_eq!(s.steps[0].name, "b");
-        // The drift is linear in b: held-out error falls to the ridge bias, under 1 nm.
-        assert!(s.steps[0].score_um < 1e-3, "{}", s.steps[0].score_um);
-        assert!(s.reference_score_um > 1.0);
-    }
-
-    #[test]
-    fn a_near_copy_of_a_chosen_sensor_is_not_eligible() {
-        let cfg = SelectionConfig {
-            count: 2,
-            ..Default::default()
-        };
-        let s = select_sensors(&toy(), &cfg).unwrap();
-        let names: Vec<_> = s.steps.iter().map(|x| x.name.as_str()).collect();
-        assert_eq!(names[1], "a", "c is a copy of b: {names:?}");
-        // b explains everything, so a is chosen for coverage, not information.
-        assert_eq!(s.steps[0].phase, Phase::Information);
-        assert_eq!(s.steps[1].phase, Phase::Coverage);
-        let b = s.candidates.iter().find(|c| c.name == "b").unwrap();
-        let c = s.candidates.iter().find(|c| c.name == "c").unwrap();
-        assert_eq!(b.cluster, c.cluster);
-        assert!(b.max_abs_corr > 0.999);
-    }
-
-    #[test]
-    fn a_channel_of_pure_noise_is_not_a_thermal_error() {
-        let mut ds = toy();
-        // rx: an angle that only carries instrument noise.
-        for (i, r) in ds.records.iter_mut().enumerate() {
-            r.values[3] = ((i * 37 % 17) as f64 - 8.0) * 0.05;
-        }
-        let cfg = SelectionConfig {
-            count: 1,
-            ..Default::default()
-        };
-        let s = select_sensors(&ds, &cfg).unwrap();
-        assert_eq!(s.n_channels, 1, "only dz drifts");
-        assert_eq!(s.n_channels_dropped, 3, "dx, dy (constant) and rx (noise)");
-        assert_eq!(s.steps[0].name, "b");
-    }
-
-    #[test]
-    fn asking_for_more_than_the_candidates_is_an_error() {
-        let cfg = SelectionConfig {
-            count: 3,
-            ..Default::default()
-        };
-        assert!(matches!(
-            select_sensors(&toy(), &cfg),
-            Err(SelectionError::NotEnoughCandidates { .. })
-        ));
-    }
-
-    #[test]
-    fn a_single_cycle_cannot_be_cross_validated() {
-        let mut ds = toy();
-        ds.records.retain(|r| r.cycle == "c1");
-        assert_eq!(
-            select_sensors(&ds, &SelectionConfig::default()).unwrap_err(),
-            SelectionError::TooFewCycles(1)
-        );
-    }
-
-    #[test]
-    fn an_unknown_reference_is_named() {
-        let cfg = SelectionConfig {
-            reference: vec!["Amb".into()],
-            ..Default::default()
-        };
-        assert_eq!(
-            select_sensors(&toy(), &cfg).unwrap_err(),
-            SelectionError::UnknownReference("Amb".into())
-        );
-    }
-}
+mod tests;
