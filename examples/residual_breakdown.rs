@@ -36,7 +36,7 @@ fn main() {
             &geom,
             &Settings {
                 seed,
-                ..Default::default()
+                ..vmc_twin::evaluation::predictor_settings(&spec)
             },
         )
         .unwrap();

@@ -55,7 +55,7 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
     )?;
     let settings = Settings {
         seed: 1,
-        ..Settings::default()
+        ..evaluation::predictor_settings(spec)
     };
     let (model, _) = predictor::train_hybrid(&data, &spec.geometry(), &settings)?;
     let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
@@ -177,8 +177,13 @@ pub fn campaign_with(
     seeds: &[u64],
 ) -> Result<(f64, usize), EvalError> {
     let t = Instant::now();
-    let (rep, _) =
-        evaluation::run_campaign_with_cycles(spec, seeds, &Settings::default(), cycles, &())?;
+    let (rep, _) = evaluation::run_campaign_with_cycles(
+        spec,
+        seeds,
+        &evaluation::predictor_settings(spec),
+        cycles,
+        &(),
+    )?;
     Ok((t.elapsed().as_secs_f64(), rep.runs.len()))
 }
 

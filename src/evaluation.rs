@@ -277,6 +277,42 @@ pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>
     Ok(out)
 }
 
+/// Time constant of the ambient history feature, s: the order of the column's and bed's thermal
+/// time constants (capacity / convection ≈ 7–9 h on the reference machine), the slow structure
+/// that follows the air and that the present readings see only at a few points.
+pub const AMBIENT_HISTORY_TAU_S: f64 = 8.0 * 3600.0;
+
+/// `settings` with the history feature of the machine's ambient sensors (those on the
+/// `ambient` node, which the operator knows measure the air): each network also sees the
+/// ambient reading minus its low-pass filter with [`AMBIENT_HISTORY_TAU_S`]. A machine without
+/// an ambient sensor gets no history feature. See `vmc_predict::history` and the README
+/// ("Tried for the 2 µm target") for how this was chosen and what it gives.
+pub fn with_ambient_history(settings: Settings, spec: &MachineSpec) -> Settings {
+    let ambient: Vec<String> = spec
+        .sensors
+        .iter()
+        .filter(|s| s.node == crate::thermal::AMBIENT_NODE)
+        .map(|s| s.name.clone())
+        .collect();
+    let in_model = |n: &String| settings.sensors.is_empty() || settings.sensors.contains(n);
+    let ambient: Vec<String> = ambient.into_iter().filter(in_model).collect();
+    Settings {
+        history_taus_s: if ambient.is_empty() {
+            Vec::new()
+        } else {
+            vec![AMBIENT_HISTORY_TAU_S]
+        },
+        history_sensors: ambient,
+        ..settings
+    }
+}
+
+/// The predictor settings used for a machine: the defaults with the ambient history feature
+/// ([`with_ambient_history`]).
+pub fn predictor_settings(spec: &MachineSpec) -> Settings {
+    with_ambient_history(Settings::default(), spec)
+}
+
 /// Calibration, training and evaluation for one machine seed.
 struct SeedResult {
     training: Vec<(u64, TrainSummary)>,

@@ -576,7 +576,7 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
         None => None,
     };
     let rrd = args.rrd.checked(args.force)?;
-    let settings = vmc_twin::predict::predictor::Settings::default();
+    let settings = evaluation::predictor_settings(&machine);
     let progress = Progress::new(0, "units");
     let (rep, models) =
         evaluation::run_campaign_with_progress(&machine, &args.seeds, &settings, &progress)?;
@@ -645,7 +645,7 @@ fn train(args: TrainArgs) -> Result<()> {
     let data = Dataset::from_csv(&text, &name)?;
     let settings = Settings {
         seed: args.seed,
-        ..Settings::default()
+        ..vmc_twin::evaluation::predictor_settings(&machine)
     };
     let geometry = machine.geometry();
     let (json, summary) = match args.kind.as_str() {

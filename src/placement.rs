@@ -452,11 +452,14 @@ fn evaluate_set(
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
         .collect();
     let set_spec = with_sensors(cand_spec, sensors)?;
-    let settings = Settings {
-        seed,
-        sensors: names.to_vec(),
-        ..settings.clone()
-    };
+    let settings = evaluation::with_ambient_history(
+        Settings {
+            seed,
+            sensors: names.to_vec(),
+            ..settings.clone()
+        },
+        &set_spec,
+    );
     let (hybrid, _) =
         predictor::train_hybrid(data, &set_spec.geometry(), &settings).map_err(EvalError::from)?;
     Ok(evaluation::evaluate_predictor(

@@ -23,7 +23,7 @@ fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
     .expect("campaign runs");
     let settings = Settings {
         seed,
-        ..Settings::default()
+        ..vmc_twin::evaluation::predictor_settings(spec)
     };
     predictor::train_hybrid(&data, &spec.geometry(), &settings)
         .expect("training succeeds")
@@ -86,9 +86,10 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
     }
     worst.sort_by(|a, b| a.0.total_cmp(&b.0));
     println!("worst runs: {:?}", &worst[..3]);
-    // Regression guard on the largest compensated error over all 147 runs: measured 2.46 µm
+    // Regression guard on the largest compensated error over all 147 runs: measured 2.03 µm
     // (README, "Compensation: the campaign"); the target of 2 µm is not reached yet, so
-    // this only stops the figure from sliding back towards the 7 µm of the first version.
+    // this only stops the figure from sliding back (2.31 µm without the ambient history
+    // feature, 7 µm in the first version).
     let (max_after, at) = runs
         .iter()
         .map(|r| {
@@ -101,8 +102,8 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
         .unwrap();
     println!("max residual |E| {max_after:.2} µm ({at})");
     assert!(
-        max_after <= 3.0,
-        "max residual |E| {max_after:.2} µm at {at} > 3 µm"
+        max_after <= 2.5,
+        "max residual |E| {max_after:.2} µm at {at} > 2.5 µm"
     );
 }
 

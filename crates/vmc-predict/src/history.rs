@@ -40,7 +40,11 @@ impl ReadingHistory {
     /// Filters with time constants `taus_s` over the readings `filtered` (indices < `n_sensors`,
     /// others ignored) of `n_sensors`.
     pub fn of_sensors(taus_s: &[f64], n_sensors: usize, filtered: &[usize]) -> Self {
-        let idx: Vec<usize> = filtered.iter().copied().filter(|&i| i < n_sensors).collect();
+        let idx: Vec<usize> = filtered
+            .iter()
+            .copied()
+            .filter(|&i| i < n_sensors)
+            .collect();
         Self {
             taus_s: taus_s.to_vec(),
             n: n_sensors,
