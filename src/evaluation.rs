@@ -155,9 +155,9 @@ pub fn run_report(
     let mut yhat = Vec::with_capacity(3 * points.len());
     for p in points {
         let q = p.compensated_command_mm?;
-        for k in 0..3 {
-            y.push(p.error_before_um[k]);
-            yhat.push((p.commanded_mm[k] - q[k]) * 1e3);
+        for ((e, c), qk) in p.error_before_um.iter().zip(&p.commanded_mm).zip(&q) {
+            y.push(*e);
+            yhat.push((c - qk) * 1e3);
         }
     }
     let m = Metrics::of(&y, &yhat).ok()?;

@@ -311,7 +311,8 @@ impl ErrorField {
         let mut travel_span_mm = [0.0; 3];
         for a in 0..3 {
             travel_span_mm[a] = travel_max_mm[a] - travel_min_mm[a];
-            if !(travel_span_mm[a] > 0.0) {
+            // Also refuses NaN spans.
+            if travel_span_mm[a].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 return Err(ErrorSpecError::Field {
                     field: format!("axes.travel_max_mm[{a}]"),
                     msg: "must be greater than travel_min_mm".into(),
@@ -348,8 +349,8 @@ impl ErrorField {
     pub fn elementary(&self, axis_pos_mm: [f64; 3], temps_degc: &[f64]) -> ElementaryErrors {
         let t = self.t_ref_degc;
         let mut e = ElementaryErrors::default();
-        for a in 0..3 {
-            e.axes[a] = self.axis_errors(a, axis_pos_mm[a], temps_degc);
+        for (a, &pos_mm) in axis_pos_mm.iter().enumerate() {
+            e.axes[a] = self.axis_errors(a, pos_mm, temps_degc);
         }
         e.squareness.xy_rad = self.squareness[0].eval(temps_degc, t);
         e.squareness.xz_rad = self.squareness[1].eval(temps_degc, t);
@@ -390,11 +391,11 @@ impl ApproachErrors {
 
     /// Records motion of each axis (sign of its velocity; 0 keeps the last direction).
     pub fn note_motion(&mut self, vel: [f64; 3]) {
-        for a in 0..3 {
-            if vel[a] > 0.0 {
-                self.last_dir[a] = 1.0;
-            } else if vel[a] < 0.0 {
-                self.last_dir[a] = -1.0;
+        for (dir, &v) in self.last_dir.iter_mut().zip(&vel) {
+            if v > 0.0 {
+                *dir = 1.0;
+            } else if v < 0.0 {
+                *dir = -1.0;
             }
         }
     }
