@@ -20,8 +20,9 @@
 //! a positive one, learned from bidirectional laser sweeps; version 3 added it — a version 2 file
 //! is still read, with zero reversal, i.e. the forward-approach model it was), and
 //! `history_taus_s` (time constants, s, of the history features of the networks' inputs, see
-//! `crate::history`; version 4 added it — older files read as empty: present readings only; an
-//! older build would ignore it, hence the new version). Of a
+//! `crate::history`) with `history_sensors` (indices into `sensors` of the filtered readings;
+//! absent = all) — version 4 added them; older files read as empty: present readings only; an
+//! older build would ignore them, hence the new version. Of a
 //! `volumetric`: `net` (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
 //! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
 //! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
