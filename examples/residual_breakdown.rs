@@ -12,7 +12,7 @@
 
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::predict::synthesis::first_order_error_mm;
 use vmc_twin::twin::{sub_seed, Twin};
 
@@ -31,7 +31,7 @@ fn main() {
             &CampaignConfig::new(seed),
         )
         .unwrap();
-        let (mut h, _) = predictor::train_hybrid(
+        let (h, _) = predictor::train_hybrid(
             &data,
             &geom,
             &Settings {
@@ -54,7 +54,18 @@ fn main() {
             let mut twin =
                 Twin::with_noise_seed(&spec, seed, sub_seed(seed, 9000 + si as u64)).unwrap();
             twin.set_ambient(state.cycle.ambient.clone()).unwrap();
-            campaign::drive(&mut twin, &state.cycle, 0.0, state.at_s, 1.0).unwrap();
+            // The predictor follows the readings through the thermal history (its history
+            // features), as the controller does in the campaign.
+            let mut hs = h.clone();
+            campaign::drive_with(
+                &mut twin,
+                &state.cycle,
+                0.0,
+                state.at_s,
+                1.0,
+                Some(&mut Follow(&mut hs)),
+            )
+            .unwrap();
             let mut worst = [[0.0f64; 3]; 6];
             // At the state and over the next 90 s with the spindle stopped (a diagonal test).
             for step in 0..4 {
@@ -65,12 +76,16 @@ fn main() {
                         axis_speed_mm_per_min: [0.0; 3],
                         coolant: false,
                     };
-                    twin.advance(30.0, &stopped).unwrap();
+                    for _ in 0..30 {
+                        twin.advance(1.0, &stopped).unwrap();
+                        let r = twin.sensor_readings();
+                        hs.observe_readings(r.time_s, &r.values_degc);
+                    }
                 }
                 let temps = twin.sensor_readings().values_degc;
                 for &q in &grid {
                     let t = twin.elementary_errors(q);
-                    let p = h.elementary_errors(q, &temps);
+                    let p = hs.elementary_errors(q, &temps);
                     let base = first_order_error_mm(&geom, q, &t);
                     let mut parts = Vec::new();
                     for part in 0..5 {
@@ -102,5 +117,22 @@ fn main() {
                 f(worst[5])
             );
         }
+    }
+}
+
+/// Passes the readings of a thermal history to the predictor (it compensates nothing).
+struct Follow<'a>(&'a mut predictor::HybridPredictor);
+
+impl vmc_twin::sim::Controller for Follow<'_> {
+    fn axis_command_mm(
+        &mut self,
+        p_mm: [f64; 3],
+        _: &vmc_twin::sensors::SensorReadings,
+    ) -> [f64; 3] {
+        p_mm
+    }
+
+    fn on_readings(&mut self, r: &vmc_twin::sensors::SensorReadings) {
+        self.0.observe_readings(r.time_s, &r.values_degc);
     }
 }
