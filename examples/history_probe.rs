@@ -1,4 +1,5 @@
-//! Diagnosis: validation RMSE of each hybrid network for several history-feature settings.
+//! Diagnosis: validation RMSE (calibration cycles only) of each hybrid network for several
+//! history-feature settings.
 //! `cargo run --release --example history_probe -- SEED`
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
@@ -16,24 +17,22 @@ fn main() {
         &CampaignConfig::new(seed),
     )
     .unwrap();
-    for taus in [
-        vec![],
-        vec![1800.0],
-        vec![3600.0],
-        vec![1800.0, 7200.0],
-        vec![900.0, 3600.0, 10800.0],
-    ] {
-        let (_, sum) = predictor::train_hybrid(
-            &data,
-            &geom,
-            &Settings {
-                seed,
-                history_taus_s: taus.clone(),
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        println!("taus {taus:?} val {:?}", sum.val_cycles);
+    let variants: [(&[&str], Vec<f64>); 5] = [
+        (&[], vec![]),
+        (&["Amb"], vec![28800.0]),
+        (&["Amb", "BXB", "BYB"], vec![600.0, 28800.0]),
+        (&["Amb", "BXB", "BYB"], vec![300.0, 28800.0]),
+        (&["Amb", "BXB", "BYB", "BXH", "BYH"], vec![600.0, 28800.0]),
+    ];
+    for (sensors, taus) in variants {
+        let settings = Settings {
+            seed,
+            history_taus_s: taus.clone(),
+            history_sensors: sensors.iter().map(|s| s.to_string()).collect(),
+            ..Default::default()
+        };
+        let (_, sum) = predictor::train_hybrid(&data, &geom, &settings).unwrap();
+        println!("history {sensors:?} taus {taus:?} val {:?}", sum.val_cycles);
         for n in &sum.nets {
             let f = |v: &Vec<f64>| {
                 v.iter()
