@@ -61,9 +61,7 @@ pub struct LoopController<P: ErrorPredictor>(pub Compensator<P>);
 
 impl<P: ErrorPredictor> Controller for LoopController<P> {
     fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3] {
-        self.0
-            .predictor_mut()
-            .observe_readings(readings.time_s, &readings.values_degc);
+        // The readings' history reached the predictor through `on_readings`, at every step.
         self.0.axis_command_mm(p_mm, &readings.values_degc)
     }
 

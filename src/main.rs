@@ -510,12 +510,7 @@ fn run(args: RunArgs) -> Result<()> {
         rec.finish(Some(&md))?;
         let path = file.path().to_path_buf();
         let bytes = file.finish()?;
-        writeln!(
-            out,
-            "wrote {} ({:.2} MB)",
-            path.display(),
-            bytes as f64 / 1e6
-        )?;
+        wrote_recording(&mut out, &path, bytes, "")?;
     }
     if let Some((csv, json)) = out_files {
         report::write_atomic(&csv, log.samples_csv().as_bytes(), args.force)?;
@@ -601,12 +596,11 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
         )?;
         record::campaign::record_campaign(&file, &machine, &rep, &models, settings)?;
         let bytes = file.finish()?;
-        writeln!(
-            out,
-            "wrote {} ({:.2} MB; representative run {})",
-            path.display(),
-            bytes as f64 / 1e6,
-            pick.title()
+        wrote_recording(
+            &mut out,
+            &path,
+            bytes,
+            &format!("; representative run {}", pick.title()),
         )?;
     }
     if let Some(dir) = out_files {
@@ -896,12 +890,7 @@ fn check(args: CheckArgs) -> Result<()> {
             &file,
             &problems,
         )?;
-        writeln!(
-            out,
-            "wrote {} ({:.2} MB)",
-            path.display(),
-            bytes as f64 / 1e6
-        )?;
+        wrote_recording(&mut out, path, bytes, "")?;
     }
     writeln!(
         out,
@@ -1032,4 +1021,19 @@ fn record_check(
     }
     rec.finish(Some(&md))?;
     Ok(rrd.finish()?)
+}
+
+/// Says which recording was written and its size (`wrote FILE (x.xx MB<extra>)`).
+fn wrote_recording(
+    out: &mut impl Write,
+    path: &std::path::Path,
+    bytes: u64,
+    extra: &str,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "wrote {} ({:.2} MB{extra})",
+        path.display(),
+        bytes as f64 / 1e6
+    )
 }

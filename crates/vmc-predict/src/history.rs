@@ -71,16 +71,6 @@ impl ReadingHistory {
         self.len() == 0
     }
 
-    /// Forgets everything (the next reading starts the filters).
-    pub fn reset(&mut self) {
-        self.started = false;
-    }
-
-    /// Whether any reading has been seen.
-    pub fn started(&self) -> bool {
-        self.started
-    }
-
     /// Takes the readings `x` (°C) at time `t_s`. Readings at or before the last one's time, or
     /// with a non-finite value, are ignored (held readings are passed again and again).
     pub fn observe(&mut self, t_s: f64, x: &[f64]) {
@@ -136,21 +126,6 @@ impl ReadingHistory {
             }
         }
     }
-}
-
-/// History features of a time series: for samples `(t_s, readings)` in time order, the feature
-/// rows ([`ReadingHistory::features_into`]) after each sample.
-pub fn features_of_series(taus_s: &[f64], series: &[(f64, &[f64])]) -> Vec<Vec<f64>> {
-    let n = series.first().map_or(0, |s| s.1.len());
-    let mut h = ReadingHistory::new(taus_s, n);
-    let mut out = Vec::with_capacity(series.len());
-    for (t, x) in series {
-        h.observe(*t, x);
-        let mut f = vec![0.0; h.len()];
-        h.features_into(x, &mut f);
-        out.push(f);
-    }
-    out
 }
 
 #[cfg(test)]
@@ -216,9 +191,6 @@ mod tests {
         h.observe(20.0, &[20.0, 1.0]);
         h.features_into(&[20.0], &mut f);
         assert_eq!(f, [20.0, 0.0]);
-        assert!(h.started());
-        h.reset();
-        assert!(!h.started());
     }
 
     #[test]
@@ -233,23 +205,5 @@ mod tests {
         // A ramp of 2 K over τ: y = 3 + 2·(1 − (1 − e^-1)) = 3 + 2/e.
         let expected = 2.0 - 2.0 * (-1.0f64).exp();
         assert!((f[3] - expected).abs() < 1e-12, "{f:?}");
-    }
-
-    #[test]
-    fn series_features_match_streaming() {
-        let xs: Vec<[f64; 1]> = (0..50).map(|k| [20.0 + (k as f64 * 0.3).sin()]).collect();
-        let series: Vec<(f64, &[f64])> = xs
-            .iter()
-            .enumerate()
-            .map(|(k, x)| (k as f64 * 30.0, &x[..]))
-            .collect();
-        let rows = features_of_series(&[120.0, 900.0], &series);
-        let mut h = ReadingHistory::new(&[120.0, 900.0], 1);
-        for ((t, x), row) in series.iter().zip(&rows) {
-            h.observe(*t, x);
-            let mut f = [0.0; 3];
-            h.features_into(x, &mut f);
-            assert_eq!(&f[..], &row[..]);
-        }
     }
 }

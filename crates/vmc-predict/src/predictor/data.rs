@@ -27,7 +27,7 @@ pub(crate) struct SensorSelection {
     pub history_idx: Vec<usize>,
     /// History features (`x − y_τ` per filter, see [`crate::history`]) of each (cycle, time)
     /// instant, computed over the cycle's readings in time order.
-    history: HashMap<(String, u64), Vec<f64>>,
+    history: HashMap<String, HashMap<u64, Vec<f64>>>,
 }
 
 impl SensorSelection {
@@ -125,9 +125,10 @@ impl SensorSelection {
         for (cycle, mut recs) in by_cycle {
             recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
             let mut h = ReadingHistory::of_sensors(taus_s, n, &self.history_idx);
+            let at = self.history.entry(cycle.to_string()).or_default();
             for r in recs {
-                let key = (cycle.to_string(), r.time_s.to_bits());
-                if self.history.contains_key(&key) {
+                let key = r.time_s.to_bits();
+                if at.contains_key(&key) {
                     continue;
                 }
                 for (xi, &c) in x.iter_mut().zip(&self.cols) {
@@ -135,7 +136,7 @@ impl SensorSelection {
                 }
                 h.observe(r.time_s, &x);
                 h.features_into(&x, &mut f);
-                self.history.insert(key, f[n..].to_vec());
+                at.insert(key, f[n..].to_vec());
             }
         }
         Ok(self)
@@ -151,7 +152,11 @@ impl SensorSelection {
         row.extend(self.cols.iter().map(|&c| r.temps_degc[c]));
         if !self.taus_s.is_empty() {
             // Every record's instant was filled in `with_history`.
-            match self.history.get(&(r.cycle.clone(), r.time_s.to_bits())) {
+            match self
+                .history
+                .get(r.cycle.as_str())
+                .and_then(|at| at.get(&r.time_s.to_bits()))
+            {
                 Some(f) => row.extend_from_slice(f),
                 None => row.extend(std::iter::repeat_n(
                     0.0,
