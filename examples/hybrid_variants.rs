@@ -6,10 +6,15 @@ use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, Settings};
 
 fn main() {
-    let mut settings = Settings::default();
+    let spec = MachineSpec::reference();
+    // The campaign's settings (ambient history on), unless the arguments change them.
+    let mut settings = evaluation::predictor_settings(&spec);
     let mut seed_off = 0u64;
     let mut members = 1u64;
     let mut seeds = vec![1u64, 2, 3];
+    // `states=dev`: the selection-only states (placement stream 9001), for choosing settings
+    // without looking at the held-out evaluation states.
+    let mut dev = false;
     for a in std::env::args().skip(1) {
         let (k, v) = a.split_once('=').expect("key=value");
         let list = || -> Vec<f64> {
@@ -29,11 +34,13 @@ fn main() {
             }
             "restarts" => settings.restarts = v.parse().unwrap(),
             "members" => members = v.parse().unwrap(),
+            "staus" => settings.spindle_history_taus_s = list(),
+            "shist" => settings.spindle_history_sensors = v.split(',').map(String::from).collect(),
+            "states" => dev = v == "dev",
             "hist" => settings.history_sensors = v.split(',').map(String::from).collect(),
             _ => panic!("unknown {k}"),
         }
     }
-    let spec = MachineSpec::reference();
     let geom = spec.geometry();
     let plans = diagonal_plans(&spec).unwrap();
     let mut runs = Vec::new();
@@ -60,12 +67,21 @@ fn main() {
         let kept: Vec<String> = sum
             .nets
             .iter()
-            .map(|n| format!("{}:{:?}", n.name, n.hidden_units))
+            .map(|n| {
+                let v: f64 =
+                    n.val_rmse.iter().map(|x| x * x).sum::<f64>() / n.val_rmse.len() as f64;
+                format!("{}:{:?}:{:.3}", n.name, n.hidden_units, v.sqrt())
+            })
             .collect();
-        let states = campaign::evaluation_states(seed);
+        let states = if dev {
+            vmc_twin::placement::validation_states(seed)
+        } else {
+            campaign::evaluation_states(seed)
+        };
         let r = evaluation::evaluate_predictor(&spec, seed, "hybrid", &h, &states, &plans).unwrap();
         let mx = r.iter().map(|x| x.max_after_um).fold(0.0, f64::max);
-        println!("seed {seed}: nets {kept:?} max {mx:.2}");
+        let qm = (r.iter().map(|x| x.rms_after_um.powi(2)).sum::<f64>() / r.len() as f64).sqrt();
+        println!("seed {seed}: nets {kept:?} max {mx:.2} qmean rms {qm:.3}");
         runs.extend(r);
     }
     let (med, worst, max, rmse) = evaluation::headline(&runs, "hybrid").unwrap();

@@ -8,7 +8,8 @@
 //! the parts add up). Prints per state the max |contribution| of each part to Ex, Ey, Ez (µm),
 //! at the state and over the next 90 s with the spindle stopped, as during a diagonal test.
 //!
-//! `cargo run --release --example residual_breakdown -- 1 2 3`
+//! `cargo run --release --example residual_breakdown -- 1 2 3` (add `dev` for the selection-only
+//! states)
 
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
@@ -17,8 +18,21 @@ use vmc_twin::predict::synthesis::first_order_error_mm;
 use vmc_twin::twin::{sub_seed, Twin};
 
 fn main() {
+    // `dev` among the arguments: the selection-only states (placement stream 9001) instead of
+    // the held-out ones.
+    let dev = std::env::args().any(|a| a == "dev");
+    // `staus=…` and `shist=…`: spindle-only history features (as in `hybrid_variants`).
+    let mut base = vmc_twin::evaluation::predictor_settings(&MachineSpec::reference());
+    for a in std::env::args().skip(1) {
+        if let Some(v) = a.strip_prefix("staus=") {
+            base.spindle_history_taus_s = v.split(',').map(|x| x.parse().unwrap()).collect();
+        } else if let Some(v) = a.strip_prefix("shist=") {
+            base.spindle_history_sensors = v.split(',').map(String::from).collect();
+        }
+    }
     let seeds: Vec<u64> = std::env::args()
         .skip(1)
+        .filter(|a| a != "dev" && !a.contains('='))
         .map(|s| s.parse().expect("seed"))
         .collect();
     let spec = MachineSpec::reference();
@@ -36,7 +50,7 @@ fn main() {
             &geom,
             &Settings {
                 seed,
-                ..vmc_twin::evaluation::predictor_settings(&spec)
+                ..base.clone()
             },
         )
         .unwrap();
@@ -50,7 +64,12 @@ fn main() {
             "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17}",
             "state", "axis X", "axis Y", "axis Z", "spindle", "squareness", "total"
         );
-        for (si, state) in campaign::evaluation_states(seed).iter().enumerate() {
+        let states = if dev {
+            vmc_twin::placement::validation_states(seed)
+        } else {
+            campaign::evaluation_states(seed)
+        };
+        for (si, state) in states.iter().enumerate() {
             let mut twin =
                 Twin::with_noise_seed(&spec, seed, sub_seed(seed, 9000 + si as u64)).unwrap();
             twin.set_ambient(state.cycle.ambient.clone()).unwrap();

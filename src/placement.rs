@@ -452,7 +452,7 @@ fn evaluate_set(
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
         .collect();
     let set_spec = with_sensors(cand_spec, sensors)?;
-    let settings = evaluation::with_ambient_history(
+    let settings = evaluation::with_history_features(
         Settings {
             seed,
             sensors: names.to_vec(),

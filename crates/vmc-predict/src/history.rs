@@ -107,15 +107,25 @@ impl ReadingHistory {
         self.last_t_s = t_s;
     }
 
+    /// Number of history features (`x_i − y_{i,τ}` per filtered sensor and filter).
+    pub fn n_history(&self) -> usize {
+        self.idx.len() * self.taus_s.len()
+    }
+
     /// Writes the features of readings `x` (the present ones, °C) into `out`
     /// ([`Self::len`] values): `x`, then `x_i − y_{i,τ}` of the filtered sensors per filter.
     /// Before any reading the filters are taken at `x` (steady state).
     pub fn features_into(&self, x: &[f64], out: &mut [f64]) {
         let n = self.n;
-        let m = self.idx.len();
         out[..n].copy_from_slice(x);
+        self.history_into(x, &mut out[n..]);
+    }
+
+    /// Writes only the history part of [`Self::features_into`] ([`Self::n_history`] values).
+    pub fn history_into(&self, x: &[f64], out: &mut [f64]) {
+        let m = self.idx.len();
         for k in 0..self.taus_s.len() {
-            let o = &mut out[n + k * m..n + (k + 1) * m];
+            let o = &mut out[k * m..(k + 1) * m];
             if self.started {
                 let row = &self.filtered[k * m..(k + 1) * m];
                 for ((f, &i), &yi) in o.iter_mut().zip(&self.idx).zip(row) {

@@ -25,8 +25,13 @@ pub(crate) struct SensorSelection {
     pub taus_s: Vec<f64>,
     /// Indices (into `names`) of the sensors with history features.
     pub history_idx: Vec<usize>,
+    /// Time constants of the spindle-only history features (s).
+    pub spindle_taus_s: Vec<f64>,
+    /// Indices (into `names`) of the sensors with spindle-only history features.
+    pub spindle_idx: Vec<usize>,
     /// History features (`x − y_τ` per filter, see [`crate::history`]) of each (cycle, time)
-    /// instant, computed over the cycle's readings in time order.
+    /// instant, computed over the cycle's readings in time order: the shared ones, then the
+    /// spindle-only ones.
     history: HashMap<String, HashMap<u64, Vec<f64>>>,
 }
 
@@ -68,6 +73,8 @@ impl SensorSelection {
             cols,
             taus_s: Vec::new(),
             history_idx: Vec::new(),
+            spindle_taus_s: Vec::new(),
+            spindle_idx: Vec::new(),
             history: HashMap::new(),
         })
     }
@@ -75,43 +82,30 @@ impl SensorSelection {
     /// Adds history features with time constants `taus_s`: each cycle's readings (every record
     /// of the cycle, whatever its instrument, in time order) run through the filters from the
     /// cycle's first record on (steady state assumed there).
-    /// `of_sensors` names the sensors that get them (empty: all).
+    /// `of_sensors` names the sensors that get them (empty: all). `spindle` adds, the same way,
+    /// features that only the spindle part sees (time constants, sensors).
     pub fn with_history(
         mut self,
         ds: &Dataset,
         taus_s: &[f64],
         of_sensors: &[String],
+        spindle: (&[f64], &[String]),
     ) -> Result<Self, PredictError> {
-        if let Some(t) = taus_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
-            return Err(PredictError::BadSettings {
-                field: "history_taus_s",
-                reason: format!("time constants must be > 0 s, got {t}"),
-            });
-        }
+        check_taus("history_taus_s", taus_s)?;
+        check_taus("spindle_history_taus_s", spindle.0)?;
         self.taus_s = taus_s.to_vec();
-        if taus_s.is_empty() {
+        self.spindle_taus_s = spindle.0.to_vec();
+        if taus_s.is_empty() && spindle.0.is_empty() {
             return Ok(self);
         }
-        self.history_idx = if of_sensors.is_empty() {
-            (0..self.names.len()).collect()
-        } else {
-            let mut idx = Vec::new();
-            for s in of_sensors {
-                match self.names.iter().position(|n| n == s) {
-                    Some(i) => idx.push(i),
-                    None => {
-                        return Err(PredictError::BadSettings {
-                            field: "history_sensors",
-                            reason: format!(
-                                "`{s}` is not among the model's sensors {:?}",
-                                self.names
-                            ),
-                        })
-                    }
-                }
-            }
-            idx
-        };
+        self.history_idx = self.indices_of("history_sensors", of_sensors)?;
+        self.spindle_idx = self.indices_of("spindle_history_sensors", spindle.1)?;
+        if taus_s.is_empty() {
+            self.history_idx.clear();
+        }
+        if spindle.0.is_empty() {
+            self.spindle_idx.clear();
+        }
         let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
         for r in &ds.records {
             match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {
@@ -121,10 +115,10 @@ impl SensorSelection {
         }
         let n = self.cols.len();
         let mut x = vec![0.0; n];
-        let mut f = vec![0.0; self.n_inputs()];
         for (cycle, mut recs) in by_cycle {
             recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
             let mut h = ReadingHistory::of_sensors(taus_s, n, &self.history_idx);
+            let mut hs = ReadingHistory::of_sensors(spindle.0, n, &self.spindle_idx);
             let at = self.history.entry(cycle.to_string()).or_default();
             for r in recs {
                 let key = r.time_s.to_bits();
@@ -135,33 +129,75 @@ impl SensorSelection {
                     *xi = r.temps_degc[c];
                 }
                 h.observe(r.time_s, &x);
-                h.features_into(&x, &mut f);
-                at.insert(key, f[n..].to_vec());
+                hs.observe(r.time_s, &x);
+                let mut f = vec![0.0; h.n_history() + hs.n_history()];
+                let (shared, own) = f.split_at_mut(h.n_history());
+                h.history_into(&x, shared);
+                hs.history_into(&x, own);
+                at.insert(key, f);
             }
         }
         Ok(self)
     }
 
-    /// Model inputs per sensor set: the readings, then the history features.
-    pub fn n_inputs(&self) -> usize {
-        ReadingHistory::n_features(self.cols.len(), self.history_idx.len(), self.taus_s.len())
+    /// Indices into `names` of `of_sensors` (all when empty); `field` names the setting.
+    fn indices_of(
+        &self,
+        field: &'static str,
+        of_sensors: &[String],
+    ) -> Result<Vec<usize>, PredictError> {
+        if of_sensors.is_empty() {
+            return Ok((0..self.names.len()).collect());
+        }
+        of_sensors
+            .iter()
+            .map(|s| {
+                self.names
+                    .iter()
+                    .position(|n| n == s)
+                    .ok_or_else(|| PredictError::BadSettings {
+                        field,
+                        reason: format!("`{s}` is not among the model's sensors {:?}", self.names),
+                    })
+            })
+            .collect()
     }
 
-    /// Appends the selected temperatures of `r` (then its history features, if any) to `row`.
-    pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>) {
+    /// History features every part sees.
+    fn n_shared_history(&self) -> usize {
+        self.history_idx.len() * self.taus_s.len()
+    }
+
+    /// Model inputs of the axis parts and the squareness: the readings, then the history
+    /// features.
+    pub fn n_inputs(&self) -> usize {
+        self.cols.len() + self.n_shared_history()
+    }
+
+    /// Model inputs of the spindle part: [`Self::n_inputs`], then the spindle-only history
+    /// features.
+    pub fn n_spindle_inputs(&self) -> usize {
+        self.n_inputs() + self.spindle_idx.len() * self.spindle_taus_s.len()
+    }
+
+    /// Appends the selected temperatures of `r` (then its history features, if any) to `row`;
+    /// with `spindle`, also the spindle-only history features.
+    pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>, spindle: bool) {
         row.extend(self.cols.iter().map(|&c| r.temps_degc[c]));
-        if !self.taus_s.is_empty() {
+        let n = if spindle {
+            self.n_spindle_inputs()
+        } else {
+            self.n_inputs()
+        } - self.cols.len();
+        if n > 0 {
             // Every record's instant was filled in `with_history`.
             match self
                 .history
                 .get(r.cycle.as_str())
                 .and_then(|at| at.get(&r.time_s.to_bits()))
             {
-                Some(f) => row.extend_from_slice(f),
-                None => row.extend(std::iter::repeat_n(
-                    0.0,
-                    self.history_idx.len() * self.taus_s.len(),
-                )),
+                Some(f) => row.extend_from_slice(&f[..n]),
+                None => row.extend(std::iter::repeat_n(0.0, n)),
             }
         }
     }
@@ -335,6 +371,17 @@ pub(crate) fn mix_seed(seed: u64, net_index: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// Refuses time constants that are not finite and > 0 (`field` names the setting).
+fn check_taus(field: &'static str, taus_s: &[f64]) -> Result<(), PredictError> {
+    match taus_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+        Some(t) => Err(PredictError::BadSettings {
+            field,
+            reason: format!("time constants must be > 0 s, got {t}"),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Per-output RMSE of `predict` over `data` (output units); empty for an empty set.

@@ -3,7 +3,7 @@
 //! ```text
 //! {
 //!   "format": "vmc-twin-model",
-//!   "version": 4,
+//!   "version": 5,
 //!   "kind": "hybrid" | "volumetric" | "linear",
 //!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
 //!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
@@ -22,7 +22,9 @@
 //! `history_taus_s` (time constants, s, of the history features of the networks' inputs, see
 //! `crate::history`) with `history_sensors` (indices into `sensors` of the filtered readings;
 //! absent = all) — version 4 added them; older files read as empty: present readings only; an
-//! older build would ignore them, hence the new version. Of a
+//! older build would ignore them, hence the new version — and `spindle_history_taus_s` with
+//! `spindle_history_sensors` (the same, for features only the spindle part sees, after the
+//! shared ones) — version 5 added them, older files read as none. Of a
 //! `volumetric`: `net` (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
 //! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
 //! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
@@ -51,7 +53,7 @@ use super::{ErrorPredictor, PredictError};
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
 /// The model file version this build writes (and the newest it reads).
-pub const FORMAT_VERSION: u64 = 4;
+pub const FORMAT_VERSION: u64 = 5;
 /// The oldest model file version this build reads (version 2: no `reversal_um`, read as zero).
 pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
@@ -548,15 +550,15 @@ mod tests {
     fn bad_version_format_and_kind_give_the_documented_messages() {
         let model = all_kinds().remove(2);
         let text = model.to_json_string().unwrap();
-        let v1 = text.replacen("\"version\": 4", "\"version\": 1", 1);
+        let v1 = text.replacen("\"version\": 5", "\"version\": 1", 1);
         assert_eq!(
             AnyPredictor::from_json_str(&v1).unwrap_err().to_string(),
-            "model file version 1 is not supported (this build reads versions 2 to 4)"
+            "model file version 1 is not supported (this build reads versions 2 to 5)"
         );
-        let v4 = text.replacen("\"version\": 4", "\"version\": 5", 1);
+        let v6 = text.replacen("\"version\": 5", "\"version\": 6", 1);
         assert_eq!(
-            AnyPredictor::from_json_str(&v4).unwrap_err().to_string(),
-            "model file version 5 is not supported (this build reads versions 2 to 4)"
+            AnyPredictor::from_json_str(&v6).unwrap_err().to_string(),
+            "model file version 6 is not supported (this build reads versions 2 to 5)"
         );
         let other = text.replacen("vmc-twin-model", "something-else", 1);
         assert_eq!(

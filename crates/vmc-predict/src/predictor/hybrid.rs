@@ -57,6 +57,14 @@ pub(crate) struct HybridParts {
     /// constants means all of them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub history_sensors: Vec<usize>,
+    /// Time constants of history features that only the spindle part sees, s (version 5; empty
+    /// before). The spindle part's inputs are the shared ones, then these features.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spindle_history_taus_s: Vec<f64>,
+    /// Indices of the sensors with spindle-only history features; empty with time constants
+    /// means all of them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spindle_history_sensors: Vec<usize>,
 }
 
 /// Query-time state: part evaluators with cached temperature-only results, scratch.
@@ -66,10 +74,14 @@ struct Runtime {
     spindle: PartRuntime<5>,
     /// Spindle and squareness fields hold the values for `last_inputs`.
     errs: ElementaryErrors,
-    /// Filters over the readings seen by [`ErrorPredictor::observe_readings`].
+    /// Filters over the readings seen by [`ErrorPredictor::observe_readings`]: those every
+    /// part sees, those only the spindle part sees.
     history: ReadingHistory,
-    /// Temperature inputs of the networks (readings, then history features) and those of
-    /// the cached results.
+    spindle_history: ReadingHistory,
+    /// Inputs of the axis parts and the squareness (a prefix of `inputs`).
+    n_shared: usize,
+    /// Temperature inputs of the networks (readings, shared history features, then the
+    /// spindle-only ones) and those of the cached results.
     inputs: Vec<f64>,
     last_inputs: Vec<f64>,
     cache_valid: bool,
@@ -95,35 +107,24 @@ impl HybridPredictor {
         geometry: MachineGeometry,
         parts: HybridParts,
     ) -> Result<Self, PredictError> {
-        if let Some(t) = parts
-            .history_taus_s
-            .iter()
-            .find(|t| !(t.is_finite() && **t > 0.0))
-        {
-            return Err(PredictError::Inconsistent {
-                reason: format!("history_taus_s holds {t}; time constants must be > 0 s"),
-            });
-        }
-        if let Some(i) = parts.history_sensors.iter().find(|&&i| i >= sensors.len()) {
-            return Err(PredictError::Inconsistent {
-                reason: format!(
-                    "history_sensors holds sensor index {i}; the model has {} sensors",
-                    sensors.len()
-                ),
-            });
-        }
-        let history_idx: Vec<usize> = if parts.history_sensors.is_empty() {
-            (0..sensors.len()).collect()
-        } else {
-            parts.history_sensors.clone()
-        };
-        let history =
-            ReadingHistory::of_sensors(&parts.history_taus_s, sensors.len(), &history_idx);
+        let history = history_of(
+            &sensors,
+            &parts.history_taus_s,
+            &parts.history_sensors,
+            ("history_taus_s", "history_sensors"),
+        )?;
+        let spindle_history = history_of(
+            &sensors,
+            &parts.spindle_history_taus_s,
+            &parts.spindle_history_sensors,
+            ("spindle_history_taus_s", "spindle_history_sensors"),
+        )?;
         let k = history.len();
+        let k_spindle = k + spindle_history.n_history();
         for (name, part) in AXIS_NETS.iter().zip(&parts.axis_nets) {
             part.check(name, 1, k, 6)?;
         }
-        parts.spindle_net.check("spindle", 0, k, 5)?;
+        parts.spindle_net.check("spindle", 0, k_spindle, 5)?;
         check_linear_model("squareness", &parts.squareness, k, 3)?;
         if let Some(r) = parts.reversal_um.iter().find(|r| !r.is_finite()) {
             return Err(PredictError::Inconsistent {
@@ -149,8 +150,10 @@ impl HybridPredictor {
             spindle,
             errs: ElementaryErrors::default(),
             history,
-            inputs: vec![0.0; k],
-            last_inputs: vec![0.0; k],
+            spindle_history,
+            n_shared: k,
+            inputs: vec![0.0; k_spindle],
+            last_inputs: vec![0.0; k_spindle],
             cache_valid: false,
         };
         Ok(Self {
@@ -205,7 +208,9 @@ impl HybridPredictor {
     /// changed (bitwise).
     fn update_temps(&mut self, readings: &[f64]) {
         let rt = &mut self.rt;
-        rt.history.features_into(readings, &mut rt.inputs);
+        let (shared, own) = rt.inputs.split_at_mut(rt.n_shared);
+        rt.history.features_into(readings, shared);
+        rt.spindle_history.history_into(readings, own);
         if rt.cache_valid
             && rt
                 .last_inputs
@@ -217,11 +222,11 @@ impl HybridPredictor {
         }
         rt.last_inputs.copy_from_slice(&rt.inputs);
         rt.cache_valid = true;
-        let temps = &rt.inputs[..];
+        let temps = &rt.inputs[..rt.n_shared];
         for net in &mut rt.axes {
             net.set_temps(temps);
         }
-        rt.spindle.set_temps(temps);
+        rt.spindle.set_temps(&rt.inputs);
         let mut s = [0.0; 5];
         rt.spindle.eval(&[], &mut s);
         rt.errs.spindle.lin_mm = [s[0] * 1e-3, s[1] * 1e-3, s[2] * 1e-3];
@@ -254,6 +259,7 @@ impl ErrorPredictor for HybridPredictor {
 
     fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
         self.rt.history.observe(time_s, temps_degc);
+        self.rt.spindle_history.observe(time_s, temps_degc);
     }
 }
 
@@ -271,6 +277,10 @@ pub fn train_hybrid(
         ds,
         &settings.history_taus_s,
         &settings.history_sensors,
+        (
+            &settings.spindle_history_taus_s,
+            &settings.spindle_history_sensors,
+        ),
     )?;
     let split = CycleSplit::new(ds, settings)?;
     // Build every table before training anything, so data errors surface at once.
@@ -291,6 +301,7 @@ pub fn train_hybrid(
             Some(k),
             &[0, 1, 2, 3, 4, 5],
             instrument,
+            false,
         )?;
         reversal_um[k] = estimate_reversal_um(&recs, &table, k, &split, settings)?;
         // Backward runs become samples of the positive approach.
@@ -314,6 +325,7 @@ pub fn train_hybrid(
         None,
         &[0, 1, 2, 3, 4],
         Instrument::Spindle,
+        true,
     )?;
     let recs = records_of(
         ds,
@@ -328,6 +340,7 @@ pub fn train_hybrid(
         None,
         &[3, 4, 5],
         Instrument::Squareness,
+        false,
     )?;
 
     let mut nets = Vec::new();
@@ -378,6 +391,12 @@ pub fn train_hybrid(
             Vec::new()
         } else {
             sel.history_idx.clone()
+        },
+        spindle_history_taus_s: sel.spindle_taus_s.clone(),
+        spindle_history_sensors: if sel.spindle_idx.len() == sel.names.len() {
+            Vec::new()
+        } else {
+            sel.spindle_idx.clone()
         },
     };
     let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
@@ -437,7 +456,8 @@ fn estimate_reversal_um(
     Ok(sum[1] / n[1] as f64 - sum[0] / n[0].max(1) as f64)
 }
 
-/// Rows `[position along axis `pos_axis` (if any), temperatures…] → values[cols]`.
+/// Rows `[position along axis `pos_axis` (if any), temperatures…] → values[cols]`; with
+/// `spindle` the temperatures include the spindle-only history features.
 fn table_of(
     recs: &[&Record],
     sel: &SensorSelection,
@@ -445,19 +465,50 @@ fn table_of(
     pos_axis: Option<usize>,
     cols: &[usize],
     instrument: Instrument,
+    spindle: bool,
 ) -> Result<Table, PredictError> {
     let mut table = Table::new();
     for r in recs {
-        let mut row = Vec::with_capacity(sel.n_inputs() + 1);
+        let mut row = Vec::with_capacity(sel.n_spindle_inputs() + 1);
         if let Some(k) = pos_axis {
             row.push(r.pos_mm[k]);
         }
-        sel.push_temps(r, &mut row);
+        sel.push_temps(r, &mut row, spindle);
         table.inputs.push(row);
         table.targets.push(required_values(r, cols, instrument)?);
         table.groups.push(split.id(&r.cycle));
     }
     Ok(table)
+}
+
+/// The filters of one block of history features of a model file, checked: time constants
+/// finite and > 0, sensor indices within `sensors` (empty: all). `fields` name them.
+fn history_of(
+    sensors: &[String],
+    taus_s: &[f64],
+    of: &[usize],
+    fields: (&str, &str),
+) -> Result<ReadingHistory, PredictError> {
+    if let Some(t) = taus_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+        return Err(PredictError::Inconsistent {
+            reason: format!("{} holds {t}; time constants must be > 0 s", fields.0),
+        });
+    }
+    if let Some(i) = of.iter().find(|&&i| i >= sensors.len()) {
+        return Err(PredictError::Inconsistent {
+            reason: format!(
+                "{} holds sensor index {i}; the model has {} sensors",
+                fields.1,
+                sensors.len()
+            ),
+        });
+    }
+    let idx: Vec<usize> = if of.is_empty() {
+        (0..sensors.len()).collect()
+    } else {
+        of.to_vec()
+    };
+    Ok(ReadingHistory::of_sensors(taus_s, sensors.len(), &idx))
 }
 
 #[cfg(test)]
@@ -575,6 +626,51 @@ mod tests {
         };
         let err = train_hybrid(&ds, &td::geometry(), &bad).unwrap_err();
         assert!(err.to_string().contains("history_taus_s"), "{err}");
+    }
+
+    #[test]
+    fn spindle_only_history_reaches_the_spindle_part_alone_and_survives_the_model_file() {
+        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let sensor = ds.sensor_names[1].clone();
+        let settings = Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 20,
+            spindle_history_taus_s: vec![300.0],
+            spindle_history_sensors: vec![sensor.clone()],
+            ..Settings::default()
+        };
+        let (mut p, _) = train_hybrid(&ds, &td::geometry(), &settings).unwrap();
+        let n = ds.sensor_names.len();
+        // One more input for the spindle part only.
+        assert_eq!(p.parts().spindle_net.linear.n_in(), n + 1);
+        for part in &p.parts().axis_nets {
+            assert_eq!(part.linear.n_in(), 1 + n);
+        }
+        assert_eq!(p.parts().squareness.n_in(), n);
+        assert_eq!(p.parts().spindle_history_sensors, vec![1]);
+        let mut back = HybridPredictor::from_json_str(&p.to_json_string().unwrap()).unwrap();
+        let q = [100.0, 50.0, -80.0];
+        let hot = td::temps_degc(6.0, 7200.0);
+        let steady = p.elementary_errors(q, &hot);
+        for k in 0..=120 {
+            let t = 60.0 * f64::from(k);
+            let temps = td::temps_degc(6.0, t);
+            p.observe_readings(t, &temps);
+            back.observe_readings(t, &temps);
+        }
+        let warmed = p.elementary_errors(q, &hot);
+        assert_eq!(warmed, back.elementary_errors(q, &hot));
+        // The history moves the spindle drift and leaves the axis parts alone.
+        assert_ne!(warmed.spindle, steady.spindle);
+        assert_eq!(warmed.axes, steady.axes);
+        // A sensor the model lacks is named in the error.
+        let bad = Settings {
+            spindle_history_sensors: vec!["nope".into()],
+            ..settings
+        };
+        let err = train_hybrid(&ds, &td::geometry(), &bad).unwrap_err();
+        assert!(err.to_string().contains("spindle_history_sensors"), "{err}");
+        assert!(err.to_string().contains("nope"), "{err}");
     }
 
     #[test]

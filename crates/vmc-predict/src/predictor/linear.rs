@@ -178,7 +178,7 @@ pub fn train_linear(
             hi[i] = hi[i].max(r.pos_mm[i]);
         }
         temps.clear();
-        sel.push_temps(r, &mut temps);
+        sel.push_temps(r, &mut temps, false);
         temp_ref_degc
             .iter_mut()
             .zip(&temps)
@@ -202,7 +202,7 @@ pub fn train_linear(
     let mut table = Table::new();
     for r in &recs {
         temps.clear();
-        sel.push_temps(r, &mut temps);
+        sel.push_temps(r, &mut temps, false);
         let mut f = vec![0.0; n_features(k)];
         features_into(&scaling, r.pos_mm, &temps, &mut f);
         table.inputs.push(f);

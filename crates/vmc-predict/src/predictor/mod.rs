@@ -292,6 +292,13 @@ pub struct Settings {
     pub history_taus_s: Vec<f64>,
     /// Sensors that get history features (default: empty = all the model's sensors).
     pub history_sensors: Vec<String>,
+    /// Time constants (s) of history features that only the hybrid's spindle part sees (default:
+    /// empty). The spindle drift follows the bearings, which no sensor touches and which lead
+    /// the spindle nose and housing readings; the rate at which those readings change (the
+    /// feature `x − y_τ` ≈ τ·dx/dt for a short τ) tells how much warmer the bearings are.
+    pub spindle_history_taus_s: Vec<f64>,
+    /// Sensors with spindle-only history features (default: empty = all the model's sensors).
+    pub spindle_history_sensors: Vec<String>,
 }
 
 impl Default for Settings {
@@ -312,6 +319,8 @@ impl Default for Settings {
             residual_net_min_gain: 0.2,
             history_taus_s: Vec::new(),
             history_sensors: Vec::new(),
+            spindle_history_taus_s: Vec::new(),
+            spindle_history_sensors: Vec::new(),
         }
     }
 }
