@@ -1,0 +1,62 @@
+//! Diagnosis (truth side): predicted vs true elementary errors of one axis along its travel on a
+//! cold machine. `cargo run --release --example axis_profile -- SEED AXIS` (AXIS 0, 1, 2).
+//!
+//! The truth printed is the twin's error functions, without the approach: the predictor learns
+//! the positive approach, which lies half a reversal above them in the axis's own positioning
+//! error (0.25–0.3 µm on the reference machine).
+use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::machine::MachineSpec;
+use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::twin::Twin;
+
+fn main() {
+    let a: Vec<u64> = std::env::args()
+        .skip(1)
+        .map(|s| s.parse().expect("number"))
+        .collect();
+    let (seed, axis) = (a[0], a[1] as usize);
+    let spec = MachineSpec::reference();
+    let data = campaign::calibrate(
+        &spec,
+        &ThermalCycle::calibration_set(),
+        &CampaignConfig::new(seed),
+    )
+    .unwrap();
+    let (mut h, _) = predictor::train_hybrid(
+        &data,
+        &spec.geometry(),
+        &Settings {
+            seed,
+            ..vmc_twin::evaluation::predictor_settings(&spec)
+        },
+    )
+    .unwrap();
+    let twin = Twin::new(&spec, seed).unwrap();
+    let temps = twin.sensor_readings().values_degc;
+    let (lo, hi) = (spec.axes.travel_min_mm[axis], spec.axes.travel_max_mm[axis]);
+    println!("pos_mm   true(dx dy dz µm, rx ry rz µrad) | predicted");
+    for k in 0..=24 {
+        let mut q =
+            [0, 1, 2].map(|i| 0.5 * (spec.axes.travel_min_mm[i] + spec.axes.travel_max_mm[i]));
+        q[axis] = lo + (hi - lo) * (0.05 + 0.9 * k as f64 / 24.0);
+        let t = twin.elementary_errors(q).axes[axis];
+        let p = h.elementary_errors(q, &temps).axes[axis];
+        let f = |l: [f64; 3], r: [f64; 3]| {
+            format!(
+                "{:6.2} {:6.2} {:6.2} {:6.2} {:6.2} {:6.2}",
+                l[0] * 1e3,
+                l[1] * 1e3,
+                l[2] * 1e3,
+                r[0] * 1e6,
+                r[1] * 1e6,
+                r[2] * 1e6
+            )
+        };
+        println!(
+            "{:7.1}  {} | {}",
+            q[axis],
+            f(t.lin_mm, t.ang_rad),
+            f(p.lin_mm, p.ang_rad)
+        );
+    }
+}
