@@ -72,7 +72,8 @@ pub(crate) struct HybridParts {
 struct Runtime {
     axes: [PartRuntime<6>; 3],
     spindle: PartRuntime<5>,
-    /// Spindle and squareness fields hold the values for `last_inputs`.
+    /// Spindle and squareness fields hold the values for `last_readings` and the history
+    /// observed so far.
     errs: ElementaryErrors,
     /// Filters over the readings seen by [`ErrorPredictor::observe_readings`]: those every
     /// part sees, those only the spindle part sees.
@@ -81,10 +82,13 @@ struct Runtime {
     /// Inputs of the axis parts and the squareness (a prefix of `inputs`).
     n_shared: usize,
     /// Temperature inputs of the networks (readings, shared history features, then the
-    /// spindle-only ones) and those of the cached results.
+    /// spindle-only ones) of the cached results.
     inputs: Vec<f64>,
-    last_inputs: Vec<f64>,
-    cache_valid: bool,
+    /// Readings of the cached results.
+    last_readings: Vec<f64>,
+    /// Whether the cached results must be recomputed at the next query (never computed, or
+    /// readings observed since, which move the history features).
+    stale: bool,
 }
 
 /// Hybrid predictor: 3 axis MLPs + spindle MLP (each on a linear part) + squareness regression
@@ -153,8 +157,8 @@ impl HybridPredictor {
             spindle_history,
             n_shared: k,
             inputs: vec![0.0; k_spindle],
-            last_inputs: vec![0.0; k_spindle],
-            cache_valid: false,
+            last_readings: vec![0.0; sensors.len()],
+            stale: true,
         };
         Ok(Self {
             sensors,
@@ -204,24 +208,25 @@ impl HybridPredictor {
         self.rt.errs
     }
 
-    /// Recomputes the temperature-only parts when their inputs (readings and history features)
-    /// changed (bitwise).
+    /// Recomputes the temperature-only parts when the readings changed (bitwise) or readings
+    /// were observed since the last time (the history features moved). A query between two
+    /// readings only compares the readings.
     fn update_temps(&mut self, readings: &[f64]) {
         let rt = &mut self.rt;
-        let (shared, own) = rt.inputs.split_at_mut(rt.n_shared);
-        rt.history.features_into(readings, shared);
-        rt.spindle_history.history_into(readings, own);
-        if rt.cache_valid
+        if !rt.stale
             && rt
-                .last_inputs
+                .last_readings
                 .iter()
-                .zip(&rt.inputs)
+                .zip(readings)
                 .all(|(a, b)| a.to_bits() == b.to_bits())
         {
             return;
         }
-        rt.last_inputs.copy_from_slice(&rt.inputs);
-        rt.cache_valid = true;
+        rt.last_readings.copy_from_slice(readings);
+        rt.stale = false;
+        let (shared, own) = rt.inputs.split_at_mut(rt.n_shared);
+        rt.history.features_into(readings, shared);
+        rt.spindle_history.history_into(readings, own);
         let temps = &rt.inputs[..rt.n_shared];
         for net in &mut rt.axes {
             net.set_temps(temps);
@@ -260,6 +265,7 @@ impl ErrorPredictor for HybridPredictor {
     fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
         self.rt.history.observe(time_s, temps_degc);
         self.rt.spindle_history.observe(time_s, temps_degc);
+        self.rt.stale = true;
     }
 }
 
