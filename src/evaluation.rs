@@ -286,23 +286,41 @@ pub const AMBIENT_HISTORY_TAU_S: f64 = 8.0 * 3600.0;
 /// an ambient sensor gets no history feature. See `vmc_predict::history` and the README
 /// ("Tried for the 2 µm target") for how this was chosen and what it gives.
 pub fn with_ambient_history(settings: Settings, spec: &MachineSpec) -> Settings {
-    let ambient: Vec<String> = spec
-        .sensors
-        .iter()
-        .filter(|s| s.node == crate::thermal::AMBIENT_NODE)
-        .map(|s| s.name.clone())
-        .collect();
-    let in_model = |n: &String| settings.sensors.is_empty() || settings.sensors.contains(n);
-    let ambient: Vec<String> = ambient.into_iter().filter(in_model).collect();
+    let (taus, ambient) = on_node(
+        &settings,
+        spec,
+        crate::thermal::AMBIENT_NODE,
+        AMBIENT_HISTORY_TAU_S,
+    );
     Settings {
-        history_taus_s: if ambient.is_empty() {
-            Vec::new()
-        } else {
-            vec![AMBIENT_HISTORY_TAU_S]
-        },
+        history_taus_s: taus,
         history_sensors: ambient,
         ..settings
     }
+}
+
+/// The model's sensors (`settings.sensors`, all of `spec`'s when empty) on thermal node `node`,
+/// with the time constants of a history feature of them: `[tau_s]`, or none without such a
+/// sensor.
+fn on_node(
+    settings: &Settings,
+    spec: &MachineSpec,
+    node: &str,
+    tau_s: f64,
+) -> (Vec<f64>, Vec<String>) {
+    let names: Vec<String> = spec
+        .sensors
+        .iter()
+        .filter(|s| s.node == node)
+        .map(|s| s.name.clone())
+        .filter(|n| settings.sensors.is_empty() || settings.sensors.contains(n))
+        .collect();
+    let taus = if names.is_empty() {
+        Vec::new()
+    } else {
+        vec![tau_s]
+    };
+    (taus, names)
 }
 
 /// Node of the thermal model whose sensors get the spindle-only rate feature
@@ -321,20 +339,9 @@ pub const SPINDLE_NOSE_TAU_S: f64 = 300.0;
 /// network it made things worse, README "Tried for the 2 µm target"). Chosen on the
 /// selection-only states of machine seeds 21–23, never on the held-out runs: README.
 pub fn with_spindle_nose_rate(settings: Settings, spec: &MachineSpec) -> Settings {
-    let in_model = |n: &String| settings.sensors.is_empty() || settings.sensors.contains(n);
-    let nose: Vec<String> = spec
-        .sensors
-        .iter()
-        .filter(|s| s.node == SPINDLE_NOSE_NODE)
-        .map(|s| s.name.clone())
-        .filter(in_model)
-        .collect();
+    let (taus, nose) = on_node(&settings, spec, SPINDLE_NOSE_NODE, SPINDLE_NOSE_TAU_S);
     Settings {
-        spindle_history_taus_s: if nose.is_empty() {
-            Vec::new()
-        } else {
-            vec![SPINDLE_NOSE_TAU_S]
-        },
+        spindle_history_taus_s: taus,
         spindle_history_sensors: nose,
         ..settings
     }
@@ -550,4 +557,43 @@ pub fn write_campaign_table(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn history_features_go_to_the_sensors_on_their_nodes_and_only_those_in_the_model() {
+        let spec = MachineSpec::reference();
+        let s = predictor_settings(&spec);
+        assert_eq!(s.history_sensors, vec!["Amb".to_string()]);
+        assert_eq!(s.history_taus_s, vec![AMBIENT_HISTORY_TAU_S]);
+        assert_eq!(s.spindle_history_sensors, vec!["BYB".to_string()]);
+        assert_eq!(s.spindle_history_taus_s, vec![SPINDLE_NOSE_TAU_S]);
+        // A model without the nose sensor gets no spindle feature, and keeps the ambient one.
+        let others: Vec<String> = spec
+            .sensors
+            .iter()
+            .map(|s| s.name.clone())
+            .filter(|n| n != "BYB")
+            .collect();
+        let s = with_history_features(
+            Settings {
+                sensors: others,
+                ..Settings::default()
+            },
+            &spec,
+        );
+        assert!(s.spindle_history_taus_s.is_empty() && s.spindle_history_sensors.is_empty());
+        assert_eq!(s.history_sensors, vec!["Amb".to_string()]);
+        // A machine without an ambient sensor gets no ambient feature.
+        let mut no_air = spec.clone();
+        no_air
+            .sensors
+            .retain(|s| s.node != crate::thermal::AMBIENT_NODE);
+        let s = predictor_settings(&no_air);
+        assert!(s.history_taus_s.is_empty() && s.history_sensors.is_empty());
+        assert_eq!(s.spindle_history_sensors, vec!["BYB".to_string()]);
+    }
 }
