@@ -16,6 +16,14 @@
 //! when logging starts (a calibration cycle from a cold machine, a controller switched on with
 //! the machine). Units: s and °C (features in K).
 
+/// The first time constant of `taus_s` that a filter cannot use (not finite, or ≤ 0 s), if any.
+pub fn invalid_tau(taus_s: &[f64]) -> Option<f64> {
+    taus_s
+        .iter()
+        .copied()
+        .find(|t| !(t.is_finite() && *t > 0.0))
+}
+
 /// Filter state over a stream of readings of `n` sensors, of which some are filtered.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReadingHistory {

@@ -375,7 +375,7 @@ pub(crate) fn mix_seed(seed: u64, net_index: u64) -> u64 {
 
 /// Refuses time constants that are not finite and > 0 (`field` names the setting).
 fn check_taus(field: &'static str, taus_s: &[f64]) -> Result<(), PredictError> {
-    match taus_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+    match crate::history::invalid_tau(taus_s) {
         Some(t) => Err(PredictError::BadSettings {
             field,
             reason: format!("time constants must be > 0 s, got {t}"),

@@ -495,7 +495,7 @@ fn history_of(
     of: &[usize],
     fields: (&str, &str),
 ) -> Result<ReadingHistory, PredictError> {
-    if let Some(t) = taus_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+    if let Some(t) = crate::history::invalid_tau(taus_s) {
         return Err(PredictError::Inconsistent {
             reason: format!("{} holds {t}; time constants must be > 0 s", fields.0),
         });

@@ -79,11 +79,7 @@ pub fn is_speed(name: &str) -> bool {
 impl FeatureSpec {
     /// Checks the time constants.
     pub fn validate(&self) -> Result<(), ThermalFitError> {
-        if let Some(t) = self
-            .time_constants_s
-            .iter()
-            .find(|t| !(t.is_finite() && **t > 0.0))
-        {
+        if let Some(t) = crate::history::invalid_tau(&self.time_constants_s) {
             return Err(ThermalFitError::BadSettings {
                 field: "time_constants_s",
                 reason: format!("every time constant must be finite and > 0 s, got {t}"),
