@@ -200,6 +200,8 @@ pub fn drive(
 }
 
 /// A shorter borrow of an optional controller (for a call that does not keep it).
+/// `Option::as_deref_mut` does not do: it keeps the trait object's lifetime, which `&mut` makes
+/// invariant, so the second call in a loop would conflict with the first.
 fn reborrow<'s>(
     c: &'s mut Option<&mut dyn crate::sim::Controller>,
 ) -> Option<&'s mut dyn crate::sim::Controller> {
