@@ -1,12 +1,14 @@
 //! Diagnosis (truth side): predicted vs true elementary errors of one axis along its travel on a
-//! cold machine. `cargo run --release --example axis_profile -- SEED AXIS` (AXIS 0, 1, 2).
+//! cold machine, or at held-out evaluation state STATE (index into
+//! `campaign::evaluation_states`, 0 = cold). `cargo run --release --example axis_profile -- SEED
+//! AXIS [STATE]` (AXIS 0, 1, 2).
 //!
 //! The truth printed is the twin's error functions, without the approach: the predictor learns
 //! the positive approach, which lies half a reversal above them in the axis's own positioning
 //! error (0.25–0.3 µm on the reference machine).
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::twin::Twin;
 
 fn main() {
@@ -31,7 +33,22 @@ fn main() {
         },
     )
     .unwrap();
-    let twin = Twin::new(&spec, seed).unwrap();
+    let mut twin = Twin::new(&spec, seed).unwrap();
+    if let Some(&si) = a.get(2) {
+        // Drive to the state, the predictor following the readings as the controller does.
+        let state = &campaign::evaluation_states(seed)[si as usize];
+        println!("state {}", state.name);
+        twin.set_ambient(state.cycle.ambient.clone()).unwrap();
+        campaign::drive_with(
+            &mut twin,
+            &state.cycle,
+            0.0,
+            state.at_s,
+            1.0,
+            Some(&mut Follow(&mut h)),
+        )
+        .unwrap();
+    }
     let temps = twin.sensor_readings().values_degc;
     let (lo, hi) = (spec.axes.travel_min_mm[axis], spec.axes.travel_max_mm[axis]);
     println!("pos_mm   true(dx dy dz µm, rx ry rz µrad) | predicted");
@@ -58,5 +75,22 @@ fn main() {
             f(t.lin_mm, t.ang_rad),
             f(p.lin_mm, p.ang_rad)
         );
+    }
+}
+
+/// Passes the readings to the predictor while the twin is driven; commands pass through.
+struct Follow<'a>(&'a mut predictor::HybridPredictor);
+
+impl vmc_twin::sim::Controller for Follow<'_> {
+    fn axis_command_mm(
+        &mut self,
+        p_mm: [f64; 3],
+        _: &vmc_twin::sensors::SensorReadings,
+    ) -> [f64; 3] {
+        p_mm
+    }
+
+    fn on_readings(&mut self, r: &vmc_twin::sensors::SensorReadings) {
+        self.0.observe_readings(r.time_s, &r.values_degc);
     }
 }

@@ -15,6 +15,13 @@ fn main() {
     // `states=dev`: the selection-only states (placement stream 9001), for choosing settings
     // without looking at the held-out evaluation states.
     let mut dev = false;
+    // Campaign settings: `every=` (s between measurement blocks), `stoplog=` / `stopevery=`
+    // (spindle log after the stop), `spevery=` (spindle test interval while driving).
+    let cfg_of = CampaignConfig::new;
+    let mut every = None;
+    let mut stoplog = None;
+    let mut stopevery = None;
+    let mut spevery = None;
     for a in std::env::args().skip(1) {
         let (k, v) = a.split_once('=').expect("key=value");
         let list = || -> Vec<f64> {
@@ -33,10 +40,15 @@ fn main() {
                 settings.hidden_candidates = list().into_iter().map(|x| x as usize).collect()
             }
             "restarts" => settings.restarts = v.parse().unwrap(),
+            "bil" => settings.axis_bilinear = v == "1",
             "members" => members = v.parse().unwrap(),
             "staus" => settings.spindle_history_taus_s = list(),
             "shist" => settings.spindle_history_sensors = v.split(',').map(String::from).collect(),
             "states" => dev = v == "dev",
+            "every" => every = Some(v.parse().unwrap()),
+            "stoplog" => stoplog = Some(v.parse().unwrap()),
+            "stopevery" => stopevery = Some(v.parse().unwrap()),
+            "spevery" => spevery = Some(v.parse().unwrap()),
             "hist" => settings.history_sensors = v.split(',').map(String::from).collect(),
             _ => panic!("unknown {k}"),
         }
@@ -45,11 +57,22 @@ fn main() {
     let plans = diagonal_plans(&spec).unwrap();
     let mut runs = Vec::new();
     for &seed in &seeds {
-        let data = campaign::calibrate(
-            &spec,
-            &ThermalCycle::calibration_set(),
-            &CampaignConfig::new(seed),
-        )
+        let data = campaign::calibrate(&spec, &ThermalCycle::calibration_set(), &{
+            let mut c = cfg_of(seed);
+            if let Some(v) = every {
+                c.measure_every_s = v;
+            }
+            if let Some(v) = stoplog {
+                c.spindle_stop_log_s = v;
+            }
+            if let Some(v) = stopevery {
+                c.spindle_stop_every_s = v;
+            }
+            if let Some(v) = spevery {
+                c.spindle_every_s = v;
+            }
+            c
+        })
         .unwrap();
         let mut hs = Vec::new();
         let mut sum = None;
@@ -86,6 +109,21 @@ fn main() {
     }
     let (med, worst, max, rmse) = evaluation::headline(&runs, "hybrid").unwrap();
     let over = runs.iter().filter(|r| r.max_after_um > 2.0).count();
+    // The worst runs, with the max of each component (µm).
+    let mut worst_runs: Vec<_> = runs.iter().collect();
+    worst_runs.sort_by(|a, b| b.max_after_um.total_cmp(&a.max_after_um));
+    for r in worst_runs.iter().take(8) {
+        println!(
+            "  {:<4} {:<26} seed {:>2}  max {:.2} µm  (Ex {:.2} Ey {:.2} Ez {:.2})",
+            r.diagonal,
+            r.thermal_state,
+            r.seed,
+            r.max_after_um,
+            r.max_after_xyz_um[0],
+            r.max_after_xyz_um[1],
+            r.max_after_xyz_um[2]
+        );
+    }
     println!(
         "{:?}: median {:.1} % worst {:.1} % max {:.2} µm rmse {:.2} µm, {over} runs > 2 µm",
         std::env::args().skip(1).collect::<Vec<_>>(),

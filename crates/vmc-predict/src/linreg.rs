@@ -119,6 +119,23 @@ impl LinearModel {
         })
     }
 
+    /// A model from its coefficients (physical units): `slopes` row-major `n_out × n_in`.
+    pub(crate) fn from_coefficients(
+        n_in: usize,
+        intercept: Vec<f64>,
+        slopes: Vec<f64>,
+        ridge: f64,
+    ) -> Self {
+        debug_assert_eq!(slopes.len(), intercept.len() * n_in);
+        Self {
+            n_in,
+            n_out: intercept.len(),
+            intercept,
+            slopes,
+            ridge,
+        }
+    }
+
     /// Number of inputs.
     pub fn n_in(&self) -> usize {
         self.n_in

@@ -3,7 +3,7 @@
 //! ```text
 //! {
 //!   "format": "vmc-twin-model",
-//!   "version": 5,
+//!   "version": 6,
 //!   "kind": "hybrid" | "volumetric" | "linear",
 //!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
 //!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
@@ -14,8 +14,11 @@
 //! `model` of a `hybrid`: `axis_nets` (3 parts X, Y, Z: `[position mm, temps °C] →
 //! [dx, dy, dz µm, rx, ry, rz µrad]`), `spindle_net` (a part `temps → [dx, dy, dz µm, rx, ry
 //! µrad]`), `squareness` (linear model `temps → [α_yz, α_xz, α_xy] µrad`); a part is
-//! `{"linear": linear model, "net": regressor or null}` (the net models what the linear model
-//! leaves, see `part`; version 2 introduced the parts, version 1 held bare regressors), and
+//! `{"linear": linear model, "net": regressor or null, "bilinear": bool}` (the net models what
+//! the linear model leaves, see `part`; version 2 introduced the parts, version 1 held bare
+//! regressors; `bilinear`, version 6, says the linear model also takes the position ×
+//! temperature products — an older build would misread such a part, hence the new version;
+//! older files read as false), and
 //! `reversal_um` (`[X, Y, Z]`, µm: the mean positioning error of a negative approach minus that of
 //! a positive one, learned from bidirectional laser sweeps; version 3 added it — a version 2 file
 //! is still read, with zero reversal, i.e. the forward-approach model it was), and
@@ -53,7 +56,7 @@ use super::{ErrorPredictor, PredictError};
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
 /// The model file version this build writes (and the newest it reads).
-pub const FORMAT_VERSION: u64 = 5;
+pub const FORMAT_VERSION: u64 = 6;
 /// The oldest model file version this build reads (version 2: no `reversal_um`, read as zero).
 pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
@@ -550,15 +553,15 @@ mod tests {
     fn bad_version_format_and_kind_give_the_documented_messages() {
         let model = all_kinds().remove(2);
         let text = model.to_json_string().unwrap();
-        let v1 = text.replacen("\"version\": 5", "\"version\": 1", 1);
+        let v1 = text.replacen("\"version\": 6", "\"version\": 1", 1);
         assert_eq!(
             AnyPredictor::from_json_str(&v1).unwrap_err().to_string(),
-            "model file version 1 is not supported (this build reads versions 2 to 5)"
+            "model file version 1 is not supported (this build reads versions 2 to 6)"
         );
-        let v6 = text.replacen("\"version\": 5", "\"version\": 6", 1);
+        let v7 = text.replacen("\"version\": 6", "\"version\": 7", 1);
         assert_eq!(
-            AnyPredictor::from_json_str(&v6).unwrap_err().to_string(),
-            "model file version 6 is not supported (this build reads versions 2 to 5)"
+            AnyPredictor::from_json_str(&v7).unwrap_err().to_string(),
+            "model file version 7 is not supported (this build reads versions 2 to 6)"
         );
         let other = text.replacen("vmc-twin-model", "something-else", 1);
         assert_eq!(
@@ -603,7 +606,10 @@ mod tests {
         assert_ne!(cut, text, "the edit must apply");
         let err = AnyPredictor::from_json_str(&cut).unwrap_err().to_string();
         assert!(
-            err.starts_with("inconsistent model file: linear model `axis_x` must map 4 → 6 values"),
+            err.starts_with("inconsistent model file: linear model `axis_x` must map 7 → 6 values")
+                && err.ends_with(
+                    "a bilinear part takes 1 position(s), 3 sensor inputs and their 3 products"
+                ),
             "{err}"
         );
     }

@@ -359,6 +359,7 @@ pub fn train_hybrid(
             &split,
             settings,
             k as u64,
+            usize::from(settings.axis_bilinear),
         )?;
         axis_nets.push(reg);
         nets.push(summary);
@@ -370,6 +371,7 @@ pub fn train_hybrid(
         &split,
         settings,
         3,
+        0,
     )?;
     nets.push(summary);
     let (squareness, summary) = fit_linear(
@@ -650,7 +652,9 @@ mod tests {
         // One more input for the spindle part only.
         assert_eq!(p.parts().spindle_net.linear.n_in(), n + 1);
         for part in &p.parts().axis_nets {
-            assert_eq!(part.linear.n_in(), 1 + n);
+            // Position, readings, and position × readings (bilinear by default).
+            assert!(part.bilinear);
+            assert_eq!(part.linear.n_in(), 1 + n + n);
         }
         assert_eq!(p.parts().squareness.n_in(), n);
         assert_eq!(p.parts().spindle_history_sensors, vec![1]);

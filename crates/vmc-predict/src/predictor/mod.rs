@@ -299,6 +299,10 @@ pub struct Settings {
     pub spindle_history_taus_s: Vec<f64>,
     /// Sensors with spindle-only history features (default: empty = all the model's sensors).
     pub spindle_history_sensors: Vec<String>,
+    /// Position × temperature products in the linear part of each axis network (default:
+    /// true), see `part`: a ballscrew or scale expands in proportion to the distance from its
+    /// fixed end, so the thermal positioning error is bilinear in position and temperatures.
+    pub axis_bilinear: bool,
 }
 
 impl Default for Settings {
@@ -321,6 +325,7 @@ impl Default for Settings {
             history_sensors: Vec::new(),
             spindle_history_taus_s: Vec::new(),
             spindle_history_sensors: Vec::new(),
+            axis_bilinear: true,
         }
     }
 }
