@@ -8,7 +8,9 @@
 //! error (0.25–0.3 µm on the reference machine).
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
+use vmc_twin::evaluation::LoopController;
+use vmc_twin::predict::controller::Compensator;
+use vmc_twin::predict::predictor::{self, Settings};
 use vmc_twin::twin::Twin;
 
 fn main() {
@@ -24,7 +26,7 @@ fn main() {
         &CampaignConfig::new(seed),
     )
     .unwrap();
-    let (mut h, _) = predictor::train_hybrid(
+    let (h, _) = predictor::train_hybrid(
         &data,
         &spec.geometry(),
         &Settings {
@@ -34,6 +36,7 @@ fn main() {
     )
     .unwrap();
     let mut twin = Twin::new(&spec, seed).unwrap();
+    let mut follow = LoopController(Compensator::new(h));
     if let Some(&si) = a.get(2) {
         // Drive to the state, the predictor following the readings as the controller does.
         let state = &campaign::evaluation_states(seed)[si as usize];
@@ -45,10 +48,11 @@ fn main() {
             0.0,
             state.at_s,
             1.0,
-            Some(&mut Follow(&mut h)),
+            Some(&mut follow),
         )
         .unwrap();
     }
+    let mut h = follow.0.into_inner();
     let temps = twin.sensor_readings().values_degc;
     let (lo, hi) = (spec.axes.travel_min_mm[axis], spec.axes.travel_max_mm[axis]);
     println!("pos_mm   true(dx dy dz µm, rx ry rz µrad) | predicted");
@@ -75,22 +79,5 @@ fn main() {
             f(t.lin_mm, t.ang_rad),
             f(p.lin_mm, p.ang_rad)
         );
-    }
-}
-
-/// Passes the readings to the predictor while the twin is driven; commands pass through.
-struct Follow<'a>(&'a mut predictor::HybridPredictor);
-
-impl vmc_twin::sim::Controller for Follow<'_> {
-    fn axis_command_mm(
-        &mut self,
-        p_mm: [f64; 3],
-        _: &vmc_twin::sensors::SensorReadings,
-    ) -> [f64; 3] {
-        p_mm
-    }
-
-    fn on_readings(&mut self, r: &vmc_twin::sensors::SensorReadings) {
-        self.0.observe_readings(r.time_s, &r.values_degc);
     }
 }

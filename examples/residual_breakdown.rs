@@ -13,6 +13,8 @@
 
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
+use vmc_twin::evaluation::LoopController;
+use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::predict::synthesis::first_order_error_mm;
 use vmc_twin::twin::{sub_seed, Twin};
@@ -75,16 +77,17 @@ fn main() {
             twin.set_ambient(state.cycle.ambient.clone()).unwrap();
             // The predictor follows the readings through the thermal history (its history
             // features), as the controller does in the campaign.
-            let mut hs = h.clone();
+            let mut follow = LoopController(Compensator::new(h.clone()));
             campaign::drive_with(
                 &mut twin,
                 &state.cycle,
                 0.0,
                 state.at_s,
                 1.0,
-                Some(&mut Follow(&mut hs)),
+                Some(&mut follow),
             )
             .unwrap();
+            let mut hs = follow.0.into_inner();
             let mut worst = [[0.0f64; 3]; 6];
             // At the state and over the next 90 s with the spindle stopped (a diagonal test).
             for step in 0..4 {
@@ -136,22 +139,5 @@ fn main() {
                 f(worst[5])
             );
         }
-    }
-}
-
-/// Passes the readings of a thermal history to the predictor (it compensates nothing).
-struct Follow<'a>(&'a mut predictor::HybridPredictor);
-
-impl vmc_twin::sim::Controller for Follow<'_> {
-    fn axis_command_mm(
-        &mut self,
-        p_mm: [f64; 3],
-        _: &vmc_twin::sensors::SensorReadings,
-    ) -> [f64; 3] {
-        p_mm
-    }
-
-    fn on_readings(&mut self, r: &vmc_twin::sensors::SensorReadings) {
-        self.0.observe_readings(r.time_s, &r.values_degc);
     }
 }
