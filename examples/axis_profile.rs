@@ -7,8 +7,8 @@
 //! the positive approach, which lies half a reversal above them in the axis's own positioning
 //! error (0.25–0.3 µm on the reference machine).
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
 use vmc_twin::evaluation::LoopController;
+use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::{self, Settings};
 use vmc_twin::twin::Twin;

@@ -12,8 +12,8 @@
 //! states)
 
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
 use vmc_twin::evaluation::LoopController;
+use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::predict::synthesis::first_order_error_mm;
