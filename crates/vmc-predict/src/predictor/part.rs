@@ -4,6 +4,10 @@
 //! `p` are the part's position inputs (one axis position, or none for the spindle) and `T` the
 //! sensor readings (°C). The linear part is fitted first by ridge least squares; the one-hidden-
 //! layer net is then fitted (Levenberg–Marquardt, as every net) to what the linear part leaves.
+//! A *bilinear* part (the hybrid's axis parts, `Settings::axis_bilinear`) adds `p·(B·T)` to the
+//! linear part: the products of the position with every temperature input, i.e. a scale error
+//! that changes with temperature, as a ballscrew's or a scale's expansion does. At query time
+//! `a_p + B·T` is cached with the readings, so a query costs the same.
 //!
 //! Why: the thermal drifts of a machine are close to linear in its temperatures, and outside
 //! the calibrated range (a warmer ambient, a combination of readings never met in
