@@ -547,6 +547,37 @@ mod tests {
     }
 
     #[test]
+    fn a_version_5_file_reads_as_plain_parts_and_predicts_as_written() {
+        // A model trained without the products, written as version 5 did (no `bilinear`).
+        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let plain = Settings {
+            axis_bilinear: false,
+            hidden_candidates: vec![6],
+            max_epochs: 20,
+            ..Settings::default()
+        };
+        let (mut p, _) = train_hybrid(&ds, &td::geometry(), &plain).unwrap();
+        let mut v: serde_json::Value = serde_json::from_str(&p.to_json_string().unwrap()).unwrap();
+        v["version"] = 5.into();
+        let model = v["model"].as_object_mut().unwrap();
+        for part in model["axis_nets"].as_array_mut().unwrap() {
+            assert_eq!(
+                part.as_object_mut().unwrap().remove("bilinear"),
+                Some(false.into())
+            );
+        }
+        model["spindle_net"]
+            .as_object_mut()
+            .unwrap()
+            .remove("bilinear");
+        let mut old = HybridPredictor::from_json_str(&v.to_string()).unwrap();
+        let hot = td::temps_degc(6.0, 7200.0);
+        for q in [[100.0, 50.0, -80.0], [400.0, 300.0, -300.0]] {
+            assert_eq!(old.predict_error_mm(q, &hot), p.predict_error_mm(q, &hot));
+        }
+    }
+
+    #[test]
     fn the_reversal_is_learned_from_alternating_sweeps_and_survives_the_model_file() {
         // Every other measurement round sweeps backward: the positioning reading shifts by R.
         let truth_um = [-0.5, -0.6, -0.4];
