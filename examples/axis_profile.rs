@@ -7,9 +7,8 @@
 //! the positive approach, which lies half a reversal above them in the axis's own positioning
 //! error (0.25–0.3 µm on the reference machine).
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::evaluation::LoopController;
+use vmc_twin::evaluation::follow_to_state;
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::{self, Settings};
 use vmc_twin::twin::Twin;
 
@@ -26,7 +25,7 @@ fn main() {
         &CampaignConfig::new(seed),
     )
     .unwrap();
-    let (h, _) = predictor::train_hybrid(
+    let (mut h, _) = predictor::train_hybrid(
         &data,
         &spec.geometry(),
         &Settings {
@@ -36,23 +35,12 @@ fn main() {
     )
     .unwrap();
     let mut twin = Twin::new(&spec, seed).unwrap();
-    let mut follow = LoopController(Compensator::new(h));
     if let Some(&si) = a.get(2) {
         // Drive to the state, the predictor following the readings as the controller does.
         let state = &campaign::evaluation_states(seed)[si as usize];
         println!("state {}", state.name);
-        twin.set_ambient(state.cycle.ambient.clone()).unwrap();
-        campaign::drive_with(
-            &mut twin,
-            &state.cycle,
-            0.0,
-            state.at_s,
-            1.0,
-            Some(&mut follow),
-        )
-        .unwrap();
+        h = follow_to_state(&mut twin, state, h).unwrap();
     }
-    let mut h = follow.0.into_inner();
     let temps = twin.sensor_readings().values_degc;
     let (lo, hi) = (spec.axes.travel_min_mm[axis], spec.axes.travel_max_mm[axis]);
     println!("pos_mm   true(dx dy dz µm, rx ry rz µrad) | predicted");

@@ -12,9 +12,8 @@
 //! states)
 
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::evaluation::LoopController;
+use vmc_twin::evaluation::follow_to_state;
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::predict::synthesis::first_order_error_mm;
 use vmc_twin::twin::{sub_seed, Twin};
@@ -74,20 +73,9 @@ fn main() {
         for (si, state) in states.iter().enumerate() {
             let mut twin =
                 Twin::with_noise_seed(&spec, seed, sub_seed(seed, 9000 + si as u64)).unwrap();
-            twin.set_ambient(state.cycle.ambient.clone()).unwrap();
             // The predictor follows the readings through the thermal history (its history
             // features), as the controller does in the campaign.
-            let mut follow = LoopController(Compensator::new(h.clone()));
-            campaign::drive_with(
-                &mut twin,
-                &state.cycle,
-                0.0,
-                state.at_s,
-                1.0,
-                Some(&mut follow),
-            )
-            .unwrap();
-            let mut hs = follow.0.into_inner();
+            let mut hs = follow_to_state(&mut twin, state, h.clone()).unwrap();
             let mut worst = [[0.0f64; 3]; 6];
             // At the state and over the next 90 s with the spindle stopped (a diagonal test).
             for step in 0..4 {

@@ -87,7 +87,7 @@ fn fit_score(train: &[(Vec<f64>, [f64; 3])], test: &[(Vec<f64>, [f64; 3])]) -> [
         // Tiny ridge for conditioning.
         let a = x.transpose() * &x + DMatrix::identity(n_in, n_in) * 1e-6;
         let b = a.cholesky().unwrap().solve(&(x.transpose() * y));
-        let s: f64 = test
+        let residuals: Vec<f64> = test
             .iter()
             .map(|(xi, yi)| {
                 let p = b[0]
@@ -95,20 +95,11 @@ fn fit_score(train: &[(Vec<f64>, [f64; 3])], test: &[(Vec<f64>, [f64; 3])]) -> [
                         .zip(b.iter().skip(1))
                         .map(|(u, w)| u * w)
                         .sum::<f64>();
-                (p - yi[o]).powi(2)
+                p - yi[o]
             })
-            .sum();
-        let mx = test
-            .iter()
-            .map(|(xi, yi)| {
-                let p = b[0]
-                    + xi.iter()
-                        .zip(b.iter().skip(1))
-                        .map(|(u, w)| u * w)
-                        .sum::<f64>();
-                (p - yi[o]).abs()
-            })
-            .fold(0.0, f64::max);
+            .collect();
+        let s: f64 = residuals.iter().map(|e| e * e).sum();
+        let mx = residuals.iter().fold(0.0f64, |m, e| m.max(e.abs()));
         *ro = ((s / test.len() as f64).sqrt(), mx);
     }
     r

@@ -25,7 +25,7 @@ use crate::program::{self, ProgramError};
 use crate::report::error_stats;
 use crate::sensors::SensorReadings;
 use crate::sim::{Controller, PointRecord, SimError};
-use crate::twin::{sub_seed, TwinError};
+use crate::twin::{sub_seed, Twin, TwinError};
 
 /// The diagonal tests run by the campaign: (report name, program text).
 pub const DIAGONALS: [(&str, &str); 7] = [
@@ -74,6 +74,24 @@ impl<P: ErrorPredictor> Controller for LoopController<P> {
     fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
         self.0.note_motion_segment_mm(start_mm, end_mm);
     }
+}
+
+/// Drives `twin` through `state`'s cycle up to the state (1 s thermal steps, cycle time 0 at
+/// the twin's start) with `predictor` following every reading, as the controller does before
+/// a test, and gives the predictor back (its history features at the state). For diagnosis
+/// examples that compare predictions with the truth at a state.
+///
+/// # Errors
+/// Twin errors.
+pub fn follow_to_state<P: ErrorPredictor>(
+    twin: &mut Twin,
+    state: &EvalState,
+    predictor: P,
+) -> Result<P, TwinError> {
+    twin.set_ambient(state.cycle.ambient.clone())?;
+    let mut follow = LoopController(Compensator::new(predictor));
+    campaign::drive_with(twin, &state.cycle, 0.0, state.at_s, 1.0, Some(&mut follow))?;
+    Ok(follow.0.into_inner())
 }
 
 /// One evaluated run: one predictor, one diagonal, one thermal state, one seed.
