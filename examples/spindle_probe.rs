@@ -104,6 +104,9 @@ fn samples(spec: &MachineSpec, seed: u64, k: u64, cycle: &ThermalCycle) -> Vec<S
     out
 }
 
+/// The inputs of one variant, from a sample.
+type Features = fn(&Sample) -> Vec<f64>;
+
 /// Least-squares fit (intercept, tiny ridge) on `train`; residuals on `test`.
 fn residuals(train: &[(Vec<f64>, f64)], test: &[(Vec<f64>, f64)]) -> Vec<f64> {
     let n_in = train[0].0.len() + 1;
@@ -157,7 +160,7 @@ fn main() {
         test.len(),
         after_stop.iter().filter(|b| **b).count()
     );
-    let variants: [(&str, fn(&Sample) -> Vec<f64>); 3] = [
+    let variants: [(&str, Features); 3] = [
         ("readings", |s| s.readings.clone()),
         ("readings + nose rate", |s| {
             let mut x = s.readings.clone();
