@@ -1,5 +1,10 @@
 //! Diagnosis: the hybrid predictor alone over seeds 1–3 with training-setting variants.
-//! `cargo run --release --example hybrid_variants -- taus=1800,7200 seedoff=0`
+//! `cargo run --release --example hybrid_variants -- states=dev seeds=21,22,23 bil=0`
+//!
+//! Keys: `states=dev` (selection-only states), `seeds=`, predictor settings (`taus=`, `hist=`,
+//! `staus=`, `shist=`, `bil=0|1`, `ridge=`, `hidden=`, `restarts=`, `gain=`, `members=`,
+//! `seedoff=`) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
+//! Prints per seed the kept nets, then the headline figures and the eight worst runs.
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::evaluation::{self, diagonal_plans};
 use vmc_twin::machine::MachineSpec;
