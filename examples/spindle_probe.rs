@@ -13,9 +13,10 @@
 //!   keeps from the predictor, shown only to say what it would be worth.
 //!
 //! `cargo run --release --example spindle_probe -- SEED`
-use nalgebra::{DMatrix, DVector};
 use vmc_twin::campaign::{self, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
+use vmc_twin::predict::linreg::LinearModel;
+use vmc_twin::predict::nn::Samples;
 use vmc_twin::sensors::SensorReadings;
 use vmc_twin::twin::{sub_seed, Twin};
 
@@ -107,28 +108,14 @@ fn samples(spec: &MachineSpec, seed: u64, k: u64, cycle: &ThermalCycle) -> Vec<S
 /// The inputs of one variant, from a sample.
 type Features = fn(&Sample) -> Vec<f64>;
 
-/// Least-squares fit (intercept, tiny ridge) on `train`; residuals on `test`.
+/// The project's ridge regression (z-scored inputs, a tiny ridge for conditioning) fitted on
+/// `train`; residuals on `test`.
 fn residuals(train: &[(Vec<f64>, f64)], test: &[(Vec<f64>, f64)]) -> Vec<f64> {
-    let n_in = train[0].0.len() + 1;
-    let x = DMatrix::from_fn(train.len(), n_in, |i, j| {
-        if j == 0 {
-            1.0
-        } else {
-            train[i].0[j - 1]
-        }
-    });
-    let y = DVector::from_fn(train.len(), |i, _| train[i].1);
-    let a = x.transpose() * &x + DMatrix::identity(n_in, n_in) * 1e-6;
-    let b = a.cholesky().unwrap().solve(&(x.transpose() * y));
+    let xs: Vec<Vec<f64>> = train.iter().map(|(x, _)| x.clone()).collect();
+    let ys: Vec<Vec<f64>> = train.iter().map(|(_, y)| vec![*y]).collect();
+    let model = LinearModel::fit(&Samples::from_rows(&xs, &ys).unwrap(), 1e-6).unwrap();
     test.iter()
-        .map(|(xi, yi)| {
-            b[0] + xi
-                .iter()
-                .zip(b.iter().skip(1))
-                .map(|(u, w)| u * w)
-                .sum::<f64>()
-                - yi
-        })
+        .map(|(x, y)| model.predict(x).unwrap()[0] - y)
         .collect()
 }
 

@@ -11,9 +11,10 @@
 //!
 //! `cargo run --release --example travel_probe -- SEED [every=MIN] [noise=µm]` — `every=30
 //! noise=0.3` thins and blurs the training samples like the campaign's laser blocks.
-use nalgebra::{DMatrix, DVector};
 use vmc_twin::campaign::{self, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
+use vmc_twin::predict::linreg::LinearModel;
+use vmc_twin::predict::nn::Samples;
 use vmc_twin::twin::{sub_seed, Twin};
 
 const TAUS_S: [f64; 2] = [1200.0, 3600.0];
@@ -73,36 +74,24 @@ fn rows(
 
 /// Least squares with intercept on `train`; RMS and max |residual| on `test`, per output.
 fn fit_score(train: &[(Vec<f64>, [f64; 3])], test: &[(Vec<f64>, [f64; 3])]) -> [(f64, f64); 3] {
-    let n_in = train[0].0.len() + 1;
-    let x = DMatrix::from_fn(train.len(), n_in, |i, j| {
-        if j == 0 {
-            1.0
-        } else {
-            train[i].0[j - 1]
-        }
-    });
-    let mut r = [(0.0, 0.0); 3];
-    for (o, ro) in r.iter_mut().enumerate() {
-        let y = DVector::from_fn(train.len(), |i, _| train[i].1[o]);
-        // Tiny ridge for conditioning.
-        let a = x.transpose() * &x + DMatrix::identity(n_in, n_in) * 1e-6;
-        let b = a.cholesky().unwrap().solve(&(x.transpose() * y));
-        let residuals: Vec<f64> = test
+    let xs: Vec<Vec<f64>> = train.iter().map(|(x, _)| x.clone()).collect();
+    let ys: Vec<Vec<f64>> = train.iter().map(|(_, y)| y.to_vec()).collect();
+    // The project's ridge regression (z-scored inputs), a tiny ridge for conditioning.
+    let model = LinearModel::fit(&Samples::from_rows(&xs, &ys).unwrap(), 1e-6).unwrap();
+    let predicted: Vec<Vec<f64>> = test
+        .iter()
+        .map(|(x, _)| model.predict(x).unwrap())
+        .collect();
+    [0, 1, 2].map(|o| {
+        let residuals: Vec<f64> = predicted
             .iter()
-            .map(|(xi, yi)| {
-                let p = b[0]
-                    + xi.iter()
-                        .zip(b.iter().skip(1))
-                        .map(|(u, w)| u * w)
-                        .sum::<f64>();
-                p - yi[o]
-            })
+            .zip(test)
+            .map(|(p, (_, y))| p[o] - y[o])
             .collect();
         let s: f64 = residuals.iter().map(|e| e * e).sum();
         let mx = residuals.iter().fold(0.0f64, |m, e| m.max(e.abs()));
-        *ro = ((s / test.len() as f64).sqrt(), mx);
-    }
-    r
+        ((s / test.len() as f64).sqrt(), mx)
+    })
 }
 
 fn main() {
