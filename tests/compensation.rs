@@ -90,9 +90,8 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
     // (README, "Compensation: the campaign"); the target of 2 µm is not reached, so
     // this only stops the figure from sliding back (2.06 µm before the bilinear axis parts,
     // chosen on development states, which raised it here; 2.31 µm without the ambient history
-    // feature, 7 µm in the first version). The guard was 2.5 µm until the bilinear parts; it is
-    // 2.6 µm now so that rounding differences of another CPU's matrix kernels cannot fail it by
-    // 0.02 µm — not to admit a worse predictor.
+    // feature, 7 µm in the first version). The guard stays at 2.5 µm: the runs are
+    // deterministic (same seeds, same bits), so it is not widened for the new figure.
     let (max_after, at) = runs
         .iter()
         .map(|r| {
@@ -105,8 +104,8 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
         .unwrap();
     println!("max residual |E| {max_after:.2} µm ({at})");
     assert!(
-        max_after <= 2.6,
-        "max residual |E| {max_after:.2} µm at {at} > 2.6 µm"
+        max_after <= 2.5,
+        "max residual |E| {max_after:.2} µm at {at} > 2.5 µm"
     );
 }
 

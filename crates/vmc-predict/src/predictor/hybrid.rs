@@ -684,7 +684,6 @@ mod tests {
         assert_eq!(p.parts().spindle_net.linear.n_in(), n + 1);
         for part in &p.parts().axis_nets {
             // Position, readings, and position × readings (bilinear by default).
-            assert!(part.bilinear);
             assert_eq!(part.linear.n_in(), 1 + n + n);
         }
         assert_eq!(p.parts().squareness.n_in(), n);
