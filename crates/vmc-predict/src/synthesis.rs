@@ -82,6 +82,7 @@
 //! Cost: [`first_order_error_mm`] does ~70 flops, no allocation, no transcendental functions.
 
 mod chain;
+pub mod reference_cases;
 
 pub use chain::{Chain, ChainError, LinearAxis, Side};
 
@@ -185,6 +186,10 @@ pub fn first_order_error_mm(
 
 #[cfg(test)]
 mod tests {
+    use super::reference_cases::{
+        single_error as only, SingleError as One, CASE_CHAIN, CASE_Q_MM, CASE_TOOL_MM,
+        SINGLE_ERROR_CASES,
+    };
     use super::*;
     use rand::rngs::StdRng;
     use rand::{RngExt, SeedableRng};
@@ -288,70 +293,11 @@ mod tests {
         );
     }
 
-    /// Which single error a table row sets.
-    #[derive(Clone, Copy, Debug)]
-    enum One {
-        Lin(usize, usize),
-        Ang(usize, usize),
-        SqXy,
-        SqXz,
-        SqYz,
-        SpLin(usize),
-        SpTilt(usize),
-    }
-
-    fn only(which: One, value: f64) -> ElementaryErrors {
-        let mut e = ElementaryErrors::default();
-        match which {
-            One::Lin(axis, i) => e.axes[axis].lin_mm[i] = value,
-            One::Ang(axis, i) => e.axes[axis].ang_rad[i] = value,
-            One::SqXy => e.squareness.xy_rad = value,
-            One::SqXz => e.squareness.xz_rad = value,
-            One::SqYz => e.squareness.yz_rad = value,
-            One::SpLin(i) => e.spindle.lin_mm[i] = value,
-            One::SpTilt(i) => e.spindle.tilt_rad[i] = value,
-        }
-        e
-    }
-
-    /// Each of the 26 errors alone on `w X Y b Z t` at q = (100, 200, −300) mm, T = (10, 20, −150) mm.
-    /// Translations 0.002 mm, motion angles 1e-5 rad, squareness 2e-5 rad. Expected vectors are
-    /// worked by hand from the conventions (arms: X (110, 220, −450), Y (10, 220, −450),
-    /// Z and spindle (10, 20, −150); workpiece side enters as −(δ + ε × a), tool side as +).
-    const SINGLE_ERROR_TABLE: [(&str, One, f64, [f64; 3]); 26] = [
-        ("δ_xx", One::Lin(0, 0), 0.002, [-0.002, 0.0, 0.0]),
-        ("δ_yx", One::Lin(0, 1), 0.002, [0.0, -0.002, 0.0]),
-        ("δ_zx", One::Lin(0, 2), 0.002, [0.0, 0.0, -0.002]),
-        ("ε_xx", One::Ang(0, 0), 1e-5, [0.0, -4.5e-3, -2.2e-3]),
-        ("ε_yx", One::Ang(0, 1), 1e-5, [4.5e-3, 0.0, 1.1e-3]),
-        ("ε_zx", One::Ang(0, 2), 1e-5, [2.2e-3, -1.1e-3, 0.0]),
-        ("δ_xy", One::Lin(1, 0), 0.002, [-0.002, 0.0, 0.0]),
-        ("δ_yy", One::Lin(1, 1), 0.002, [0.0, -0.002, 0.0]),
-        ("δ_zy", One::Lin(1, 2), 0.002, [0.0, 0.0, -0.002]),
-        ("ε_xy", One::Ang(1, 0), 1e-5, [0.0, -4.5e-3, -2.2e-3]),
-        ("ε_yy", One::Ang(1, 1), 1e-5, [4.5e-3, 0.0, 1e-4]),
-        ("ε_zy", One::Ang(1, 2), 1e-5, [2.2e-3, -1e-4, 0.0]),
-        ("δ_xz", One::Lin(2, 0), 0.002, [0.002, 0.0, 0.0]),
-        ("δ_yz", One::Lin(2, 1), 0.002, [0.0, 0.002, 0.0]),
-        ("δ_zz", One::Lin(2, 2), 0.002, [0.0, 0.0, 0.002]),
-        ("ε_xz", One::Ang(2, 0), 1e-5, [0.0, 1.5e-3, 2e-4]),
-        ("ε_yz", One::Ang(2, 1), 1e-5, [-1.5e-3, 0.0, -1e-4]),
-        ("ε_zz", One::Ang(2, 2), 1e-5, [-2e-4, 1e-4, 0.0]),
-        ("α_xy", One::SqXy, 2e-5, [-4e-3, 0.0, 0.0]),
-        ("α_xz", One::SqXz, 2e-5, [-6e-3, 0.0, 0.0]),
-        ("α_yz", One::SqYz, 2e-5, [0.0, 6e-3, 0.0]),
-        ("δ_xb", One::SpLin(0), 0.002, [0.002, 0.0, 0.0]),
-        ("δ_yb", One::SpLin(1), 0.002, [0.0, 0.002, 0.0]),
-        ("δ_zb", One::SpLin(2), 0.002, [0.0, 0.0, 0.002]),
-        ("ε_xb", One::SpTilt(0), 1e-5, [0.0, 1.5e-3, 2e-4]),
-        ("ε_yb", One::SpTilt(1), 1e-5, [-1.5e-3, 0.0, -1e-4]),
-    ];
-
     #[test]
     fn each_of_the_26_errors_alone_gives_its_hand_derived_effect() {
-        let geom = geometry("w X Y b Z t", [10.0, 20.0, -150.0]);
-        for (name, which, value, want) in SINGLE_ERROR_TABLE {
-            let got = first_order_error_mm(&geom, [100.0, 200.0, -300.0], &only(which, value));
+        let geom = geometry(CASE_CHAIN, CASE_TOOL_MM);
+        for (name, which, value, want) in SINGLE_ERROR_CASES {
+            let got = first_order_error_mm(&geom, CASE_Q_MM, &only(which, value));
             for i in 0..3 {
                 assert!(
                     (got[i] - want[i]).abs() < EXACT_MM,
