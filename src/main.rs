@@ -281,10 +281,27 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("vmc-twin: error: {e:#}");
+            eprintln!("vmc-twin: error: {}", error_text(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, `: `-joined, without repeating a cause that its parent's message
+/// already ends with (errors that print their source as well as exposing it).
+fn error_text(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let s = cause.to_string();
+        if out.ends_with(&s) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&s);
+    }
+    out
 }
 
 fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<MachineSpec> {
@@ -353,8 +370,12 @@ fn run(args: RunArgs) -> Result<()> {
         (Some(path), true) => {
             use vmc_twin::predict::controller::Compensator;
             use vmc_twin::predict::predictor::AnyPredictor;
-            let model =
-                AnyPredictor::load_json(path).with_context(|| format!("{}", path.display()))?;
+            use vmc_twin::predict::predictor::PredictError;
+            // An I/O error names the file already; a content error does not.
+            let model = AnyPredictor::load_json(path).map_err(|e| match e {
+                PredictError::Io { .. } => anyhow::Error::new(e),
+                _ => anyhow::Error::new(e).context(path.display().to_string()),
+            })?;
             let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
             let ctrl = Compensator::for_machine(model, &names).with_context(|| {
                 format!(
@@ -1036,4 +1057,29 @@ fn wrote_recording(
         path.display(),
         bytes as f64 / 1e6
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_text;
+    use vmc_twin::predict::nn::{DataError, NnError};
+    use vmc_twin::predict::predictor::PredictError;
+
+    #[test]
+    fn a_cause_that_its_parent_already_prints_is_not_repeated() {
+        // `PredictError::Net` prints its source and exposes it too.
+        let e = anyhow::Error::new(PredictError::Net {
+            net: "spindle",
+            source: NnError::Data(DataError::TooLarge {
+                what: "targets",
+                column: 0,
+            }),
+        });
+        let text = error_text(&e);
+        assert!(text.starts_with("network `spindle`: targets, column 0: "), "{text}");
+        assert_eq!(text.matches("targets, column 0").count(), 1, "{text}");
+        // Contexts still chain.
+        let e = e.context("cal.csv");
+        assert!(error_text(&e).starts_with("cal.csv: network `spindle`: "));
+    }
 }

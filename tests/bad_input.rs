@@ -219,3 +219,58 @@ fn absurd_steps_are_refused_before_any_simulation() {
     );
     assert!(!t.0.join("c.csv").exists());
 }
+
+#[test]
+fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
+    let t = Tmp::new("data");
+    let ok = Command::new(BIN)
+        .args(["calibrate", "--measure-every-min", "120", "-o", "cal.csv"])
+        .current_dir(&t.0)
+        .output()
+        .unwrap();
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    let text = std::fs::read_to_string(t.0.join("cal.csv")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let write = |name: &str, lines: &[String]| {
+        std::fs::write(t.0.join(name), lines.join("\n") + "\n").unwrap();
+    };
+    // A corrupt measurement cell (line 2 is the first record; its dx_um is the 7th cell).
+    let mut huge = lines.clone();
+    let mut cells: Vec<String> = huge[1].split(',').map(String::from).collect();
+    cells[6] = "1e308".into();
+    huge[1] = cells.join(",");
+    write("huge.csv", &huge);
+    assert_eq!(
+        one_line_error(&t.0, &["train", "--data", "huge.csv", "-o", "m.json"]),
+        "huge.csv: line 2, column `dx_um`: implausible value 1e308: beyond ±1e6 (a corrupt cell or a unit mistake?)"
+    );
+    // A column pasted twice.
+    let header = lines[0].clone();
+    let last = header.rsplit(',').next().unwrap().to_string();
+    let n = header.split(',').count();
+    lines[0] = format!("{header},{last}");
+    for l in lines.iter_mut().skip(1) {
+        let v = l.rsplit(',').next().unwrap().to_string();
+        l.push(',');
+        l.push_str(&v);
+    }
+    write("dup.csv", &lines);
+    assert_eq!(
+        one_line_error(&t.0, &["train", "--data", "dup.csv", "-o", "m.json"]),
+        format!(
+            "dup.csv: column `{last}` appears twice in the header (columns {n} and {})",
+            n + 1
+        )
+    );
+    assert!(!t.0.join("m.json").exists());
+    // A missing model file is named once; a file that is not a model says so.
+    let prog = repo("trajectories/diag_xy.ngc").display().to_string();
+    let err = one_line_error(&t.0, &["run", &prog, "--model", "nope.json", "--compensate"]);
+    assert!(err.starts_with("nope.json: "), "{err}");
+    assert_eq!(err.matches("nope.json").count(), 1, "{err}");
+    std::fs::write(t.0.join("x.json"), "{}").unwrap();
+    assert_eq!(
+        one_line_error(&t.0, &["run", &prog, "--model", "x.json", "--compensate"]),
+        "x.json: not a vmc-twin model file: no `format` field"
+    );
+}

@@ -22,6 +22,11 @@
 //! | `volumetric` | volumetric error Ex, Ey, Ez    | empty                                |
 //!
 //! Empty cells are read as "not measured" (NaN in memory).
+//!
+//! Plausibility: a measurement beyond ±1e6 µm or µrad (a metre, a radian), a position beyond
+//! ±1e6 mm or a temperature below absolute zero is refused with its line and column: such a
+//! value is a corrupt cell or a unit mistake, and training on it would give absurd models
+//! without any error.
 
 use std::fmt::Write as _;
 
@@ -130,6 +135,18 @@ pub enum DatasetError {
         /// What is wrong.
         msg: String,
     },
+    /// A column name appears twice in the header (which one would be meant?).
+    #[error("{source_name}: column `{column}` appears twice in the header (columns {first} and {second})")]
+    DuplicateColumn {
+        /// File name.
+        source_name: String,
+        /// The column.
+        column: String,
+        /// 1-based positions of its first two occurrences.
+        first: usize,
+        /// See `first`.
+        second: usize,
+    },
     /// The file has no header or no records.
     #[error("{source_name}: {msg}")]
     Empty {
@@ -157,6 +174,12 @@ const FIXED: [&str; 12] = [
     "ry_urad",
     "rz_urad",
 ];
+
+/// Largest plausible |value| of a position (mm) or a measurement (µm, µrad).
+const PLAUSIBLE_MAX: f64 = 1e6;
+
+/// Absolute zero, °C.
+const ABSOLUTE_ZERO_DEGC: f64 = -273.15;
 
 fn cell(v: f64) -> String {
     if v.is_nan() {
@@ -218,6 +241,16 @@ impl Dataset {
             msg: "empty file (no header line)".into(),
         })?;
         let cols: Vec<&str> = header.split(',').map(|c| c.trim()).collect();
+        for (j, c) in cols.iter().enumerate() {
+            if let Some(i) = cols[..j].iter().position(|d| d == c) {
+                return Err(DatasetError::DuplicateColumn {
+                    source_name: source_name.into(),
+                    column: c.to_string(),
+                    first: i + 1,
+                    second: j + 1,
+                });
+            }
+        }
         let mut idx = [0usize; 12];
         for (k, name) in FIXED.iter().enumerate() {
             idx[k] =
@@ -267,6 +300,12 @@ impl Dataset {
                 if !v.is_finite() {
                     return Err(bad(FIXED[k], format!("not a finite number: \"{c}\"")));
                 }
+                if k >= 3 && v.abs() > PLAUSIBLE_MAX {
+                    return Err(bad(
+                        FIXED[k],
+                        format!("implausible value {v:e}: beyond ±1e6 (a corrupt cell or a unit mistake?)"),
+                    ));
+                }
                 Ok(v)
             };
             let instrument = Instrument::from_name(cells[idx[2]]).ok_or_else(|| {
@@ -292,6 +331,12 @@ impl Dataset {
                             format!("not a finite temperature: \"{c}\""),
                         )
                     })?;
+                if v < ABSOLUTE_ZERO_DEGC {
+                    return Err(bad(
+                        &format!("{name}_degc"),
+                        format!("temperature {c} °C is below absolute zero"),
+                    ));
+                }
                 temps.push(v);
             }
             let dir = match dir_col.map(|i| cells[i]) {
@@ -403,6 +448,63 @@ mod tests {
         let text = sample().to_csv().replace("ry_urad", "ry");
         let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
         assert_eq!(err.to_string(), "d.csv: missing column `ry_urad`");
+    }
+
+    #[test]
+    fn a_column_named_twice_is_rejected() {
+        // A sensor column pasted twice would otherwise make two sensors of one name.
+        let text = sample().to_csv().replacen("_degc\n", "_degc,BXH_degc\n", 1);
+        let text: String = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| {
+                if i == 0 {
+                    format!("{l}\n")
+                } else {
+                    format!("{l},20\n")
+                }
+            })
+            .collect();
+        let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
+        assert!(
+            err.to_string().starts_with(
+                "d.csv: column `BXH_degc` appears twice in the header (columns 14 and "
+            ),
+            "{err}"
+        );
+        // A fixed column too.
+        let text = sample().to_csv().replacen("dir", "x_mm", 1);
+        let err = Dataset::from_csv(&text, "d.csv").unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("column `x_mm` appears twice in the header (columns 4 and 13)"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn implausible_values_name_line_and_column() {
+        let d = sample();
+        let mut huge = d.clone();
+        huge.records[1].values[0] = 1e150;
+        let err = Dataset::from_csv(&huge.to_csv(), "d.csv").unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("d.csv: line 3, column `dx_um`: implausible value 1e150"),
+            "{err}"
+        );
+        let mut cold = d.clone();
+        cold.records[0].temps_degc[0] = -300.0;
+        let err = Dataset::from_csv(&cold.to_csv(), "d.csv").unwrap_err();
+        assert!(
+            err.to_string()
+                .ends_with("temperature -300 °C is below absolute zero"),
+            "{err}"
+        );
+        // The bound is far from any machine: a 1 mm (1000 µm) error still reads.
+        let mut big = d;
+        big.records[1].values[0] = 1000.0;
+        assert!(Dataset::from_csv(&big.to_csv(), "d.csv").is_ok());
     }
 
     #[test]

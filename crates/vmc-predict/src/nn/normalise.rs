@@ -57,7 +57,13 @@ impl Normaliser {
                     1.0
                 }
             })
-            .collect();
+            .collect::<Vec<f64>>();
+        if let Some(column) = (0..width).find(|&k| !(mean[k].is_finite() && std[k].is_finite())) {
+            return Err(DataError::TooLarge {
+                what: "data",
+                column,
+            });
+        }
         Ok(Self { mean, std })
     }
 
@@ -122,5 +128,14 @@ mod tests {
         assert!(Normaliser::fit(&[], 2).is_err());
         assert!(Normaliser::fit(&[1.0, 2.0, 3.0], 2).is_err());
         assert!(Normaliser::fit(&[1.0], 0).is_err());
+        // Finite values whose spread overflows are refused with the column, not passed on as
+        // an infinite scale.
+        assert_eq!(
+            Normaliser::fit(&[0.0, 1.0, 1.0, -1.7e308, 2.0, 1.7e308], 2),
+            Err(DataError::TooLarge {
+                what: "data",
+                column: 1
+            })
+        );
     }
 }

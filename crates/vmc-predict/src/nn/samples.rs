@@ -37,6 +37,14 @@ pub enum DataError {
         /// The bad value.
         value: f64,
     },
+    /// Values so large that their mean or spread overflows (a unit mistake or a corrupt value).
+    #[error("{what}, column {column}: values too large to normalise (their mean or spread overflows); check the data for a unit mistake or a corrupt value")]
+    TooLarge {
+        /// Which buffer (`"inputs"`, `"targets"`).
+        what: &'static str,
+        /// 0-based column.
+        column: usize,
+    },
     /// A split parameter is unusable.
     #[error("invalid split: {reason}")]
     BadSplit {
