@@ -6,7 +6,9 @@
 //! error of the predicted volumetric error is split by part (X, Y, Z axis nets, spindle,
 //! squareness) by substituting each predicted part into the true set (first-order synthesis, so
 //! the parts add up). Prints per state the max |contribution| of each part to Ex, Ey, Ez (µm),
-//! at the state and over the next 90 s with the spindle stopped, as during a diagonal test.
+//! at the state and over the next 90 s with the spindle stopped, as during a diagonal test,
+//! then the max |E| of the whole prediction error and of the error with the spindle part taken
+//! as true (`|E|-sp`: what a perfect spindle part would leave, before non-repeatability).
 //!
 //! `cargo run --release --example residual_breakdown -- 1 2 3` (add `dev` for the selection-only
 //! states)
@@ -62,8 +64,16 @@ fn main() {
         );
         println!("seed {seed}: max |prediction error| contribution, µm (Ex Ey Ez)");
         println!(
-            "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17}",
-            "state", "axis X", "axis Y", "axis Z", "spindle", "squareness", "total"
+            "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17} | {:>6} {:>6}",
+            "state",
+            "axis X",
+            "axis Y",
+            "axis Z",
+            "spindle",
+            "squareness",
+            "total",
+            "|E|",
+            "|E|-sp"
         );
         let states = if dev {
             vmc_twin::placement::validation_states(seed)
@@ -77,6 +87,8 @@ fn main() {
             // features), as the controller does in the campaign.
             let mut hs = follow_to_state(&mut twin, state, h.clone()).unwrap();
             let mut worst = [[0.0f64; 3]; 6];
+            // Max |E| of the prediction error: all parts; all but the spindle.
+            let mut norms = [0.0f64; 2];
             // At the state and over the next 90 s with the spindle stopped (a diagonal test).
             for step in 0..4 {
                 if step > 0 {
@@ -108,23 +120,32 @@ fn main() {
                         parts.push(first_order_error_mm(&geom, q, &m) - base);
                     }
                     parts.push(first_order_error_mm(&geom, q, &p) - base);
+                    // Everything predicted but the spindle, which is taken as true: what a
+                    // perfect spindle part (e.g. one that knew the spindle speed) would leave.
+                    let mut no_spindle = p;
+                    no_spindle.spindle = t.spindle;
+                    let rest = first_order_error_mm(&geom, q, &no_spindle) - base;
                     for (w, d) in worst.iter_mut().zip(&parts) {
                         for c in 0..3 {
                             w[c] = w[c].max((d[c] * 1e3).abs());
                         }
                     }
+                    norms[0] = norms[0].max(parts[5].norm() * 1e3);
+                    norms[1] = norms[1].max(rest.norm() * 1e3);
                 }
             }
             let f = |w: [f64; 3]| format!("{:5.2} {:5.2} {:5.2}", w[0], w[1], w[2]);
             println!(
-                "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17}",
+                "  {:<24} {:>17} {:>17} {:>17} {:>17} {:>17} | {:>17} | {:6.2} {:6.2}",
                 state.name,
                 f(worst[0]),
                 f(worst[1]),
                 f(worst[2]),
                 f(worst[3]),
                 f(worst[4]),
-                f(worst[5])
+                f(worst[5]),
+                norms[0],
+                norms[1]
             );
         }
     }

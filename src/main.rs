@@ -1076,7 +1076,10 @@ mod tests {
             }),
         });
         let text = error_text(&e);
-        assert!(text.starts_with("network `spindle`: targets, column 0: "), "{text}");
+        assert!(
+            text.starts_with("network `spindle`: targets, column 0: "),
+            "{text}"
+        );
         assert_eq!(text.matches("targets, column 0").count(), 1, "{text}");
         // Contexts still chain.
         let e = e.context("cal.csv");

@@ -228,7 +228,11 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
         .current_dir(&t.0)
         .output()
         .unwrap();
-    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
     let text = std::fs::read_to_string(t.0.join("cal.csv")).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let write = |name: &str, lines: &[String]| {
@@ -265,7 +269,10 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
     assert!(!t.0.join("m.json").exists());
     // A missing model file is named once; a file that is not a model says so.
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
-    let err = one_line_error(&t.0, &["run", &prog, "--model", "nope.json", "--compensate"]);
+    let err = one_line_error(
+        &t.0,
+        &["run", &prog, "--model", "nope.json", "--compensate"],
+    );
     assert!(err.starts_with("nope.json: "), "{err}");
     assert_eq!(err.matches("nope.json").count(), 1, "{err}");
     std::fs::write(t.0.join("x.json"), "{}").unwrap();
