@@ -1,9 +1,11 @@
 //! Property ("fuzz") tests of everything that reads user files (issue 7, part B): the G-code
-//! front end (lexer, parser, interpreter, planner, travel and collision check) and the machine
-//! and fixture loaders. Properties, for every input: no panic; no hang (every accepted program
-//! is bounded in machine time, so the check and a simulation of it end); every rejection is
-//! one line with a location — `line L, column C` for syntax and semantics, `line L` for motion,
-//! the dotted field or the TOML line and column for configuration files.
+//! front end (lexer, parser, interpreter, planner, travel and collision check), the machine
+//! and fixture loaders, calibration datasets and measured thermal-drift files. Properties, for
+//! every input: no panic; no hang (every accepted program is bounded in machine time, so the
+//! check and a simulation of it end); every rejection is one line with a location — `line L,
+//! column C` for syntax and semantics, `line L` for motion, the dotted field or the TOML line
+//! and column for configuration files, the file (and for a bad cell its line and column) for
+//! data files; accepted data files train (or refuse to) without a panic.
 //!
 //! Inputs are drawn by proptest from a fixed seed (deterministic in CI). The number of cases per
 //! property is set so that the whole file runs in about 15 s in release on the 2-core CI machine;
@@ -427,6 +429,164 @@ fn mutated_fixtures_never_panic_and_name_the_field() {
                 }
             }
             Ok(())
+        })
+        .unwrap();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Calibration datasets (`train --data`).
+
+/// A small real dataset: every 25th record of the reference machine's calibration campaign
+/// (all instruments, every cycle), as the CSV `calibrate` writes.
+fn small_dataset_csv() -> String {
+    use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+    let spec = MachineSpec::reference();
+    let mut ds = campaign::calibrate(
+        &spec,
+        &ThermalCycle::calibration_set(),
+        &CampaignConfig::new(1),
+    )
+    .unwrap();
+    ds.records = ds.records.into_iter().step_by(25).collect();
+    ds.to_csv()
+}
+
+/// Accepted datasets train the linear baseline or refuse with an error, never a panic; rejected
+/// ones name the file, and a bad cell its line and column.
+fn dataset_file(text: &str) -> Result<(), TestCaseError> {
+    use vmc_twin::predict::dataset::{Dataset, DatasetError};
+    use vmc_twin::predict::predictor::{self, Settings};
+    match Dataset::from_csv(text, "cal.csv") {
+        Ok(ds) => {
+            let geometry = MachineSpec::reference().geometry();
+            if let Err(e) = predictor::train_linear(&ds, &geometry, &Settings::default()) {
+                let msg = e.to_string();
+                prop_assert!(!msg.is_empty() && !msg.contains('\n'), "{}", msg);
+            }
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            prop_assert!(msg.starts_with("cal.csv: "), "{}", msg);
+            prop_assert!(!msg.contains('\n'), "{}", msg);
+            if let DatasetError::BadCell { .. } = e {
+                prop_assert!(has_line_location(&msg, "cal.csv"), "{}", msg);
+            }
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn mutated_calibration_datasets_never_panic_and_every_rejection_names_the_file() {
+    let csv = small_dataset_csv();
+    // The unmutated file is accepted and trains: the property is not vacuous.
+    let ds = vmc_twin::predict::dataset::Dataset::from_csv(&csv, "cal.csv").unwrap();
+    let geometry = MachineSpec::reference().geometry();
+    vmc_twin::predict::predictor::train_linear(&ds, &geometry, &Default::default()).unwrap();
+    runner(1000)
+        .run(&prop::collection::vec(mutation(), 1..4), |muts| {
+            let text = muts.iter().fold(csv.clone(), |t, m| apply(&t, m));
+            dataset_file(&text)
+        })
+        .unwrap();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Measured thermal-drift files (`fit-thermal --data`).
+
+/// Every 8th row of the real spindle test slice (3 cycles, 8 min steps), four of its columns.
+fn small_thermal_csv() -> String {
+    let text = include_str!("data/spindle-thermal/train_every60s.csv");
+    let keep = [0usize, 1, 2, 6, 7, 11]; // time_s, spindle_rpm, ch1, ch5, t1, t5
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        if i == 0 || i % 8 == 1 {
+            let cells: Vec<&str> = line.split(',').collect();
+            let row: Vec<&str> = keep.iter().map(|&k| cells[k]).collect();
+            out.push_str(&row.join(","));
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// Read, split and fit (linear, the fast form) as `fit-thermal` does: accepted files fit or
+/// refuse with an error; every error is one line, and table errors name the file.
+fn thermal_file(text: &str) -> Result<(), TestCaseError> {
+    use vmc_twin::predict::thermal_fit::{self, Architecture, FitSettings, Split, TableRequest};
+    let inputs = vec![
+        "t1_degc".to_string(),
+        "t5_degc".into(),
+        "spindle_rpm".into(),
+    ];
+    let outputs = vec!["ch1_um".to_string(), "ch5_um".into()];
+    let request = TableRequest {
+        time: None,
+        required: inputs
+            .iter()
+            .map(|n| (n.clone(), "input"))
+            .chain(outputs.iter().map(|n| (n.clone(), "output")))
+            .collect(),
+        optional: Vec::new(),
+        min_rows: 20,
+    };
+    let table = match thermal_fit::read_csv(text, "t.csv", &request) {
+        Ok(t) => t,
+        Err(e) => {
+            let msg = e.to_string();
+            prop_assert!(msg.starts_with("t.csv: "), "{}", msg);
+            prop_assert!(!msg.contains('\n'), "{}", msg);
+            return Ok(());
+        }
+    };
+    let settings = FitSettings {
+        architecture: Architecture::Linear,
+        ..FitSettings::default()
+    };
+    let fitted = Split::resolve(
+        &table.time_s,
+        None,
+        table.column("spindle_rpm").map(|v| ("spindle_rpm", v)),
+        settings.val_fraction,
+    )
+    .and_then(|split| thermal_fit::fit(&table, &inputs, &outputs, &split, &settings));
+    if let Err(e) = fitted {
+        let msg = e.to_string();
+        prop_assert!(!msg.is_empty() && !msg.contains('\n'), "{}", msg);
+    }
+    Ok(())
+}
+
+#[test]
+fn mutated_thermal_measurement_files_never_panic_and_every_rejection_is_one_line() {
+    let csv = small_thermal_csv();
+    // The unmutated slice reads and fits: the property is not vacuous.
+    {
+        use vmc_twin::predict::thermal_fit::{
+            self, Architecture, FitSettings, Split, TableRequest,
+        };
+        let cols = ["t1_degc", "t5_degc", "spindle_rpm", "ch1_um", "ch5_um"];
+        let request = TableRequest {
+            time: None,
+            required: cols.iter().map(|c| (c.to_string(), "input")).collect(),
+            optional: Vec::new(),
+            min_rows: 20,
+        };
+        let table = thermal_fit::read_csv(&csv, "t.csv", &request).unwrap();
+        let rpm = table.column("spindle_rpm").unwrap();
+        let split = Split::resolve(&table.time_s, None, Some(("spindle_rpm", rpm)), 0.25).unwrap();
+        let settings = FitSettings {
+            architecture: Architecture::Linear,
+            ..FitSettings::default()
+        };
+        let inputs: Vec<String> = cols[..3].iter().map(|c| c.to_string()).collect();
+        let outputs: Vec<String> = cols[3..].iter().map(|c| c.to_string()).collect();
+        thermal_fit::fit(&table, &inputs, &outputs, &split, &settings).unwrap();
+    }
+    runner(1000)
+        .run(&prop::collection::vec(mutation(), 1..4), |muts| {
+            let text = muts.iter().fold(csv.clone(), |t, m| apply(&t, m));
+            thermal_file(&text)
         })
         .unwrap();
 }
