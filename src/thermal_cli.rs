@@ -163,7 +163,16 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
         ensemble: args.ensemble,
         ..FitSettings::default()
     };
-    let model = thermal_fit::fit(&table, &args.inputs, &args.outputs, &split, &settings)?;
+    let model =
+        thermal_fit::fit(&table, &args.inputs, &args.outputs, &split, &settings).map_err(|e| {
+            match e {
+                // A value of the file, not a setting: name the file.
+                e @ thermal_fit::ThermalFitError::NonFiniteFeature { .. } => {
+                    anyhow::Error::new(e).context(source.clone())
+                }
+                e => anyhow::Error::new(e),
+            }
+        })?;
     report::write_atomic(&args.out, model.to_json().as_bytes(), args.force)?;
     print!("{}", fit_report(&model, &table, &source));
     println!("wrote {}", args.out.display());
@@ -278,7 +287,9 @@ pub fn predict_thermal(args: PredictThermalArgs) -> Result<()> {
         .iter()
         .filter_map(|c| table.column(&c.name))
         .collect();
-    let pred = model.predict(&table.time_s, &inputs)?;
+    let pred = model
+        .predict(&table.time_s, &inputs)
+        .with_context(|| source.clone())?;
     let measured: Vec<(&str, &[f64])> = model
         .outputs
         .iter()

@@ -465,7 +465,56 @@ fn bad_feature_options_are_errors() {
     ]);
     assert_error(&o, &["--speed-exponents", "\"x\" is not a number"]);
     let o = run(&["--inputs", "t1_degc,spindle_rpm", "--speed-exponents=-1"]);
-    assert_error(&o, &["speed_exponents", "finite and > 0"]);
+    assert_error(&o, &["speed_exponents", "must lie in (0, 10], got -1"]);
+    let o = run(&["--inputs", "t1_degc,spindle_rpm", "--speed-exponents=1e300"]);
+    assert_error(&o, &["speed_exponents", "must lie in (0, 10], got 1e300"]);
+    // A net whose Levenberg–Marquardt system would not fit in memory is refused, not attempted.
+    // 1 temperature → 4 features; 4 → 100000 → 1 has 600001 weights.
+    let o = vmc(
+        dir.path(),
+        &[
+            "fit-thermal",
+            "--data",
+            "data.csv",
+            "--inputs",
+            "t1_degc",
+            "--outputs",
+            "ch1_um",
+            "-o",
+            "model.json",
+            "--arch",
+            "mlp",
+            "--hidden",
+            "100000",
+        ],
+    );
+    assert_error(
+        &o,
+        &["600001 weights", "at most 4096", "smaller hidden widths"],
+    );
+    // A speed cell so large that its powers overflow names the feature, the time and the file.
+    let huge = synthetic_csv().replacen("\n60,2000,", "\n60,1e200,", 1);
+    std::fs::write(dir.path().join("huge.csv"), huge).unwrap();
+    let o = vmc(
+        dir.path(),
+        &[
+            "fit-thermal",
+            "--data",
+            "huge.csv",
+            "--inputs",
+            "t1_degc,spindle_rpm",
+            "--outputs",
+            "ch1_um",
+            "-o",
+            "model.json",
+            "--arch",
+            "linear",
+        ],
+    );
+    assert_error(
+        &o,
+        &["huge.csv: feature \"spindle_rpm^2\" is not finite at t = 60 s"],
+    );
     let o = run(&["--inputs", "t1_degc,spindle_rpm", "--relative-to-mean"]);
     assert_error(
         &o,

@@ -72,6 +72,19 @@ pub enum NnError {
     /// Training needs at least one sample.
     #[error("the training set is empty")]
     EmptyTrainingSet,
+    /// Too many weights for Levenberg–Marquardt, which solves a weights × weights system.
+    #[error(
+        "a net of widths {sizes:?} has {weights} weights; Levenberg–Marquardt solves a \
+         weights × weights system, so at most {max} weights are supported: use smaller hidden widths"
+    )]
+    TooManyWeights {
+        /// The layer widths asked for.
+        sizes: Vec<usize>,
+        /// Their number of weights (saturating).
+        weights: usize,
+        /// The most supported ([`train::MAX_LM_WEIGHTS`]).
+        max: usize,
+    },
     /// A training setting is out of range.
     #[error("invalid training setting {field}: {reason}")]
     BadConfig {

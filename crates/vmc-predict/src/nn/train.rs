@@ -134,6 +134,30 @@ pub struct TrainReport {
     pub restart_scores: Vec<f64>,
 }
 
+/// Most weights a net trained here may have: the normal equations are a weights × weights
+/// matrix (4096² f64 = 134 MB). The project's nets have a few hundred.
+pub const MAX_LM_WEIGHTS: usize = 4096;
+
+/// Weights of a fully connected net of widths `sizes` (with biases), saturating.
+fn weight_count(sizes: &[usize]) -> usize {
+    sizes.windows(2).fold(0usize, |acc, w| {
+        acc.saturating_add(w[0].saturating_add(1).saturating_mul(w[1]))
+    })
+}
+
+/// Refuses nets whose normal equations would not fit in memory.
+fn check_weight_count(sizes: &[usize]) -> Result<(), NnError> {
+    let weights = weight_count(sizes);
+    if weights > MAX_LM_WEIGHTS {
+        return Err(NnError::TooManyWeights {
+            sizes: sizes.to_vec(),
+            weights,
+            max: MAX_LM_WEIGHTS,
+        });
+    }
+    Ok(())
+}
+
 /// Trains a new net of widths `sizes` on `train`, with `config.restarts` independent
 /// initialisations; keeps the one with the best validation RMSE (training RMSE if `val` is
 /// `None` or empty). Ties keep the earlier restart.
@@ -144,6 +168,7 @@ pub fn train(
     config: &TrainConfig,
 ) -> Result<(Mlp, TrainReport), NnError> {
     check_config(config)?;
+    check_weight_count(sizes)?;
     let mut best: Option<(Mlp, TrainReport, f64)> = None;
     let mut scores = Vec::with_capacity(config.restarts);
     for r in 0..config.restarts {
@@ -187,6 +212,13 @@ pub fn train_from(
 ) -> Result<TrainReport, NnError> {
     check_config(config)?;
     check_widths(mlp, train)?;
+    if mlp.n_params() > MAX_LM_WEIGHTS {
+        return Err(NnError::TooManyWeights {
+            sizes: mlp.sizes().to_vec(),
+            weights: mlp.n_params(),
+            max: MAX_LM_WEIGHTS,
+        });
+    }
     if train.is_empty() {
         return Err(NnError::EmptyTrainingSet);
     }
@@ -461,6 +493,39 @@ mod tests {
             .map(|v| (2.0 * v).sin() + noise * normal.sample(&mut rng))
             .collect();
         Samples::new(1, 1, x, y).unwrap()
+    }
+
+    #[test]
+    fn a_net_too_large_for_the_normal_equations_is_refused_before_any_allocation() {
+        let data = sine_samples(10, 0.0, 0);
+        let config = TrainConfig::default();
+        // 1 → 100000 → 1: 300001 weights (a 720 GB normal matrix).
+        let err = train(&[1, 100_000, 1], &data, None, &config).unwrap_err();
+        assert_eq!(
+            err,
+            NnError::TooManyWeights {
+                sizes: vec![1, 100_000, 1],
+                weights: 300_001,
+                max: MAX_LM_WEIGHTS
+            }
+        );
+        assert!(
+            err.to_string().contains("use smaller hidden widths"),
+            "{err}"
+        );
+        // Absurd widths saturate instead of overflowing.
+        assert!(matches!(
+            train(&[1, usize::MAX, 1], &data, None, &config),
+            Err(NnError::TooManyWeights {
+                weights: usize::MAX,
+                ..
+            })
+        ));
+        // The bound counts weights and biases: 1 → 1364 → 1 has 4093 and passes the check,
+        // 1 → 1366 → 1 has 4099 and does not.
+        assert_eq!(weight_count(&[1, 1364, 1]), 4093);
+        assert!(check_weight_count(&[1, 1364, 1]).is_ok());
+        assert!(check_weight_count(&[1, 1366, 1]).is_err());
     }
 
     #[test]

@@ -71,6 +71,10 @@ impl Default for FeatureSpec {
     }
 }
 
+/// Largest speed exponent accepted: friction heat grows at most with the cube of the speed,
+/// and higher powers of a real speed column overflow.
+pub const MAX_SPEED_EXPONENT: f64 = 10.0;
+
 /// True for an input column that is a speed (unit `rpm`), from its name.
 pub fn is_speed(name: &str) -> bool {
     name.rsplit_once('_').is_some_and(|(_, u)| u == "rpm")
@@ -88,11 +92,15 @@ impl FeatureSpec {
         if let Some(k) = self
             .speed_exponents
             .iter()
-            .find(|k| !(k.is_finite() && **k > 0.0))
+            .find(|k| !(k.is_finite() && **k > 0.0 && **k <= MAX_SPEED_EXPONENT))
         {
             return Err(ThermalFitError::BadSettings {
                 field: "speed_exponents",
-                reason: format!("every speed exponent must be finite and > 0, got {k}"),
+                reason: if k.abs() < 1e6 {
+                    format!("every speed exponent must lie in (0, {MAX_SPEED_EXPONENT}], got {k}")
+                } else {
+                    format!("every speed exponent must lie in (0, {MAX_SPEED_EXPONENT}], got {k:e}")
+                },
             });
         }
         Ok(())
@@ -164,6 +172,31 @@ impl FeatureSpec {
             }
         }
         out
+    }
+
+    /// [`Self::compute`], refusing a non-finite feature (named, with its row's time).
+    ///
+    /// # Errors
+    /// [`ThermalFitError::NonFiniteFeature`] for the first one.
+    pub fn compute_checked<S: AsRef<str>>(
+        &self,
+        time_s: &[f64],
+        names: &[S],
+        inputs: &[&[f64]],
+    ) -> Result<Vec<f64>, ThermalFitError> {
+        let out = self.compute(time_s, names, inputs);
+        let width = self.width(names).max(1);
+        match out.iter().position(|v| !v.is_finite()) {
+            None => Ok(out),
+            Some(i) => Err(ThermalFitError::NonFiniteFeature {
+                feature: self
+                    .names(names)
+                    .get(i % width)
+                    .cloned()
+                    .unwrap_or_default(),
+                time_s: time_s.get(i / width).copied().unwrap_or(f64::NAN),
+            }),
+        }
     }
 
     /// Feature rows (row-major, `time_s.len()` × [`FeatureSpec::width`]) of the input columns
@@ -267,6 +300,37 @@ mod tests {
         }
         // Steady state at the first row: x − f = 0.
         assert_eq!(f[1], 0.0);
+    }
+
+    #[test]
+    fn a_feature_that_overflows_is_named_with_its_time() {
+        let spec = FeatureSpec {
+            time_constants_s: vec![600.0],
+            speed_exponents: vec![1.0, 3.0],
+            relative_to_mean: false,
+        };
+        let t = [0.0, 15.0, 30.0];
+        let rpm = [0.0, 1e200, 0.0];
+        let err = spec
+            .compute_checked(&t, &["spindle_rpm"], &[&rpm])
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "feature \"spindle_rpm^3\" is not finite at t = 15 s: an input value too large for \
+             it (a corrupt cell or a unit mistake?)"
+        );
+        // Plain values pass, and so do they through the unchecked path, bit for bit.
+        let ok = [0.0, 2000.0, 0.0];
+        assert_eq!(
+            spec.compute_checked(&t, &["spindle_rpm"], &[&ok]).unwrap(),
+            spec.compute(&t, &["spindle_rpm"], &[&ok])
+        );
+        // Exponents beyond the bound are refused when the settings are checked.
+        let wild = FeatureSpec {
+            speed_exponents: vec![1e300],
+            ..spec
+        };
+        assert!(wild.validate().is_err());
     }
 
     #[test]

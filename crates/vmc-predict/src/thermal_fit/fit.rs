@@ -367,7 +367,9 @@ pub fn fit(
         .map(|n| col(n, "output").map(<[f64]>::to_vec))
         .collect::<Result<_, _>>()?;
     let width = settings.features.width(inputs);
-    let feats = settings.features.compute(&table.time_s, inputs, &x_cols);
+    let feats = settings
+        .features
+        .compute_checked(&table.time_s, inputs, &x_cols)?;
     let mut rows = [Vec::new(), Vec::new(), Vec::new()];
     for (i, t) in table.time_s.iter().enumerate() {
         let k = match split.part(*t) {

@@ -169,6 +169,17 @@ pub enum ThermalFitError {
         reason: String,
     },
     /// Network training failed.
+    /// A feature computed from the inputs is not finite (e.g. a huge speed raised to a power).
+    #[error(
+        "feature \"{feature}\" is not finite at t = {time_s} s: an input value too large for it \
+         (a corrupt cell or a unit mistake?)"
+    )]
+    NonFiniteFeature {
+        /// The feature (`<input>`, `<input>-lowpass<τ>s`, `<speed>^<k>…`).
+        feature: String,
+        /// Time of the row, s.
+        time_s: f64,
+    },
     #[error("training the residual MLP: {0}")]
     Net(#[from] crate::nn::NnError),
     /// Linear regression failed.

@@ -263,7 +263,9 @@ impl ThermalModel {
                 ),
             });
         }
-        let feats = self.features.compute(time_s, &self.input_names(), inputs);
+        let feats = self
+            .features
+            .compute_checked(time_s, &self.input_names(), inputs)?;
         self.predict_features(&feats)
     }
 
