@@ -574,6 +574,7 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
     if args.seeds.is_empty() {
         anyhow::bail!("--seeds needs at least one seed");
     }
+    check_distinct_seeds("--seeds", &args.seeds)?;
     let out_files = match &args.out {
         Some(dir) => {
             std::fs::create_dir_all(dir)
@@ -709,6 +710,7 @@ fn train(args: TrainArgs) -> Result<()> {
 
 fn select_sensors(args: SelectArgs) -> Result<()> {
     let machine = load_machine(args.machine.as_deref(), None)?;
+    check_distinct_seeds("--compare-seeds", &args.compare_seeds)?;
     let only: Option<Vec<String>> = if args.candidates == "all" {
         None
     } else {
@@ -718,6 +720,9 @@ fn select_sensors(args: SelectArgs) -> Result<()> {
             .map(|w| w.trim().to_string())
             .collect();
         for w in &wanted {
+            if w.is_empty() {
+                anyhow::bail!("--candidates: an empty name in `{}`", args.candidates);
+            }
             if w != "ambient" && !machine.thermal.nodes.iter().any(|n| &n.name == w) {
                 let nodes: Vec<&str> = machine
                     .thermal
@@ -789,8 +794,21 @@ fn select_and_write(
     Ok(())
 }
 
+/// A seed given twice would count its runs twice in the medians.
+fn check_distinct_seeds(option: &str, seeds: &[u64]) -> Result<()> {
+    for (i, s) in seeds.iter().enumerate() {
+        if seeds[..i].contains(s) {
+            anyhow::bail!("{option}: seed {s} is given twice (its runs would count twice)");
+        }
+    }
+    Ok(())
+}
+
 fn bench(args: BenchArgs) -> Result<()> {
     use vmc_twin::benchmark;
+    if args.repeats == 0 {
+        anyhow::bail!("--repeats must be at least 1");
+    }
     let spec = MachineSpec::reference();
     let mut out = std::io::stdout().lock();
     writeln!(
