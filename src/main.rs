@@ -766,6 +766,16 @@ fn select_and_write(
     if args.count == 0 {
         anyhow::bail!("--count must be at least 1");
     }
+    let candidates = match only {
+        Some(list) => list.iter().filter(|w| *w != "ambient").count(),
+        None => machine.thermal.nodes.len(),
+    };
+    if args.count > candidates {
+        anyhow::bail!(
+            "--count {}: there are only {candidates} candidate locations besides ambient",
+            args.count
+        );
+    }
     report::check_writable(&args.out, args.force)?;
     if let Some(j) = &args.json {
         report::check_writable(j, args.force)?;

@@ -301,6 +301,10 @@ fn repeated_seeds_and_empty_options_are_refused_before_any_work() {
         "--candidates: an empty name in `spindle_nose,,saddle`"
     );
     assert_eq!(
+        one_line_error(&t.0, &["select-sensors", "--count", "1000"]),
+        "--count 1000: there are only 39 candidate locations besides ambient"
+    );
+    assert_eq!(
         one_line_error(&t.0, &["bench", "--repeats", "0"]),
         "--repeats must be at least 1"
     );
