@@ -479,7 +479,8 @@ fn run(args: RunArgs) -> Result<()> {
             &cfg,
             controller.as_mut().map(|c| c as &mut dyn sim::Controller),
             &mut obs,
-        )?;
+        )
+        .with_context(|| args.program.display().to_string())?;
     }
     progress.finish();
 

@@ -247,7 +247,30 @@ pub enum SimError {
     /// Bad settings.
     #[error("simulation settings: {0}")]
     Config(String),
+    /// The compensation commanded the axes implausibly far from the programmed point.
+    #[error(
+        "line {line} (t = {time_s:.1} s): the compensation moves the axes {correction_mm:.4} mm \
+         away from the programmed point ({:.3}, {:.3}, {:.3}) mm, above the limit of {} mm for a \
+         geometric and thermal correction: the model does not fit this machine or is corrupt",
+        p_mm[0], p_mm[1], p_mm[2], MAX_CORRECTION_MM
+    )]
+    Compensation {
+        /// Program line of the point.
+        line: usize,
+        /// Twin time, s.
+        time_s: f64,
+        /// Programmed tool position, mm.
+        p_mm: [f64; 3],
+        /// Distance of the axis command from it, mm (NaN if not a number).
+        correction_mm: f64,
+    },
 }
+
+/// Largest distance between the compensated axis command and the programmed point, mm. Geometric
+/// and thermal errors of a machining centre are tens of µm; a correction above 1 mm is a model
+/// that does not belong to the machine (or a corrupt file), and is refused, as a CNC limits its
+/// compensation values.
+pub const MAX_CORRECTION_MM: f64 = 1.0;
 
 /// Executes `plan` on `twin` from its current state. Plan time 0 is the twin's current time.
 pub fn execute(
@@ -307,7 +330,7 @@ pub fn execute(
                     p,
                     true,
                     cfg.report_thermal_part,
-                );
+                )?;
                 index += 1;
             }
             (_, SampleMode::EveryCycle) if moving && seg.duration_s > 0.0 => {
@@ -328,7 +351,7 @@ pub fn execute(
                         p,
                         false,
                         cfg.report_thermal_part,
-                    );
+                    )?;
                     index += 1;
                 }
             }
@@ -473,7 +496,7 @@ fn measure(
     p_mm: [f64; 3],
     at_dwell: bool,
     report_thermal_part: bool,
-) {
+) -> Result<(), SimError> {
     let approach = twin.draw_approach_mm();
     let before = twin.tool_error_mm(p_mm, p_mm, approach);
     let thermal_part_um = report_thermal_part.then(|| {
@@ -483,6 +506,19 @@ fn measure(
     let (q, after) = match compensator {
         Some(c) => {
             let q = c.axis_command_mm(p_mm, readings);
+            let correction_mm =
+                ((q[0] - p_mm[0]).powi(2) + (q[1] - p_mm[1]).powi(2) + (q[2] - p_mm[2]).powi(2))
+                    .sqrt();
+            // Like a CNC's limit on compensation values: the machine does not follow a command
+            // far from the programmed point (or not a number at all).
+            if !(correction_mm <= MAX_CORRECTION_MM) {
+                return Err(SimError::Compensation {
+                    line,
+                    time_s,
+                    p_mm,
+                    correction_mm,
+                });
+            }
             (Some(q), Some(twin.tool_error_mm(p_mm, q, approach)))
         }
         None => (None, None),
@@ -499,6 +535,7 @@ fn measure(
         at_dwell,
     };
     observer.on_point(&point, readings);
+    Ok(())
 }
 
 #[cfg(test)]
@@ -559,6 +596,67 @@ mod tests {
         }
         // One node-temperature report per whole thermal step.
         assert_eq!(poses.node_steps, plan.duration_s().floor() as usize);
+    }
+
+    /// Commands the programmed point shifted by `offset_mm` along X.
+    struct Shift(f64);
+
+    impl Controller for Shift {
+        fn axis_command_mm(&mut self, p_mm: [f64; 3], _r: &SensorReadings) -> [f64; 3] {
+            [p_mm[0] + self.0, p_mm[1], p_mm[2]]
+        }
+    }
+
+    #[test]
+    fn a_correction_above_the_limit_or_not_a_number_stops_the_run_at_its_line() {
+        let spec = MachineSpec::reference();
+        let plan = crate::program::plan_source(
+            include_str!("../trajectories/diag_xy.ngc"),
+            "diag_xy.ngc",
+            &spec,
+            spec.axes.home_mm,
+        )
+        .unwrap();
+        let run = |offset_mm: f64| {
+            let mut twin = Twin::new(&spec, 1).unwrap();
+            let mut c = Shift(offset_mm);
+            let mut n = CountPoints::default();
+            let r = execute(
+                &mut twin,
+                &plan,
+                &SimConfig::default(),
+                Some(&mut c),
+                &mut n,
+            );
+            (r, n.points)
+        };
+        // 10 µm: an ordinary correction, every point measured.
+        let (r, points) = run(0.01);
+        assert!(r.is_ok());
+        assert_eq!(points, 10);
+        // 2 mm and NaN: refused at the first point, nothing measured with it.
+        for offset in [2.0, f64::NAN] {
+            let (r, points) = run(offset);
+            match r {
+                Err(SimError::Compensation {
+                    line,
+                    correction_mm,
+                    ..
+                }) => {
+                    assert_eq!(
+                        line,
+                        plan.segments()
+                            .iter()
+                            .find(|s| s.kind == SegmentKind::Dwell)
+                            .unwrap()
+                            .line
+                    );
+                    assert!(offset.is_nan() && correction_mm.is_nan() || correction_mm == 2.0);
+                }
+                other => panic!("{offset}: {other:?}"),
+            }
+            assert_eq!(points, 0);
+        }
     }
 
     #[test]

@@ -280,6 +280,33 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
         one_line_error(&t.0, &["run", &prog, "--model", "x.json", "--compensate"]),
         "x.json: not a vmc-twin model file: no `format` field"
     );
+    // A well-formed model whose prediction is absurd (an intercept of 5 mm, in µm) is stopped at
+    // the first compensated point, not run with the axes 5 mm off.
+    let ok = Command::new(BIN)
+        .args([
+            "train", "--data", "cal.csv", "--kind", "linear", "-o", "lin.json",
+        ])
+        .current_dir(&t.0)
+        .output()
+        .unwrap();
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let mut model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(t.0.join("lin.json")).unwrap()).unwrap();
+    model["model"]["regression"]["intercept"][0] = serde_json::json!(5000.0);
+    std::fs::write(t.0.join("wild.json"), model.to_string()).unwrap();
+    let err = one_line_error(
+        &t.0,
+        &["run", &prog, "--model", "wild.json", "--compensate"],
+    );
+    assert!(err.starts_with(&format!("{prog}: line 7 (t = ")), "{err}");
+    assert!(
+        err.contains("above the limit of 1 mm for a geometric and thermal correction"),
+        "{err}"
+    );
 }
 
 #[test]
