@@ -43,6 +43,17 @@ pub enum SensorError {
         /// The offending value, formatted.
         got: String,
     },
+    /// A name that cannot serve as a column name (`<name>_degc` in datasets) and model field.
+    #[error(
+        "sensors[{index}].name = `{name}`: a sensor name must be non-empty and made of ASCII \
+         letters, digits, `_`, `-` and `.` (it becomes the dataset column `<name>_degc`)"
+    )]
+    BadName {
+        /// Position of the sensor in the list.
+        index: usize,
+        /// The name.
+        name: String,
+    },
     /// Two sensors share a name.
     #[error("sensors[{index}].name = `{name}` is a duplicate")]
     DuplicateName {
@@ -116,6 +127,17 @@ impl SensorSpec {
 pub fn validate_sensors(specs: &[SensorSpec], node_names: &[String]) -> Result<(), SensorError> {
     let mut seen = HashSet::new();
     for (i, s) in specs.iter().enumerate() {
+        let usable = !s.name.is_empty()
+            && s
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+        if !usable {
+            return Err(SensorError::BadName {
+                index: i,
+                name: s.name.clone(),
+            });
+        }
         if !seen.insert(s.name.as_str()) {
             return Err(SensorError::DuplicateName {
                 index: i,
@@ -306,6 +328,23 @@ mod tests {
 
     fn nodes() -> Vec<String> {
         vec!["a".into(), "b".into()]
+    }
+
+    #[test]
+    fn a_name_that_cannot_be_a_column_name_is_refused() {
+        for bad in ["", "a,b", "x y", "t\"1", "é"] {
+            let err = validate_sensors(&[sensor(bad, "a", 0.0, 0.0)], &nodes()).unwrap_err();
+            assert_eq!(
+                err,
+                SensorError::BadName {
+                    index: 0,
+                    name: bad.into()
+                }
+            );
+        }
+        for good in ["BXH", "z_screw_1", "t1.front-left"] {
+            assert!(validate_sensors(&[sensor(good, "a", 0.0, 0.0)], &nodes()).is_ok());
+        }
     }
 
     #[test]
