@@ -376,6 +376,13 @@ fn run(args: RunArgs) -> Result<()> {
                 PredictError::Io { .. } => anyhow::Error::new(e),
                 _ => anyhow::Error::new(e).context(path.display().to_string()),
             })?;
+            model.check_geometry(&machine.geometry()).with_context(|| {
+                format!(
+                    "{}: model does not fit machine {}",
+                    path.display(),
+                    machine.machine.name
+                )
+            })?;
             let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
             let ctrl = Compensator::for_machine(model, &names).with_context(|| {
                 format!(

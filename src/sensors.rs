@@ -128,8 +128,7 @@ pub fn validate_sensors(specs: &[SensorSpec], node_names: &[String]) -> Result<(
     let mut seen = HashSet::new();
     for (i, s) in specs.iter().enumerate() {
         let usable = !s.name.is_empty()
-            && s
-                .name
+            && s.name
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
         if !usable {

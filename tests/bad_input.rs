@@ -340,3 +340,52 @@ fn repeated_seeds_and_empty_options_are_refused_before_any_work() {
         "nothing written"
     );
 }
+
+#[test]
+fn a_model_of_another_kinematics_is_refused_before_the_run() {
+    let t = Tmp::new("geometry");
+    let reference = std::fs::read_to_string(repo("machines/vmc-reference.toml")).unwrap();
+    let gantry = reference.replacen("chain = \"w X Y b Z t\"", "chain = \"w Y b X Z t\"", 1);
+    assert_ne!(gantry, reference);
+    std::fs::write(t.0.join("gantry.toml"), gantry).unwrap();
+    for args in [
+        &[
+            "calibrate",
+            "--machine",
+            "gantry.toml",
+            "--measure-every-min",
+            "120",
+            "-o",
+            "g.csv",
+        ][..],
+        &[
+            "train",
+            "--data",
+            "g.csv",
+            "--machine",
+            "gantry.toml",
+            "--kind",
+            "linear",
+            "-o",
+            "g.json",
+        ],
+    ] {
+        let o = Command::new(BIN)
+            .args(args)
+            .current_dir(&t.0)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let prog = repo("trajectories/diag_xy.ngc").display().to_string();
+    assert_eq!(
+        one_line_error(&t.0, &["run", &prog, "--model", "g.json", "--compensate"]),
+        "g.json: model does not fit machine vmc-reference: geometry mismatch: the model was \
+         trained for chain `w Y b X Z t` with tool offset [0.0, 0.0, -150.0] mm, the machine has \
+         chain `w X Y b Z t` with tool offset [0.0, 0.0, -150.0] mm"
+    );
+}

@@ -421,6 +421,30 @@ impl AnyPredictor {
         super::check_sensor_names(self.sensor_names(), machine_sensor_names)
     }
 
+    /// Rejects a machine whose nominal geometry (chain, tool offset to 1 nm) is not the one the
+    /// model was trained for.
+    ///
+    /// # Errors
+    /// [`PredictError::GeometryMismatch`] naming both.
+    pub fn check_geometry(&self, machine: &MachineGeometry) -> Result<(), PredictError> {
+        let model = self.geometry();
+        let same_tool = model
+            .tool_offset_mm
+            .iter()
+            .zip(&machine.tool_offset_mm)
+            .all(|(a, b)| (a - b).abs() <= 1e-6);
+        if model.chain == machine.chain && same_tool {
+            Ok(())
+        } else {
+            Err(PredictError::GeometryMismatch {
+                model_chain: model.chain.to_string(),
+                model_tool_mm: model.tool_offset_mm,
+                machine_chain: machine.chain.to_string(),
+                machine_tool_mm: machine.tool_offset_mm,
+            })
+        }
+    }
+
     /// The machine geometry stored with the model.
     pub fn geometry(&self) -> &MachineGeometry {
         match self {

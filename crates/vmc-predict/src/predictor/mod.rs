@@ -153,6 +153,23 @@ pub enum PredictError {
         /// The machine's sensor names.
         found: Vec<String>,
     },
+    /// A model's nominal geometry (chain, tool offset) is not the machine's: its predictions
+    /// are for another kinematics or another tool.
+    #[error(
+        "geometry mismatch: the model was trained for chain `{model_chain}` with tool offset \
+         {model_tool_mm:?} mm, the machine has chain `{machine_chain}` with tool offset \
+         {machine_tool_mm:?} mm"
+    )]
+    GeometryMismatch {
+        /// The model's chain.
+        model_chain: String,
+        /// The model's tool offset, mm.
+        model_tool_mm: [f64; 3],
+        /// The machine's chain.
+        machine_chain: String,
+        /// The machine's tool offset, mm.
+        machine_tool_mm: [f64; 3],
+    },
     /// A record lacks a value the model needs (empty cell).
     #[error(
         "`{instrument}` record of cycle \"{cycle}\" at t = {time_s} s has no `{column}` value"
