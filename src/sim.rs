@@ -511,7 +511,7 @@ fn measure(
                     .sqrt();
             // Like a CNC's limit on compensation values: the machine does not follow a command
             // far from the programmed point (or not a number at all).
-            if !(correction_mm <= MAX_CORRECTION_MM) {
+            if correction_mm.is_nan() || correction_mm > MAX_CORRECTION_MM {
                 return Err(SimError::Compensation {
                     line,
                     time_s,
