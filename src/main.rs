@@ -376,13 +376,25 @@ fn run(args: RunArgs) -> Result<()> {
                 PredictError::Io { .. } => anyhow::Error::new(e),
                 _ => anyhow::Error::new(e).context(path.display().to_string()),
             })?;
-            model.check_geometry(&machine.geometry()).with_context(|| {
-                format!(
-                    "{}: model does not fit machine {}",
+            let trained_tool_mm = model.geometry().tool_offset_mm;
+            let (model, retooled) = model
+                .for_machine_geometry(&machine.geometry())
+                .with_context(|| {
+                    format!(
+                        "{}: model does not fit machine {}",
+                        path.display(),
+                        machine.machine.name
+                    )
+                })?;
+            if retooled {
+                println!(
+                    "note: {} was calibrated with tool offset {:?} mm; its elementary errors are \
+                     synthesised for this machine's tool offset {:?} mm",
                     path.display(),
-                    machine.machine.name
-                )
-            })?;
+                    trained_tool_mm,
+                    machine.tool.offset_mm
+                );
+            }
             let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
             let ctrl = Compensator::for_machine(model, &names).with_context(|| {
                 format!(

@@ -389,3 +389,81 @@ fn a_model_of_another_kinematics_is_refused_before_the_run() {
          chain `w X Y b Z t` with tool offset [0.0, 0.0, -150.0] mm"
     );
 }
+
+#[test]
+fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
+    let t = Tmp::new("tool");
+    let reference = std::fs::read_to_string(repo("machines/vmc-reference.toml")).unwrap();
+    let long = reference.replacen(
+        "offset_mm = [0.0, 0.0, -150.0]",
+        "offset_mm = [0.0, 0.0, -250.0]",
+        1,
+    );
+    assert_ne!(long, reference);
+    std::fs::write(t.0.join("long.toml"), long).unwrap();
+    let run = |args: &[&str]| {
+        Command::new(BIN)
+            .args(args)
+            .current_dir(&t.0)
+            .output()
+            .unwrap()
+    };
+    for args in [
+        &["calibrate", "--measure-every-min", "120", "-o", "c.csv"][..],
+        &[
+            "train", "--data", "c.csv", "--kind", "linear", "-o", "lin.json",
+        ],
+        &["train", "--data", "c.csv", "-o", "hyb.json"],
+    ] {
+        let o = run(args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let prog = repo("trajectories/diag_xy.ngc").display().to_string();
+    let err = one_line_error(
+        &t.0,
+        &[
+            "run",
+            &prog,
+            "--machine",
+            "long.toml",
+            "--model",
+            "lin.json",
+            "--compensate",
+        ],
+    );
+    assert!(
+        err.ends_with(
+            "tool offset [0.0, 0.0, -250.0] mm (a hybrid model follows a tool change; a volumetric \
+             or linear one is fitted on the calibration tool's tip: recalibrate with this tool)"
+        ),
+        "{err}"
+    );
+    let o = run(&[
+        "run",
+        &prog,
+        "--machine",
+        "long.toml",
+        "--model",
+        "hyb.json",
+        "--compensate",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        out.contains(
+            "note: hyb.json was calibrated with tool offset [0.0, 0.0, -150.0] mm; its elementary \
+             errors are synthesised for this machine's tool offset [0.0, 0.0, -250.0] mm"
+        ),
+        "{out}"
+    );
+    let reduction: f64 = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("reduction of RMS |E|: "))
+        .and_then(|v| v.trim_end_matches(" %").parse().ok())
+        .unwrap_or_else(|| panic!("no reduction line in\n{out}"));
+    assert!(reduction >= 80.0, "{reduction} %\n{out}");
+}

@@ -445,6 +445,27 @@ impl AnyPredictor {
         }
     }
 
+    /// The model for `machine`: itself when the geometry is the one it was trained for; a hybrid
+    /// model synthesised for the machine's tool when only the tool differs
+    /// ([`HybridPredictor::with_tool_offset_mm`]; `true` in the answer says it was).
+    ///
+    /// # Errors
+    /// Another chain, or another tool for a volumetric or linear model (fitted on the tool-tip
+    /// error of the calibration's tool): [`PredictError::GeometryMismatch`].
+    pub fn for_machine_geometry(
+        self,
+        machine: &MachineGeometry,
+    ) -> Result<(Self, bool), PredictError> {
+        match (self.check_geometry(machine), self) {
+            (Ok(()), me) => Ok((me, false)),
+            (Err(_), AnyPredictor::Hybrid(h)) if h.geometry().chain == machine.chain => Ok((
+                AnyPredictor::Hybrid(h.with_tool_offset_mm(machine.tool_offset_mm)?),
+                true,
+            )),
+            (Err(e), _) => Err(e),
+        }
+    }
+
     /// The machine geometry stored with the model.
     pub fn geometry(&self) -> &MachineGeometry {
         match self {

@@ -175,6 +175,27 @@ impl HybridPredictor {
         self.parts.reversal_um
     }
 
+    /// The same model synthesised for another tool (tool tip relative to the spindle gauge
+    /// point, mm). The parts predict elementary errors of the axes and the spindle, which do not
+    /// depend on the tool; the tool enters only through the synthesis (angular errors and
+    /// spindle tilts times the tool's arm), so a tool change needs no recalibration. The
+    /// baselines, fitted on the tool-tip error itself, cannot do this.
+    ///
+    /// # Errors
+    /// A non-finite offset ([`PredictError::Inconsistent`]).
+    pub fn with_tool_offset_mm(&self, tool_offset_mm: [f64; 3]) -> Result<Self, PredictError> {
+        if let Some(v) = tool_offset_mm.iter().find(|v| !v.is_finite()) {
+            return Err(PredictError::Inconsistent {
+                reason: format!("tool offset holds a non-finite value ({v})"),
+            });
+        }
+        let geometry = MachineGeometry {
+            tool_offset_mm,
+            ..self.geometry
+        };
+        Self::from_parts(self.sensors.clone(), geometry, self.parts.clone())
+    }
+
     /// The machine geometry used by the synthesis.
     pub fn geometry(&self) -> &MachineGeometry {
         &self.geometry
@@ -575,6 +596,39 @@ mod tests {
         for q in [[100.0, 50.0, -80.0], [400.0, 300.0, -300.0]] {
             assert_eq!(old.predict_error_mm(q, &hot), p.predict_error_mm(q, &hot));
         }
+    }
+
+    #[test]
+    fn another_tool_gives_the_model_calibrated_with_that_tool() {
+        // The parts learn elementary errors, which do not depend on the tool: a model moved to
+        // a 250 mm tool predicts exactly what one trained with that tool predicts, and differs
+        // from the 150 mm model by the angular errors times the extra 100 mm arm.
+        let ds = td::dataset(&[4.0, 7.0, 5.5], 3);
+        let quick = Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 20,
+            ..Settings::default()
+        };
+        let (p150, _) = train_hybrid(&ds, &td::geometry(), &quick).unwrap();
+        let long = MachineGeometry {
+            tool_offset_mm: [0.0, 0.0, -250.0],
+            ..td::geometry()
+        };
+        let (mut p250, _) = train_hybrid(&ds, &long, &quick).unwrap();
+        let mut moved = p150.with_tool_offset_mm([0.0, 0.0, -250.0]).unwrap();
+        assert_eq!(moved.geometry(), &long);
+        let mut p150 = p150;
+        let hot = td::temps_degc(6.0, 7200.0);
+        for q in [[100.0, 50.0, -80.0], [400.0, 300.0, -300.0]] {
+            let m = moved.predict_error_mm(q, &hot);
+            assert_eq!(m, p250.predict_error_mm(q, &hot));
+            let short = p150.predict_error_mm(q, &hot);
+            assert!(
+                (0..3).any(|k| (m[k] - short[k]).abs() > 1e-6),
+                "{m:?} vs {short:?}"
+            );
+        }
+        assert!(p150.with_tool_offset_mm([0.0, f64::NAN, -250.0]).is_err());
     }
 
     #[test]

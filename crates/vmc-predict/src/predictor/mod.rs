@@ -158,7 +158,13 @@ pub enum PredictError {
     #[error(
         "geometry mismatch: the model was trained for chain `{model_chain}` with tool offset \
          {model_tool_mm:?} mm, the machine has chain `{machine_chain}` with tool offset \
-         {machine_tool_mm:?} mm"
+         {machine_tool_mm:?} mm{}",
+        if model_chain == machine_chain {
+            " (a hybrid model follows a tool change; a volumetric or linear one is fitted on the \
+             calibration tool's tip: recalibrate with this tool)"
+        } else {
+            ""
+        }
     )]
     GeometryMismatch {
         /// The model's chain.
