@@ -543,6 +543,17 @@ mod tests {
     use super::*;
     use crate::machine::MachineSpec;
 
+    /// The XY diagonal planned from home on `spec`.
+    fn diag_xy_plan(spec: &MachineSpec) -> Plan {
+        crate::program::plan_source(
+            include_str!("../trajectories/diag_xy.ngc"),
+            "diag_xy.ngc",
+            spec,
+            spec.axes.home_mm,
+        )
+        .unwrap()
+    }
+
     /// Wants poses every 0.5 s and keeps them.
     #[derive(Default)]
     struct Poses {
@@ -570,13 +581,7 @@ mod tests {
     #[test]
     fn motion_samples_follow_the_plan_at_the_requested_interval() {
         let spec = MachineSpec::reference();
-        let plan = crate::program::plan_source(
-            include_str!("../trajectories/diag_xy.ngc"),
-            "diag_xy.ngc",
-            &spec,
-            spec.axes.home_mm,
-        )
-        .unwrap();
+        let plan = diag_xy_plan(&spec);
         let mut twin = Twin::new(&spec, 1).unwrap();
         // Start later than 0 so the twin-time offset is exercised.
         twin.advance(10.0, &activity_over(&plan, 0.0, 0.0)).unwrap();
@@ -610,13 +615,7 @@ mod tests {
     #[test]
     fn a_correction_above_the_limit_or_not_a_number_stops_the_run_at_its_line() {
         let spec = MachineSpec::reference();
-        let plan = crate::program::plan_source(
-            include_str!("../trajectories/diag_xy.ngc"),
-            "diag_xy.ngc",
-            &spec,
-            spec.axes.home_mm,
-        )
-        .unwrap();
+        let plan = diag_xy_plan(&spec);
         let run = |offset_mm: f64| {
             let mut twin = Twin::new(&spec, 1).unwrap();
             let mut c = Shift(offset_mm);

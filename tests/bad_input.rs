@@ -312,29 +312,28 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
 #[test]
 fn repeated_seeds_and_empty_options_are_refused_before_any_work() {
     let t = Tmp::new("options");
-    assert_eq!(
-        one_line_error(&t.0, &["campaign", "--seeds", "1,2,1"]),
-        "--seeds: seed 1 is given twice (its runs would count twice)"
-    );
-    assert_eq!(
-        one_line_error(&t.0, &["select-sensors", "--compare-seeds", "3,3"]),
-        "--compare-seeds: seed 3 is given twice (its runs would count twice)"
-    );
-    assert_eq!(
-        one_line_error(
-            &t.0,
-            &["select-sensors", "--candidates", "spindle_nose,,saddle"]
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["campaign", "--seeds", "1,2,1"],
+            "--seeds: seed 1 is given twice (its runs would count twice)",
         ),
-        "--candidates: an empty name in `spindle_nose,,saddle`"
-    );
-    assert_eq!(
-        one_line_error(&t.0, &["select-sensors", "--count", "1000"]),
-        "--count 1000: there are only 39 candidate locations besides ambient"
-    );
-    assert_eq!(
-        one_line_error(&t.0, &["bench", "--repeats", "0"]),
-        "--repeats must be at least 1"
-    );
+        (
+            &["select-sensors", "--compare-seeds", "3,3"],
+            "--compare-seeds: seed 3 is given twice (its runs would count twice)",
+        ),
+        (
+            &["select-sensors", "--candidates", "spindle_nose,,saddle"],
+            "--candidates: an empty name in `spindle_nose,,saddle`",
+        ),
+        (
+            &["select-sensors", "--count", "1000"],
+            "--count 1000: there are only 39 candidate locations besides ambient",
+        ),
+        (&["bench", "--repeats", "0"], "--repeats must be at least 1"),
+    ];
+    for (args, want) in cases {
+        assert_eq!(one_line_error(&t.0, args), want);
+    }
     assert!(
         std::fs::read_dir(&t.0).unwrap().next().is_none(),
         "nothing written"

@@ -166,7 +166,10 @@ fn bad_selection_requests_are_clear_errors() {
     );
     let err = text(&o).1;
     assert!(!o.status.success());
-    assert!(err.contains("asked for 3 sensors"), "{err}");
+    assert!(
+        err.contains("--count 3: there are only 2 candidate locations besides ambient"),
+        "{err}"
+    );
 
     let o = vmc(dir, &["select-sensors", "--count", "0", "--no-compare"]);
     assert!(
