@@ -82,7 +82,7 @@ pub enum NnError {
         sizes: Vec<usize>,
         /// Their number of weights (saturating).
         weights: usize,
-        /// The most supported ([`train::MAX_LM_WEIGHTS`]).
+        /// The most supported (`MAX_LM_WEIGHTS`, 4096).
         max: usize,
     },
     /// A training setting is out of range.
