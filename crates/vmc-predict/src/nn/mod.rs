@@ -25,7 +25,7 @@ pub use mlp::{Init, Mlp};
 pub use normalise::Normaliser;
 pub use regressor::Regressor;
 pub use samples::{DataError, Samples};
-pub use train::{train, train_from, Damping, StopReason, TrainConfig, TrainReport};
+pub use train::{train, train_from, Damping, StopReason, TrainConfig, TrainReport, MAX_LM_WEIGHTS};
 
 use thiserror::Error;
 
@@ -82,7 +82,7 @@ pub enum NnError {
         sizes: Vec<usize>,
         /// Their number of weights (saturating).
         weights: usize,
-        /// The most supported (`MAX_LM_WEIGHTS`, 4096).
+        /// The most supported ([`MAX_LM_WEIGHTS`]).
         max: usize,
     },
     /// A training setting is out of range.
