@@ -284,6 +284,17 @@ pub enum OutputError {
     /// The file exists and overwriting was not allowed.
     #[error("{0}: already exists (pass --force to overwrite)")]
     Exists(PathBuf),
+    /// The path names a folder, not a file.
+    #[error("{0}: is a folder; give a file name")]
+    IsFolder(PathBuf),
+    /// The file's folder does not exist.
+    #[error("{path}: the folder {folder} does not exist")]
+    NoFolder {
+        /// The file.
+        path: PathBuf,
+        /// Its folder.
+        folder: PathBuf,
+    },
     /// An I/O failure.
     #[error("{path}: {err}")]
     Io {
@@ -294,9 +305,20 @@ pub enum OutputError {
     },
 }
 
-/// Checks up front that `path` may be written: its folder exists (or can be created) and the
-/// file does not exist unless `force`.
+/// Checks up front, before any work, that `path` may be written: it is not a folder, its
+/// folder exists, and the file does not exist unless `force`.
 pub fn check_writable(path: &Path, force: bool) -> Result<(), OutputError> {
+    if path.is_dir() {
+        return Err(OutputError::IsFolder(path.to_path_buf()));
+    }
+    if let Some(folder) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !folder.is_dir() {
+            return Err(OutputError::NoFolder {
+                path: path.to_path_buf(),
+                folder: folder.to_path_buf(),
+            });
+        }
+    }
     if path.exists() && !force {
         return Err(OutputError::Exists(path.to_path_buf()));
     }
@@ -361,6 +383,20 @@ mod tests {
         assert_eq!(std::fs::read(&f).unwrap(), b"one");
         write_atomic(&f, b"two", true).unwrap();
         assert_eq!(std::fs::read(&f).unwrap(), b"two");
+        // A folder as the file, even with --force, and a missing folder: refused up front.
+        assert!(matches!(
+            check_writable(&dir, true),
+            Err(OutputError::IsFolder(_))
+        ));
+        let missing = dir.join("no-such-folder").join("m.json");
+        assert_eq!(
+            check_writable(&missing, true).unwrap_err().to_string(),
+            format!(
+                "{}: the folder {} does not exist",
+                missing.display(),
+                dir.join("no-such-folder").display()
+            )
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
