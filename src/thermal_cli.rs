@@ -167,7 +167,8 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
         thermal_fit::fit(&table, &args.inputs, &args.outputs, &split, &settings).map_err(|e| {
             match e {
                 // A value of the file, not a setting: name the file.
-                e @ thermal_fit::ThermalFitError::NonFiniteFeature { .. } => {
+                e @ (thermal_fit::ThermalFitError::NonFiniteFeature { .. }
+                | thermal_fit::ThermalFitError::TooLarge { .. }) => {
                     anyhow::Error::new(e).context(source.clone())
                 }
                 e => anyhow::Error::new(e),

@@ -492,28 +492,39 @@ fn bad_feature_options_are_errors() {
         &o,
         &["600001 weights", "at most 4096", "smaller hidden widths"],
     );
-    // A speed cell so large that its powers overflow names the feature, the time and the file.
-    let huge = synthetic_csv().replacen("\n60,2000,", "\n60,1e200,", 1);
+    // A speed cell so large that its cube overflows names the feature, the time and the file;
+    // an output cell whose square overflows names its column.
+    let fit = |file: &str| {
+        vmc(
+            dir.path(),
+            &[
+                "fit-thermal",
+                "--data",
+                file,
+                "--inputs",
+                "t1_degc,spindle_rpm",
+                "--outputs",
+                "ch1_um",
+                "-o",
+                "model.json",
+                "--arch",
+                "linear",
+            ],
+        )
+    };
+    let huge = synthetic_csv().replacen("\n60,2000,", "\n60,1e120,", 1);
     std::fs::write(dir.path().join("huge.csv"), huge).unwrap();
-    let o = vmc(
-        dir.path(),
-        &[
-            "fit-thermal",
-            "--data",
-            "huge.csv",
-            "--inputs",
-            "t1_degc,spindle_rpm",
-            "--outputs",
-            "ch1_um",
-            "-o",
-            "model.json",
-            "--arch",
-            "linear",
-        ],
-    );
     assert_error(
-        &o,
-        &["huge.csv: feature \"spindle_rpm^2\" is not finite at t = 60 s"],
+        &fit("huge.csv"),
+        &["huge.csv: feature \"spindle_rpm^3\" is not finite at t = 60 s"],
+    );
+    let csv = synthetic_csv();
+    let row = csv.lines().nth(3).unwrap();
+    let bad_row = format!("{},1e200", row.rsplit_once(',').unwrap().0);
+    std::fs::write(dir.path().join("out.csv"), csv.replacen(row, &bad_row, 1)).unwrap();
+    assert_error(
+        &fit("out.csv"),
+        &["out.csv: column \"ch1_um\" at t = 120 s: a value too large to fit"],
     );
     let o = run(&["--inputs", "t1_degc,spindle_rpm", "--relative-to-mean"]);
     assert_error(

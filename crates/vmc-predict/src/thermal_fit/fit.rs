@@ -366,6 +366,20 @@ pub fn fit(
         .iter()
         .map(|n| col(n, "output").map(<[f64]>::to_vec))
         .collect::<Result<_, _>>()?;
+    // Values whose squares overflow would fit to garbage (a corrupt cell or a unit mistake).
+    let named: Vec<(&String, &[f64])> = inputs
+        .iter()
+        .zip(x_cols.iter().copied())
+        .chain(outputs.iter().zip(y.iter().map(Vec::as_slice)))
+        .collect();
+    for (name, values) in named {
+        if let Some(i) = values.iter().position(|v| !(v * v).is_finite()) {
+            return Err(ThermalFitError::TooLarge {
+                column: name.clone(),
+                time_s: table.time_s[i],
+            });
+        }
+    }
     let width = settings.features.width(inputs);
     let feats = settings
         .features

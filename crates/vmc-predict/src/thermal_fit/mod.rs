@@ -169,6 +169,17 @@ pub enum ThermalFitError {
         reason: String,
     },
     /// Network training failed.
+    /// A column holds a value too large to fit (its square overflows).
+    #[error(
+        "column \"{column}\" at t = {time_s} s: a value too large to fit (its square overflows): \
+         a corrupt cell or a unit mistake?"
+    )]
+    TooLarge {
+        /// The column.
+        column: String,
+        /// Time of the row, s.
+        time_s: f64,
+    },
     /// A feature computed from the inputs is not finite (e.g. a huge speed raised to a power).
     #[error(
         "feature \"{feature}\" is not finite at t = {time_s} s: an input value too large for it \
