@@ -46,6 +46,21 @@ fn one_line_error(dir: &Path, args: &[&str]) -> String {
         .to_string()
 }
 
+/// Runs `vmc-twin args` in `dir`, asserting success; returns stdout.
+fn succeed(dir: &Path, args: &[&str]) -> String {
+    let o = Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 /// (program text, expected message after `bad.ngc: `), run with `vmc-twin run bad.ngc`.
 const PROGRAMS: &[(&str, &str)] = &[
     (
@@ -223,15 +238,9 @@ fn absurd_steps_are_refused_before_any_simulation() {
 #[test]
 fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
     let t = Tmp::new("data");
-    let ok = Command::new(BIN)
-        .args(["calibrate", "--measure-every-min", "120", "-o", "cal.csv"])
-        .current_dir(&t.0)
-        .output()
-        .unwrap();
-    assert!(
-        ok.status.success(),
-        "{}",
-        String::from_utf8_lossy(&ok.stderr)
+    succeed(
+        &t.0,
+        &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
     );
     let text = std::fs::read_to_string(t.0.join("cal.csv")).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
@@ -282,17 +291,11 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
     );
     // A well-formed model whose prediction is absurd (an intercept of 5 mm, in µm) is stopped at
     // the first compensated point, not run with the axes 5 mm off.
-    let ok = Command::new(BIN)
-        .args([
+    succeed(
+        &t.0,
+        &[
             "train", "--data", "cal.csv", "--kind", "linear", "-o", "lin.json",
-        ])
-        .current_dir(&t.0)
-        .output()
-        .unwrap();
-    assert!(
-        ok.status.success(),
-        "{}",
-        String::from_utf8_lossy(&ok.stderr)
+        ],
     );
     let mut model: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(t.0.join("lin.json")).unwrap()).unwrap();
@@ -347,7 +350,8 @@ fn a_model_of_another_kinematics_is_refused_before_the_run() {
     let gantry = reference.replacen("chain = \"w X Y b Z t\"", "chain = \"w Y b X Z t\"", 1);
     assert_ne!(gantry, reference);
     std::fs::write(t.0.join("gantry.toml"), gantry).unwrap();
-    for args in [
+    succeed(
+        &t.0,
         &[
             "calibrate",
             "--machine",
@@ -356,7 +360,10 @@ fn a_model_of_another_kinematics_is_refused_before_the_run() {
             "120",
             "-o",
             "g.csv",
-        ][..],
+        ],
+    );
+    succeed(
+        &t.0,
         &[
             "train",
             "--data",
@@ -368,18 +375,7 @@ fn a_model_of_another_kinematics_is_refused_before_the_run() {
             "-o",
             "g.json",
         ],
-    ] {
-        let o = Command::new(BIN)
-            .args(args)
-            .current_dir(&t.0)
-            .output()
-            .unwrap();
-        assert!(
-            o.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-    }
+    );
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     assert_eq!(
         one_line_error(&t.0, &["run", &prog, "--model", "g.json", "--compensate"]),
@@ -400,40 +396,31 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
     );
     assert_ne!(long, reference);
     std::fs::write(t.0.join("long.toml"), long).unwrap();
-    let run = |args: &[&str]| {
-        Command::new(BIN)
-            .args(args)
-            .current_dir(&t.0)
-            .output()
-            .unwrap()
-    };
-    for args in [
-        &["calibrate", "--measure-every-min", "120", "-o", "c.csv"][..],
+    succeed(
+        &t.0,
+        &["calibrate", "--measure-every-min", "120", "-o", "c.csv"],
+    );
+    succeed(
+        &t.0,
         &[
             "train", "--data", "c.csv", "--kind", "linear", "-o", "lin.json",
         ],
-        &["train", "--data", "c.csv", "-o", "hyb.json"],
-    ] {
-        let o = run(args);
-        assert!(
-            o.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-    }
-    let prog = repo("trajectories/diag_xy.ngc").display().to_string();
-    let err = one_line_error(
-        &t.0,
-        &[
-            "run",
-            &prog,
-            "--machine",
-            "long.toml",
-            "--model",
-            "lin.json",
-            "--compensate",
-        ],
     );
+    succeed(&t.0, &["train", "--data", "c.csv", "-o", "hyb.json"]);
+    let prog = repo("trajectories/diag_xy.ngc").display().to_string();
+    let args = |model: &'static str| {
+        [
+            "run".to_string(),
+            prog.clone(),
+            "--machine".into(),
+            "long.toml".into(),
+            "--model".into(),
+            model.into(),
+            "--compensate".into(),
+        ]
+    };
+    let lin = args("lin.json");
+    let err = one_line_error(&t.0, &lin.each_ref().map(String::as_str));
     assert!(
         err.ends_with(
             "tool offset [0.0, 0.0, -250.0] mm (a hybrid model follows a tool change; a volumetric \
@@ -441,17 +428,8 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         ),
         "{err}"
     );
-    let o = run(&[
-        "run",
-        &prog,
-        "--machine",
-        "long.toml",
-        "--model",
-        "hyb.json",
-        "--compensate",
-    ]);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let hyb = args("hyb.json");
+    let out = succeed(&t.0, &hyb.each_ref().map(String::as_str));
     assert!(
         out.contains(
             "note: hyb.json was calibrated with tool offset [0.0, 0.0, -150.0] mm; its elementary \
