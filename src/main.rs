@@ -739,9 +739,12 @@ fn select_sensors(args: SelectArgs) -> Result<()> {
             .split(',')
             .map(|w| w.trim().to_string())
             .collect();
-        for w in &wanted {
+        for (i, w) in wanted.iter().enumerate() {
             if w.is_empty() {
                 anyhow::bail!("--candidates: an empty name in `{}`", args.candidates);
+            }
+            if wanted[..i].contains(w) {
+                anyhow::bail!("--candidates: `{w}` is named twice");
             }
             if w != "ambient" && !machine.thermal.nodes.iter().any(|n| &n.name == w) {
                 let nodes: Vec<&str> = machine

@@ -315,7 +315,11 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
 #[test]
 fn repeated_seeds_and_empty_options_are_refused_before_any_work() {
     let t = Tmp::new("options");
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["select-sensors", "--candidates", "saddle,x_motor,saddle"],
+            "--candidates: `saddle` is named twice",
+        ),
         (
             &["campaign", "--seeds", "1,2,1"],
             "--seeds: seed 1 is given twice (its runs would count twice)",
