@@ -287,21 +287,10 @@ fn main() -> ExitCode {
     }
 }
 
-/// The error and its causes, `: `-joined, without repeating a cause that its parent's message
-/// already ends with (errors that print their source as well as exposing it).
+/// The error and its causes, `: `-joined (each error type prints its cause once: either in
+/// its message or as its source, not both).
 fn error_text(e: &anyhow::Error) -> String {
-    let mut out = String::new();
-    for cause in e.chain() {
-        let s = cause.to_string();
-        if out.ends_with(&s) {
-            continue;
-        }
-        if !out.is_empty() {
-            out.push_str(": ");
-        }
-        out.push_str(&s);
-    }
-    out
+    format!("{e:#}")
 }
 
 fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<MachineSpec> {
@@ -789,10 +778,10 @@ fn select_and_write(
     if args.count == 0 {
         anyhow::bail!("--count must be at least 1");
     }
-    let candidates = match only {
-        Some(list) => list.iter().filter(|w| *w != "ambient").count(),
-        None => machine.thermal.nodes.len(),
-    };
+    let candidates = placement::candidates_among(machine, only)?
+        .iter()
+        .filter(|c| c.node != vmc_twin::thermal::AMBIENT_NODE)
+        .count();
     if args.count > candidates {
         anyhow::bail!(
             "--count {}: there are only {candidates} candidate locations besides ambient",
@@ -1118,10 +1107,10 @@ mod tests {
 
     #[test]
     fn a_cause_that_its_parent_already_prints_is_not_repeated() {
-        // `PredictError::Net` prints its source and exposes it too.
+        // `PredictError::Net` prints its cause in its message (and does not expose it again).
         let e = anyhow::Error::new(PredictError::Net {
             net: "spindle",
-            source: NnError::Data(DataError::TooLarge {
+            cause: NnError::Data(DataError::TooLarge {
                 what: "targets",
                 column: 0,
             }),

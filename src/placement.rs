@@ -122,6 +122,22 @@ pub fn candidate_sensors(spec: &MachineSpec) -> Result<Vec<SensorSpec>, Placemen
         .collect())
 }
 
+/// The candidates of a study: every one of [`candidate_sensors`], or those on the nodes `only`
+/// (ambient always, as the cold reference).
+///
+/// # Errors
+/// As [`candidate_sensors`].
+pub fn candidates_among(
+    spec: &MachineSpec,
+    only: Option<&[String]>,
+) -> Result<Vec<SensorSpec>, PlacementError> {
+    let mut candidates = candidate_sensors(spec)?;
+    if let Some(only) = only {
+        candidates.retain(|c| c.node == AMBIENT_NODE || only.contains(&c.node));
+    }
+    Ok(candidates)
+}
+
 /// `spec` with `sensors` in place of its own, validated.
 ///
 /// # Errors
@@ -320,10 +336,7 @@ pub fn study_among(
     cfg: &PlacementConfig,
     only: Option<&[String]>,
 ) -> Result<PlacementReport, PlacementError> {
-    let mut candidates = candidate_sensors(spec)?;
-    if let Some(only) = only {
-        candidates.retain(|c| c.node == AMBIENT_NODE || only.contains(&c.node));
-    }
+    let candidates = candidates_among(spec, only)?;
     let cand_spec = with_sensors(spec, candidates.clone())?;
     let scenarios = selection_cycles(cfg.seed);
     let data = campaign::calibrate(&cand_spec, &scenarios, &CampaignConfig::new(cfg.seed))

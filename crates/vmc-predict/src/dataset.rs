@@ -300,6 +300,7 @@ impl Dataset {
                 if !v.is_finite() {
                     return Err(bad(FIXED[k], format!("not a finite number: \"{c}\"")));
                 }
+                // Positions and measurements (FIXED[3..]); the time (k = 1) may be any finite value.
                 if k >= 3 && v.abs() > PLAUSIBLE_MAX {
                     return Err(bad(
                         FIXED[k],

@@ -79,7 +79,7 @@ impl LinearModel {
                 coefficients: n_coef,
             });
         }
-        let norm = Normaliser::fit(data.inputs(), n_in)?;
+        let norm = Normaliser::fit_named(data.inputs(), n_in, "inputs")?;
         let rows = if ridge > 0.0 { n + n_in } else { n };
         let mut z = DMatrix::<f64>::zeros(rows, n_coef);
         let mut y = DMatrix::<f64>::zeros(rows, n_out);

@@ -20,6 +20,12 @@ pub struct Normaliser {
 impl Normaliser {
     /// Fits mean and standard deviation of each of the `width` columns of a row-major buffer.
     pub fn fit(rows: &[f64], width: usize) -> Result<Self, DataError> {
+        Self::fit_named(rows, width, "data")
+    }
+
+    /// [`Self::fit`], naming the buffer (`"inputs"`, `"targets"`) in a
+    /// [`DataError::TooLarge`].
+    pub fn fit_named(rows: &[f64], width: usize, what: &'static str) -> Result<Self, DataError> {
         if width == 0 {
             return Err(DataError::ZeroWidth { what: "features" });
         }
@@ -59,10 +65,7 @@ impl Normaliser {
             })
             .collect::<Vec<f64>>();
         if let Some(column) = (0..width).find(|&k| !(mean[k].is_finite() && std[k].is_finite())) {
-            return Err(DataError::TooLarge {
-                what: "data",
-                column,
-            });
+            return Err(DataError::TooLarge { what, column });
         }
         Ok(Self { mean, std })
     }

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::mlp::Mlp;
 use super::normalise::Normaliser;
-use super::samples::{DataError, Samples};
+use super::samples::Samples;
 use super::train::{train, TrainConfig, TrainReport};
 use super::NnError;
 
@@ -79,16 +79,8 @@ impl Regressor {
         if train_set.is_empty() {
             return Err(NnError::EmptyTrainingSet);
         }
-        let named = |what: &'static str| {
-            move |e: DataError| match e {
-                DataError::TooLarge { column, .. } => DataError::TooLarge { what, column },
-                e => e,
-            }
-        };
-        let input_norm =
-            Normaliser::fit(train_set.inputs(), train_set.n_in()).map_err(named("inputs"))?;
-        let output_norm =
-            Normaliser::fit(train_set.targets(), train_set.n_out()).map_err(named("targets"))?;
+        let input_norm = Normaliser::fit_named(train_set.inputs(), train_set.n_in(), "inputs")?;
+        let output_norm = Normaliser::fit_named(train_set.targets(), train_set.n_out(), "targets")?;
         let normalise = |s: &Samples| {
             s.map_rows(
                 |x, z| input_norm.normalise_into(x, z),

@@ -303,7 +303,7 @@ impl Table {
     ) -> Result<(Samples, Samples, SplitKind), PredictError> {
         let err = |e| PredictError::Net {
             net,
-            source: crate::nn::NnError::Data(e),
+            cause: crate::nn::NnError::Data(e),
         };
         let all = Samples::from_rows(&self.inputs, &self.targets).map_err(err)?;
         // `split_by_groups` refuses a split with an empty side; that is the fallback case.
@@ -433,7 +433,7 @@ pub(crate) fn fit_mlp(
     let mut candidates = Vec::new();
     for &h in &settings.hidden_candidates {
         let (reg, report) = Regressor::fit(&tr, Some(&va), &[h], &config)
-            .map_err(|source| PredictError::Net { net, source })?;
+            .map_err(|cause| PredictError::Net { net, cause })?;
         let score = report.val_rmse[report.best_epoch];
         candidates.push(CandidateScore {
             hidden_units: h,
@@ -479,7 +479,7 @@ pub(crate) fn fit_linear(
 ) -> Result<(LinearModel, NetSummary), PredictError> {
     let (tr, va, kind) = table.split(split, model)?;
     let lin =
-        LinearModel::fit(&tr, ridge).map_err(|source| PredictError::Linear { model, source })?;
+        LinearModel::fit(&tr, ridge).map_err(|cause| PredictError::Linear { model, cause })?;
     let mut predict = |x: &[f64], o: &mut [f64]| {
         let _ = lin.predict_into(x, o);
     };

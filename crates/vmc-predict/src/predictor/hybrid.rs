@@ -474,9 +474,9 @@ fn estimate_reversal_um(
     let mut out = [0.0];
     for ((r, x), y) in recs.iter().zip(&table.inputs).zip(&table.targets) {
         lin.predict_into(x, &mut out)
-            .map_err(|source| PredictError::Linear {
+            .map_err(|cause| PredictError::Linear {
                 model: "reversal",
-                source,
+                cause,
             })?;
         let d = usize::from(r.dir < 0);
         sum[d] += y[k] - out[0];

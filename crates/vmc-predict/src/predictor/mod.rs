@@ -209,20 +209,23 @@ pub enum PredictError {
         reason: String,
     },
     /// Network construction or training failed.
-    #[error("network `{net}`: {source}")]
+    ///
+    /// The message includes the cause; it is not also given as `source()`, so a printer of the
+    /// error chain shows it once.
+    #[error("network `{net}`: {cause}")]
     Net {
         /// Which network.
         net: &'static str,
         /// The cause.
-        source: NnError,
+        cause: NnError,
     },
-    /// A linear regression failed.
-    #[error("linear model `{model}`: {source}")]
+    /// A linear regression failed (the cause is in the message, as for [`Self::Net`]).
+    #[error("linear model `{model}`: {cause}")]
     Linear {
         /// Which model.
         model: &'static str,
         /// The cause.
-        source: LinRegError,
+        cause: LinRegError,
     },
     /// The text is not a vmc-twin model file.
     #[error("not a vmc-twin model file: {reason}")]

@@ -147,10 +147,7 @@ pub(crate) fn fit_linear_plus_net(
         };
         linear
             .predict_into(x, &mut l)
-            .map_err(|source| PredictError::Linear {
-                model: name,
-                source,
-            })?;
+            .map_err(|cause| PredictError::Linear { model: name, cause })?;
         residual
             .targets
             .push(y.iter().zip(&l).map(|(y, l)| y - l).collect());

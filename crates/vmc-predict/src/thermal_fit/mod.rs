@@ -168,7 +168,6 @@ pub enum ThermalFitError {
         /// What is wrong.
         reason: String,
     },
-    /// Network training failed.
     /// A column holds a value too large to fit (its square overflows).
     #[error(
         "column \"{column}\" at t = {time_s} s: a value too large to fit (its square overflows): \
@@ -191,9 +190,23 @@ pub enum ThermalFitError {
         /// Time of the row, s.
         time_s: f64,
     },
+    /// Training a net failed. The message includes the cause; it is not also given as
+    /// `source()`, so a printer of the error chain shows it once.
     #[error("training the residual MLP: {0}")]
-    Net(#[from] crate::nn::NnError),
-    /// Linear regression failed.
+    Net(crate::nn::NnError),
+    /// Linear regression failed (the cause is in the message, as for [`Self::Net`]).
     #[error("fitting the linear part: {0}")]
-    Linear(#[from] crate::linreg::LinRegError),
+    Linear(crate::linreg::LinRegError),
+}
+
+impl From<crate::nn::NnError> for ThermalFitError {
+    fn from(e: crate::nn::NnError) -> Self {
+        ThermalFitError::Net(e)
+    }
+}
+
+impl From<crate::linreg::LinRegError> for ThermalFitError {
+    fn from(e: crate::linreg::LinRegError) -> Self {
+        ThermalFitError::Linear(e)
+    }
 }
