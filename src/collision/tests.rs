@@ -144,10 +144,20 @@ fn contacts_on_arcs_are_found_on_the_arc_itself() {
 }
 
 proptest::proptest! {
-    #![proptest_config(proptest::prelude::ProptestConfig { cases: 96, ..Default::default() })]
+    // Fixed seed: the same cases on every run (determinism rule), no regression files.
+    #![proptest_config(proptest::prelude::ProptestConfig {
+        cases: 96,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x636f_6c6c),
+        failure_persistence: None,
+        ..Default::default()
+    })]
     /// The sampling bound, against a reference 200 times denser (1 µm steps): whenever the
     /// reference finds a contact deeper than 0.1 mm the check reports it, and never more than
     /// 0.1 mm shallower than the reference's deepest. Random short moves around a fixture corner.
+    /// The reference is itself sampled: the penetration depth changes by at most the distance
+    /// the tool moves (1-Lipschitz in translation), so the true deepest contact lies within half
+    /// a reference step (0.5 µm) above the reference's, and the check may find up to that much
+    /// more.
     #[test]
     fn no_contact_deeper_than_a_tenth_of_a_millimetre_is_missed(
         a in proptest::array::uniform3(-12.0f64..12.0),
@@ -189,7 +199,7 @@ proptest::proptest! {
             proptest::prop_assert!(found_mm > 0.0, "missed a {reference_mm} mm contact");
         }
         proptest::prop_assert!(found_mm >= reference_mm - 0.1 - 1e-9, "found {found_mm}, reference {reference_mm}");
-        proptest::prop_assert!(found_mm <= reference_mm + 1e-9, "found {found_mm}, reference {reference_mm}");
+        proptest::prop_assert!(found_mm <= reference_mm + 0.0005 + 1e-9, "found {found_mm}, reference {reference_mm}");
     }
 }
 
