@@ -3,7 +3,8 @@
 //!
 //! Keys: `states=dev` (selection-only states), `seeds=`, predictor settings (`taus=`, `hist=`,
 //! `staus=`, `shist=`, `bil=0|1`, `ridge=`, `hidden=`, `restarts=`, `gain=`, `members=`,
-//! `seedoff=`) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
+//! `seedoff=`, and the opt-in commanded spindle speed: `rpmexp=` heat-input exponents, `rpmtaus=`
+//! their filters' time constants, s) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
 //! Prints per seed the kept nets, then the headline figures and the eight worst runs.
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::evaluation::{self, diagonal_plans};
@@ -55,6 +56,8 @@ fn main() {
             "stopevery" => stopevery = Some(v.parse().unwrap()),
             "spevery" => spevery = Some(v.parse().unwrap()),
             "hist" => settings.history_sensors = v.split(',').map(String::from).collect(),
+            "rpmexp" => settings.spindle_speed_exponents = list(),
+            "rpmtaus" => settings.spindle_speed_taus_s = list(),
             _ => panic!("unknown {k}"),
         }
     }
@@ -162,6 +165,11 @@ impl predictor::ErrorPredictor for Ensemble {
     fn observe_readings(&mut self, t: f64, x: &[f64]) {
         for p in &mut self.0 {
             p.observe_readings(t, x);
+        }
+    }
+    fn observe_spindle_speed(&mut self, t: f64, rpm: f64) {
+        for p in &mut self.0 {
+            p.observe_spindle_speed(t, rpm);
         }
     }
 }

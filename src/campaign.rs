@@ -72,6 +72,27 @@ impl ThermalCycle {
         &self.phases[self.phases.len() - 1]
     }
 
+    /// Mean spindle speed over cycle time `[from_s, to_s]`, rpm (the speed at `from_s` for an
+    /// empty interval).
+    pub fn mean_rpm(&self, from_s: f64, to_s: f64) -> f64 {
+        if to_s <= from_s {
+            return self.phase_at(from_s).spindle_rpm;
+        }
+        let mut acc = 0.0;
+        let mut sum = 0.0;
+        for (k, p) in self.phases.iter().enumerate() {
+            let start = acc;
+            acc += p.duration_s;
+            // The last phase lasts beyond the end.
+            let end = if k + 1 == self.phases.len() { f64::INFINITY } else { acc };
+            let overlap = to_s.min(end) - from_s.max(start);
+            if overlap > 0.0 {
+                sum += overlap * p.spindle_rpm;
+            }
+        }
+        sum / (to_s - from_s)
+    }
+
     /// Typical cycles for calibration: heating at constant duties (one with a speed change, one
     /// axis-heavy), then cooling, over an ordinary workshop day (one with a slow ambient drift,
     /// one with ambient steps as when the air conditioning changes its set point — steps and
@@ -223,6 +244,9 @@ pub fn drive_with(
 ) -> Result<(), TwinError> {
     if let Some(c) = controller.as_mut() {
         c.on_readings(&twin.sensor_readings());
+        // A no-op when the controller already followed the machine up to now; else the
+        // spindle is taken at rest before.
+        c.on_spindle_speed(twin.time_s(), 0.0);
     }
     let min = twin.spec().axes.travel_min_mm;
     let max = twin.spec().axes.travel_max_mm;
@@ -251,6 +275,7 @@ pub fn drive_with(
         twin.advance(dt, &activity)?;
         if let Some(c) = controller.as_mut() {
             c.on_readings(&twin.sensor_readings());
+            c.on_spindle_speed(twin.time_s(), p.spindle_rpm);
         }
     }
     Ok(())
@@ -350,10 +375,21 @@ pub fn calibrate(
         let t0 = twin.time_s();
         let end = cycle.duration_s();
         let mut next_block = 0.0;
+        // The commanded speed since the previous record (the dataset's `spindle_rpm`): the
+        // spindle runs while the duty is driven and stands still during a block.
+        let mut driven_rpm = 0.0;
+        let log_rpm = |records: &mut Vec<Record>, from: usize, rpm: f64| {
+            for r in &mut records[from..] {
+                r.spindle_rpm = Some(rpm);
+            }
+        };
         loop {
             let t = twin.time_s() - t0;
             if t >= next_block - 1e-9 {
+                let first = records.len();
                 inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
+                log_rpm(&mut records, first, driven_rpm);
+                let first = records.len();
                 inst.spindle_stop_log(
                     &mut twin,
                     mid(spec),
@@ -364,6 +400,7 @@ pub fn calibrate(
                     &mut records,
                 )?;
                 measurement_block(&mut twin, &mut inst, &grid, &cycle.name, t0, &mut records)?;
+                log_rpm(&mut records, first, 0.0);
                 next_block += cfg.measure_every_s;
                 continue;
             }
@@ -376,7 +413,10 @@ pub fn calibrate(
                 let t = twin.time_s() - t0;
                 let next_probe = ((t / cfg.spindle_every_s).floor() + 1.0) * cfg.spindle_every_s;
                 drive(&mut twin, cycle, t0, next_probe.min(target), cfg.step_s)?;
+                driven_rpm = cycle.mean_rpm(t, twin.time_s() - t0);
+                let first = records.len();
                 inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
+                log_rpm(&mut records, first, driven_rpm);
             }
         }
     }

@@ -74,6 +74,10 @@ impl<P: ErrorPredictor> Controller for LoopController<P> {
     fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
         self.0.note_motion_segment_mm(start_mm, end_mm);
     }
+
+    fn on_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+        self.0.predictor_mut().observe_spindle_speed(time_s, rpm);
+    }
 }
 
 /// Drives `twin` through `state`'s cycle up to the state (1 s thermal steps, cycle time 0 at

@@ -125,6 +125,7 @@ impl Instruments {
             values,
             temps_degc: twin.sensor_readings().values_degc,
             dir,
+            spindle_rpm: None,
         }
     }
 

@@ -70,6 +70,11 @@ pub trait Controller {
     /// controller logging its sensors sees. Lets a model follow the readings' history.
     /// Default: ignored.
     fn on_readings(&mut self, _readings: &SensorReadings) {}
+
+    /// The spindle ran at the commanded speed `rpm` since the previous call, up to twin time
+    /// `time_s` (s): what the controller commanded (S, M3/M5), never the twin's state. Called
+    /// at every thermal step. Default: ignored.
+    fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
 }
 
 /// One measurement point.
@@ -306,6 +311,8 @@ pub fn execute(
     };
     if let Some(c) = compensator.as_mut() {
         c.on_readings(&clock.readings);
+        // A no-op when the controller already followed the machine up to now.
+        c.on_spindle_speed(twin.time_s(), 0.0);
     }
     let mut index = 0;
     for (si, seg) in plan.segments().iter().enumerate() {
@@ -441,6 +448,7 @@ impl Clock {
         self.readings = twin.sensor_readings();
         if let Some(c) = controller.as_mut() {
             c.on_readings(&self.readings);
+            c.on_spindle_speed(twin.time_s(), activity.spindle_rpm);
         }
         observer.on_thermal_step(twin.time_s(), &self.readings);
         observer.on_node_temps(twin.time_s(), twin.node_temps_degc());

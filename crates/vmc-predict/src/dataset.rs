@@ -3,7 +3,8 @@
 //! the same format a user would produce from a real machine.
 //!
 //! Columns: `cycle, time_s, instrument, x_mm, y_mm, z_mm, dx_um, dy_um, dz_um, rx_urad, ry_urad,
-//! rz_urad`, optionally `dir`, then one `<sensor>_degc` column per temperature sensor.
+//! rz_urad`, optionally `dir` and `spindle_rpm`, then one `<sensor>_degc` column per temperature
+//! sensor.
 //!
 //! `dir` is the approach direction of the measured position: `1` when the axes reached it moving
 //! in the positive direction, `-1` when moving in the negative direction. For `laser_k` records it
@@ -22,6 +23,12 @@
 //! | `volumetric` | volumetric error Ex, Ey, Ez    | empty                                |
 //!
 //! Empty cells are read as "not measured" (NaN in memory).
+//!
+//! `spindle_rpm` is the commanded spindle speed the machine ran at *since the cycle's previous
+//! record* (rpm, 0 when stopped), as a controller logging its spindle command would write it: a
+//! speed change then falls at a record, and a model of the spindle's heat input sees the steps
+//! where they were. It is optional (an empty cell or a missing column reads as "not logged");
+//! only models that use the commanded speed need it (`Settings::spindle_speed_exponents`).
 //!
 //! Plausibility: a measurement beyond ±1e6 µm or µrad (a metre, a radian), a position beyond
 //! ±1e6 mm or a temperature below absolute zero is refused with its line and column: such a
@@ -101,6 +108,9 @@ pub struct Record {
     /// Approach direction of the measured position: `1` positive, `-1` negative (see the
     /// module doc; default `1`).
     pub dir: i8,
+    /// Commanded spindle speed since the cycle's previous record, rpm (see the module doc);
+    /// `None` when not logged.
+    pub spindle_rpm: Option<f64>,
 }
 
 /// A calibration dataset.
@@ -160,6 +170,9 @@ pub enum DatasetError {
 /// The optional approach-direction column.
 const DIR_COLUMN: &str = "dir";
 
+/// The optional commanded-spindle-speed column.
+pub const SPINDLE_RPM_COLUMN: &str = "spindle_rpm";
+
 const FIXED: [&str; 12] = [
     "cycle",
     "time_s",
@@ -203,6 +216,11 @@ impl Dataset {
         let mut s = FIXED.join(",");
         s.push(',');
         s.push_str(DIR_COLUMN);
+        let with_rpm = self.records.iter().any(|r| r.spindle_rpm.is_some());
+        if with_rpm {
+            s.push(',');
+            s.push_str(SPINDLE_RPM_COLUMN);
+        }
         for n in &self.sensor_names {
             let _ = write!(s, ",{n}_degc");
         }
@@ -222,6 +240,9 @@ impl Dataset {
                 let _ = write!(s, ",{}", cell(v));
             }
             let _ = write!(s, ",{}", r.dir);
+            if with_rpm {
+                let _ = write!(s, ",{}", r.spindle_rpm.map(cell).unwrap_or_default());
+            }
             for t in &r.temps_degc {
                 let _ = write!(s, ",{t}");
             }
@@ -262,6 +283,7 @@ impl Dataset {
                     })?;
         }
         let dir_col = cols.iter().position(|c| *c == DIR_COLUMN);
+        let rpm_col = cols.iter().position(|c| *c == SPINDLE_RPM_COLUMN);
         let sensor_cols: Vec<(usize, String)> = cols
             .iter()
             .enumerate()
@@ -350,6 +372,21 @@ impl Dataset {
                     ))
                 }
             };
+            let spindle_rpm = match rpm_col.map(|i| cells[i]) {
+                None | Some("") => None,
+                Some(c) => {
+                    let v: f64 = c.parse().map_err(|_| {
+                        bad(SPINDLE_RPM_COLUMN, format!("not a number: \"{c}\""))
+                    })?;
+                    if !(v.is_finite() && (0.0..=PLAUSIBLE_MAX).contains(&v)) {
+                        return Err(bad(
+                            SPINDLE_RPM_COLUMN,
+                            format!("spindle speed must lie in [0, 1e6] rpm, got \"{c}\""),
+                        ));
+                    }
+                    Some(v)
+                }
+            };
             records.push(Record {
                 cycle: cells[idx[0]].to_string(),
                 time_s: num(1, true)?,
@@ -358,6 +395,7 @@ impl Dataset {
                 values,
                 temps_degc: temps,
                 dir,
+                spindle_rpm,
             });
         }
         if records.is_empty() {
@@ -389,6 +427,7 @@ mod tests {
                     values: [-1.25, 0.5, 0.1, 3.0, -2.0, 1.0],
                     temps_degc: vec![20.0625, 20.0],
                     dir: -1,
+                    spindle_rpm: None,
                 },
                 Record {
                     cycle: "c1".into(),
@@ -398,6 +437,7 @@ mod tests {
                     values: [0.3, -0.2, -12.7, 1.5, 0.25, f64::NAN],
                     temps_degc: vec![25.125, 20.1],
                     dir: 1,
+                    spindle_rpm: None,
                 },
             ],
         }
@@ -432,6 +472,27 @@ mod tests {
         let back = Dataset::from_csv(&text, "old.csv").unwrap();
         assert!(back.records.iter().all(|r| r.dir == 1));
         assert_eq!(back.records[0].values, d.records[0].values);
+    }
+
+    #[test]
+    fn the_spindle_speed_column_round_trips_and_is_checked() {
+        let mut d = sample();
+        assert!(!d.to_csv().contains(SPINDLE_RPM_COLUMN));
+        d.records[0].spindle_rpm = Some(3000.0);
+        let text = d.to_csv();
+        assert!(text.contains(",dir,spindle_rpm,BXH_degc"), "{text}");
+        let back = Dataset::from_csv(&text, "d.csv").unwrap();
+        assert_eq!(back.records[0].spindle_rpm, Some(3000.0));
+        assert_eq!(back.records[1].spindle_rpm, None);
+        for (cell, why) in [("-5", "must lie in [0, 1e6]"), ("fast", "not a number")] {
+            let err = Dataset::from_csv(&text.replace(",3000,", &format!(",{cell},")), "d.csv")
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.starts_with("d.csv: line 2, column `spindle_rpm`: ") && err.contains(why),
+                "{err}"
+            );
+        }
     }
 
     #[test]

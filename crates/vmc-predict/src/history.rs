@@ -146,6 +146,100 @@ impl ReadingHistory {
     }
 }
 
+/// Heat-input features of the commanded spindle speed: what a controller knows of the heat the
+/// spindle put in, beyond what its temperature sensors show (the bearings, where the heat is
+/// made, carry no sensor).
+///
+/// The speed is logged as *the speed the spindle ran at since the previous log* (rpm; 0 when
+/// stopped), so a step between two logs falls at a log. For each exponent `e` the heat input is
+/// `q_e = (n / 1000 rpm)^e` (bearing friction heat grows between linearly and with the cube of
+/// the speed), held constant between logs, and the features are `q_e` itself (the present
+/// duty: running or stopped) and its first-order low-pass filters `τ·dy/dt = q_e − y` per time
+/// constant `τ` (the temperature rise of a part with that time constant driven by that heat),
+/// updated exactly for the held input: `y₁ = a·y₀ + (1 − a)·q_e`, `a = e^(−h/τ)`. The filters
+/// start at zero at the first log: the spindle at rest for long before logging starts (a cold
+/// machine, a controller switched on with it). Units: s, rpm; features dimensionless.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpeedHistory {
+    exponents: Vec<f64>,
+    taus_s: Vec<f64>,
+    /// Filter outputs, `[exponent][tau]` row-major.
+    filtered: Vec<f64>,
+    /// Heat inputs of the last logged interval, per exponent.
+    last_q: Vec<f64>,
+    last_t_s: f64,
+    started: bool,
+}
+
+impl SpeedHistory {
+    /// Features of `exponents` (each in (0, 10]) through filters of `taus_s` (each > 0 s).
+    pub fn new(exponents: &[f64], taus_s: &[f64]) -> Self {
+        Self {
+            exponents: exponents.to_vec(),
+            taus_s: taus_s.to_vec(),
+            filtered: vec![0.0; exponents.len() * taus_s.len()],
+            last_q: vec![0.0; exponents.len()],
+            last_t_s: 0.0,
+            started: false,
+        }
+    }
+
+    /// Number of features: per exponent, the present input and one filter per time constant.
+    pub fn n_features(n_exponents: usize, n_taus: usize) -> usize {
+        n_exponents * (1 + n_taus)
+    }
+
+    /// Features of this history ([`Self::n_features`]).
+    pub fn len(&self) -> usize {
+        Self::n_features(self.exponents.len(), self.taus_s.len())
+    }
+
+    /// Whether there are no features (no exponent).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The spindle ran at `rpm` since the previous log, up to `t_s`. A log at or before the
+    /// previous one's time, or with a speed that is not finite, is ignored.
+    pub fn observe(&mut self, t_s: f64, rpm: f64) {
+        if !t_s.is_finite() || !rpm.is_finite() {
+            return;
+        }
+        if !self.started {
+            self.started = true;
+            self.last_t_s = t_s;
+            return;
+        }
+        let h = t_s - self.last_t_s;
+        if h <= 0.0 {
+            return;
+        }
+        let nt = self.taus_s.len();
+        for (k, &e) in self.exponents.iter().enumerate() {
+            let q = (rpm.abs() / 1000.0).powf(e);
+            for (y, &tau) in self.filtered[k * nt..(k + 1) * nt]
+                .iter_mut()
+                .zip(&self.taus_s)
+            {
+                let a = (-h / tau).exp();
+                *y = a * *y + (1.0 - a) * q;
+            }
+            self.last_q[k] = q;
+        }
+        self.last_t_s = t_s;
+    }
+
+    /// Writes the features into `out` ([`Self::len`] values): per exponent, the present input,
+    /// then its filters.
+    pub fn features_into(&self, out: &mut [f64]) {
+        let nt = self.taus_s.len();
+        for (k, o) in out.chunks_exact_mut(1 + nt).enumerate() {
+            o[0] = self.last_q[k];
+            o[1..].copy_from_slice(&self.filtered[k * nt..(k + 1) * nt]);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -223,5 +317,34 @@ mod tests {
         // A ramp of 2 K over τ: y = 3 + 2·(1 − (1 − e^-1)) = 3 + 2/e.
         let expected = 2.0 - 2.0 * (-1.0f64).exp();
         assert!((f[3] - expected).abs() < 1e-12, "{f:?}");
+    }
+
+    #[test]
+    fn speed_features_are_first_order_responses_to_the_held_heat_input() {
+        let tau = 600.0;
+        let mut h = SpeedHistory::new(&[1.0, 2.0], &[tau]);
+        assert_eq!(h.len(), 4);
+        h.observe(0.0, 0.0);
+        // 2000 rpm for 600 s, logged every 60 s: q1 = 2, q2 = 4; y = q (1 − e^-1).
+        for k in 1..=10 {
+            h.observe(60.0 * k as f64, 2000.0);
+        }
+        let mut f = [0.0; 4];
+        h.features_into(&mut f);
+        let g = 1.0 - (-1.0f64).exp();
+        assert!((f[0] - 2.0).abs() < 1e-12 && (f[2] - 4.0).abs() < 1e-12, "{f:?}");
+        assert!((f[1] - 2.0 * g).abs() < 1e-12, "{f:?}");
+        assert!((f[3] - 4.0 * g).abs() < 1e-12, "{f:?}");
+        // Stopped for one τ, logged once: the present input is zero, the filter decays by e^-1.
+        h.observe(600.0 + tau, 0.0);
+        h.features_into(&mut f);
+        assert_eq!(f[0], 0.0);
+        assert!((f[1] - 2.0 * g * (-1.0f64).exp()).abs() < 1e-12, "{f:?}");
+        // Stale or broken logs change nothing.
+        let before = h.clone();
+        h.observe(600.0 + tau, 9000.0);
+        h.observe(0.0, 9000.0);
+        h.observe(1e9, f64::NAN);
+        assert_eq!(h, before);
     }
 }

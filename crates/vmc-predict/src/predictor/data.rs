@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use crate::dataset::{Dataset, Instrument, Record};
-use crate::history::ReadingHistory;
+use crate::history::{ReadingHistory, SpeedHistory};
 use crate::linreg::LinearModel;
 use crate::nn::{Regressor, Samples, TrainConfig};
 
@@ -33,6 +33,12 @@ pub(crate) struct SensorSelection {
     /// instant, computed over the cycle's readings in time order: the shared ones, then the
     /// spindle-only ones.
     history: HashMap<String, HashMap<u64, Vec<f64>>>,
+    /// Heat-input exponents of the commanded spindle speed (empty: not used).
+    pub speed_exponents: Vec<f64>,
+    /// Time constants of the speed's heat-input filters (s).
+    pub speed_taus_s: Vec<f64>,
+    /// Spindle-speed features ([`SpeedHistory`]) of each (cycle, time) instant.
+    speed: HashMap<String, HashMap<u64, Vec<f64>>>,
 }
 
 impl SensorSelection {
@@ -76,6 +82,9 @@ impl SensorSelection {
             spindle_taus_s: Vec::new(),
             spindle_idx: Vec::new(),
             history: HashMap::new(),
+            speed_exponents: Vec::new(),
+            speed_taus_s: Vec::new(),
+            speed: HashMap::new(),
         })
     }
 
@@ -140,6 +149,70 @@ impl SensorSelection {
         Ok(self)
     }
 
+    /// Adds the commanded spindle speed's heat-input features for the spindle part (see
+    /// [`SpeedHistory`]): each cycle's `spindle_rpm` log (every record, in time order) runs
+    /// through the filters from the cycle's first record on (spindle at rest before it).
+    /// Nothing with no exponents; every record must carry the speed otherwise.
+    pub fn with_spindle_speed(
+        mut self,
+        ds: &Dataset,
+        exponents: &[f64],
+        taus_s: &[f64],
+    ) -> Result<Self, PredictError> {
+        if exponents.is_empty() {
+            return Ok(self);
+        }
+        check_taus("spindle_speed_taus_s", taus_s)?;
+        if let Some(e) = exponents.iter().find(|e| !(**e > 0.0 && **e <= 10.0)) {
+            return Err(PredictError::BadSettings {
+                field: "spindle_speed_exponents",
+                reason: format!("heat-input exponents must lie in (0, 10], got {e}"),
+            });
+        }
+        self.speed_exponents = exponents.to_vec();
+        self.speed_taus_s = taus_s.to_vec();
+        if let Some((index, r)) = ds
+            .records
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.spindle_rpm.is_none())
+        {
+            return Err(PredictError::MissingSpindleSpeed {
+                index,
+                cycle: r.cycle.clone(),
+                time_s: r.time_s,
+            });
+        }
+        let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
+        for r in &ds.records {
+            match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {
+                Some((_, v)) => v.push(r),
+                None => by_cycle.push((&r.cycle, vec![r])),
+            }
+        }
+        for (cycle, mut recs) in by_cycle {
+            recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+            let mut h = SpeedHistory::new(exponents, taus_s);
+            let at = self.speed.entry(cycle.to_string()).or_default();
+            for r in recs {
+                let key = r.time_s.to_bits();
+                if at.contains_key(&key) {
+                    continue;
+                }
+                h.observe(r.time_s, r.spindle_rpm.unwrap_or(0.0));
+                let mut f = vec![0.0; h.len()];
+                h.features_into(&mut f);
+                at.insert(key, f);
+            }
+        }
+        Ok(self)
+    }
+
+    /// Spindle-speed features of the spindle part.
+    fn n_speed(&self) -> usize {
+        SpeedHistory::n_features(self.speed_exponents.len(), self.speed_taus_s.len())
+    }
+
     /// Indices into `names` of `of_sensors` (all when empty); `field` names the setting.
     fn indices_of(
         &self,
@@ -175,9 +248,9 @@ impl SensorSelection {
     }
 
     /// Model inputs of the spindle part: [`Self::n_inputs`], then the spindle-only history
-    /// features.
+    /// features, then the spindle-speed features.
     pub fn n_spindle_inputs(&self) -> usize {
-        self.n_inputs() + self.spindle_idx.len() * self.spindle_taus_s.len()
+        self.n_inputs() + self.spindle_idx.len() * self.spindle_taus_s.len() + self.n_speed()
     }
 
     /// Appends the selected temperatures of `r` (then its history features, if any) to `row`;
@@ -185,7 +258,7 @@ impl SensorSelection {
     pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>, spindle: bool) {
         row.extend(self.cols.iter().map(|&c| r.temps_degc[c]));
         let n = if spindle {
-            self.n_spindle_inputs()
+            self.n_spindle_inputs() - self.n_speed()
         } else {
             self.n_inputs()
         } - self.cols.len();
@@ -198,6 +271,18 @@ impl SensorSelection {
             {
                 Some(f) => row.extend_from_slice(&f[..n]),
                 None => row.extend(std::iter::repeat_n(0.0, n)),
+            }
+        }
+        let ns = self.n_speed();
+        if spindle && ns > 0 {
+            // Every record's instant was filled in `with_spindle_speed`.
+            match self
+                .speed
+                .get(r.cycle.as_str())
+                .and_then(|at| at.get(&r.time_s.to_bits()))
+            {
+                Some(f) => row.extend_from_slice(f),
+                None => row.extend(std::iter::repeat_n(0.0, ns)),
             }
         }
     }

@@ -3,7 +3,7 @@
 //! ```text
 //! {
 //!   "format": "vmc-twin-model",
-//!   "version": 6,
+//!   "version": 7,
 //!   "kind": "hybrid" | "volumetric" | "linear",
 //!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
 //!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
@@ -27,7 +27,10 @@
 //! absent = all) — version 4 added them; older files read as empty: present readings only; an
 //! older build would ignore them, hence the new version — and `spindle_history_taus_s` with
 //! `spindle_history_sensors` (the same, for features only the spindle part sees, after the
-//! shared ones) — version 5 added them, older files read as none. Of a
+//! shared ones) — version 5 added them, older files read as none — and
+//! `spindle_speed_exponents` with `spindle_speed_taus_s` (the commanded spindle speed's
+//! heat-input features of the spindle part, opt-in, see `crate::history::SpeedHistory`;
+//! version 7, absent = not used). Of a
 //! `volumetric`: `net` (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
 //! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
 //! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
@@ -56,7 +59,7 @@ use super::{ErrorPredictor, PredictError};
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
 /// The model file version this build writes (and the newest it reads).
-pub const FORMAT_VERSION: u64 = 6;
+pub const FORMAT_VERSION: u64 = 7;
 /// The oldest model file version this build reads (version 2: no `reversal_um`, read as zero).
 pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
@@ -507,6 +510,12 @@ impl ErrorPredictor for AnyPredictor {
             p.observe_readings(time_s, temps_degc);
         }
     }
+
+    fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+        if let AnyPredictor::Hybrid(p) = self {
+            p.observe_spindle_speed(time_s, rpm);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -598,15 +607,15 @@ mod tests {
     fn bad_version_format_and_kind_give_the_documented_messages() {
         let model = all_kinds().remove(2);
         let text = model.to_json_string().unwrap();
-        let v1 = text.replacen("\"version\": 6", "\"version\": 1", 1);
+        let v1 = text.replacen("\"version\": 7", "\"version\": 1", 1);
         assert_eq!(
             AnyPredictor::from_json_str(&v1).unwrap_err().to_string(),
-            "model file version 1 is not supported (this build reads versions 2 to 6)"
+            "model file version 1 is not supported (this build reads versions 2 to 7)"
         );
-        let v7 = text.replacen("\"version\": 6", "\"version\": 7", 1);
+        let v8 = text.replacen("\"version\": 7", "\"version\": 8", 1);
         assert_eq!(
-            AnyPredictor::from_json_str(&v7).unwrap_err().to_string(),
-            "model file version 7 is not supported (this build reads versions 2 to 6)"
+            AnyPredictor::from_json_str(&v8).unwrap_err().to_string(),
+            "model file version 8 is not supported (this build reads versions 2 to 7)"
         );
         let other = text.replacen("vmc-twin-model", "something-else", 1);
         assert_eq!(

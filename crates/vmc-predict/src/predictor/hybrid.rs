@@ -16,7 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::{Dataset, Instrument, Record};
-use crate::history::ReadingHistory;
+use crate::history::{ReadingHistory, SpeedHistory};
 use crate::linreg::LinearModel;
 use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
 
@@ -65,6 +65,13 @@ pub(crate) struct HybridParts {
     /// means all of them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub spindle_history_sensors: Vec<usize>,
+    /// Heat-input exponents of the commanded spindle speed (version 7, opt-in; empty: the
+    /// speed is not used). The spindle part's inputs end with the [`SpeedHistory`] features.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spindle_speed_exponents: Vec<f64>,
+    /// Time constants of the speed's heat-input filters, s.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spindle_speed_taus_s: Vec<f64>,
 }
 
 /// Query-time state: part evaluators with cached temperature-only results, scratch.
@@ -79,6 +86,9 @@ struct Runtime {
     /// part sees, those only the spindle part sees.
     history: ReadingHistory,
     spindle_history: ReadingHistory,
+    /// Heat-input filters over the commanded spindle speed (no features unless the model
+    /// uses the speed).
+    speed: SpeedHistory,
     /// Inputs of the axis parts and the squareness (a prefix of `inputs`).
     n_shared: usize,
     /// Temperature inputs of the networks (readings, shared history features, then the
@@ -123,8 +133,26 @@ impl HybridPredictor {
             &parts.spindle_history_sensors,
             ("spindle_history_taus_s", "spindle_history_sensors"),
         )?;
+        let speed = SpeedHistory::new(
+            &parts.spindle_speed_exponents,
+            &parts.spindle_speed_taus_s,
+        );
+        if let Some(t) = crate::history::invalid_tau(&parts.spindle_speed_taus_s) {
+            return Err(PredictError::Inconsistent {
+                reason: format!("spindle_speed_taus_s holds an unusable time constant ({t})"),
+            });
+        }
+        if let Some(e) = parts
+            .spindle_speed_exponents
+            .iter()
+            .find(|e| !(**e > 0.0 && **e <= 10.0))
+        {
+            return Err(PredictError::Inconsistent {
+                reason: format!("spindle_speed_exponents holds {e}, outside (0, 10]"),
+            });
+        }
         let k = history.len();
-        let k_spindle = k + spindle_history.n_history();
+        let k_spindle = k + spindle_history.n_history() + speed.len();
         for (name, part) in AXIS_NETS.iter().zip(&parts.axis_nets) {
             part.check(name, 1, k, 6)?;
         }
@@ -155,6 +183,7 @@ impl HybridPredictor {
             errs: ElementaryErrors::default(),
             history,
             spindle_history,
+            speed,
             n_shared: k,
             inputs: vec![0.0; k_spindle],
             last_readings: vec![0.0; sensors.len()],
@@ -247,7 +276,9 @@ impl HybridPredictor {
         rt.stale = false;
         let (shared, own) = rt.inputs.split_at_mut(rt.n_shared);
         rt.history.features_into(readings, shared);
+        let (own, speed) = own.split_at_mut(rt.spindle_history.n_history());
         rt.spindle_history.history_into(readings, own);
+        rt.speed.features_into(speed);
         let temps = &rt.inputs[..rt.n_shared];
         for net in &mut rt.axes {
             net.set_temps(temps);
@@ -288,6 +319,13 @@ impl ErrorPredictor for HybridPredictor {
         self.rt.spindle_history.observe(time_s, temps_degc);
         self.rt.stale = true;
     }
+
+    fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+        if !self.rt.speed.is_empty() {
+            self.rt.speed.observe(time_s, rpm);
+            self.rt.stale = true;
+        }
+    }
 }
 
 /// Trains the hybrid predictor on the `laser_x/y/z`, `spindle` and `squareness` records.
@@ -308,6 +346,11 @@ pub fn train_hybrid(
             &settings.spindle_history_taus_s,
             &settings.spindle_history_sensors,
         ),
+    )?
+    .with_spindle_speed(
+        ds,
+        &settings.spindle_speed_exponents,
+        &settings.spindle_speed_taus_s,
     )?;
     let split = CycleSplit::new(ds, settings)?;
     // Build every table before training anything, so data errors surface at once.
@@ -427,6 +470,8 @@ pub fn train_hybrid(
         } else {
             sel.spindle_idx.clone()
         },
+        spindle_speed_exponents: sel.speed_exponents.clone(),
+        spindle_speed_taus_s: sel.speed_taus_s.clone(),
     };
     let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
     let summary = TrainSummary {

@@ -89,6 +89,11 @@ pub trait ErrorPredictor {
     /// filters them; the default ignores them. A controller passes every new reading, also
     /// while it is not compensating (warm-up), so the model knows the thermal past.
     fn observe_readings(&mut self, _time_s: f64, _temps_degc: &[f64]) {}
+
+    /// The spindle ran at the commanded speed `rpm` since the previous call, up to `time_s`
+    /// (the same clock as [`Self::observe_readings`]). A model with spindle-speed features
+    /// ([`Settings::spindle_speed_exponents`]) filters it; the default ignores it.
+    fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
 }
 
 /// A mutable borrow predicts like the predictor itself (e.g. `Compensator::new(&mut model)`).
@@ -108,6 +113,10 @@ impl<P: ErrorPredictor + ?Sized> ErrorPredictor for &mut P {
 
     fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
         (**self).observe_readings(time_s, temps_degc);
+    }
+
+    fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+        (**self).observe_spindle_speed(time_s, rpm);
     }
 }
 
@@ -131,6 +140,19 @@ pub enum PredictError {
         found: usize,
         /// Minimum required.
         needed: usize,
+    },
+    /// The settings use the commanded spindle speed, and a record does not carry it.
+    #[error(
+        "the spindle-speed features need the `spindle_rpm` column on every record; record \
+         {index} (cycle `{cycle}`, t = {time_s} s) has none"
+    )]
+    MissingSpindleSpeed {
+        /// 0-based record index in the dataset.
+        index: usize,
+        /// Its cycle.
+        cycle: String,
+        /// Its time, s.
+        time_s: f64,
     },
     /// Sensors asked for in the settings are not columns of the dataset.
     #[error(
@@ -329,6 +351,17 @@ pub struct Settings {
     /// true), see `part`: a ballscrew or scale expands in proportion to the distance from its
     /// fixed end, so the thermal positioning error is bilinear in position and temperatures.
     pub axis_bilinear: bool,
+    /// Heat-input exponents of the commanded spindle speed for the hybrid's spindle part
+    /// (default: empty = the speed is not used). **Opt-in, outside DESIGN §3's boundary as
+    /// written** (which lists temperature readings and commanded axis positions): the
+    /// controller knows the speed it commands, but whether the predictor may use it is the
+    /// team's decision. With exponents, the spindle part also sees per exponent `e` the heat
+    /// input `(n / 1000 rpm)^e` and its low-pass filters with [`Self::spindle_speed_taus_s`]
+    /// ([`crate::history::SpeedHistory`]); the dataset needs the `spindle_rpm` column.
+    pub spindle_speed_exponents: Vec<f64>,
+    /// Time constants (s) of the spindle speed's heat-input filters (used with
+    /// [`Self::spindle_speed_exponents`]).
+    pub spindle_speed_taus_s: Vec<f64>,
 }
 
 impl Default for Settings {
@@ -352,6 +385,8 @@ impl Default for Settings {
             spindle_history_taus_s: Vec::new(),
             spindle_history_sensors: Vec::new(),
             axis_bilinear: true,
+            spindle_speed_exponents: Vec::new(),
+            spindle_speed_taus_s: Vec::new(),
         }
     }
 }

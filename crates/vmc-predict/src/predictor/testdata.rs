@@ -154,6 +154,7 @@ pub fn dataset(amps_degc: &[f64], seed: u64) -> Dataset {
                     values,
                     temps_degc: temps,
                     dir: 1,
+                    spindle_rpm: None,
                 });
             };
             for k in 0..3 {

@@ -19,6 +19,7 @@ fn toy() -> Dataset {
                 values: [0.0, 0.0, 10.0 * (b - 20.0), f64::NAN, f64::NAN, f64::NAN],
                 temps_degc: vec![20.0, a, b, c],
                 dir: 1,
+                spindle_rpm: None,
             });
         }
     }
