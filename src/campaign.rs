@@ -84,7 +84,11 @@ impl ThermalCycle {
             let start = acc;
             acc += p.duration_s;
             // The last phase lasts beyond the end.
-            let end = if k + 1 == self.phases.len() { f64::INFINITY } else { acc };
+            let end = if k + 1 == self.phases.len() {
+                f64::INFINITY
+            } else {
+                acc
+            };
             let overlap = to_s.min(end) - from_s.max(start);
             if overlap > 0.0 {
                 sum += overlap * p.spindle_rpm;
@@ -550,4 +554,76 @@ pub fn run_at_state_observed(
         compensator,
         observer,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::predict::dataset::Instrument;
+
+    fn short_cycle() -> ThermalCycle {
+        ThermalCycle {
+            name: "short".into(),
+            ambient: AMBIENT_20,
+            phases: vec![
+                phase(0.25, 3000.0, [2000.0, 1000.0, 500.0]),
+                phase(0.25, 6000.0, [2000.0, 1000.0, 500.0]),
+                phase(0.5, 0.0, [0.0; 3]),
+            ],
+        }
+    }
+
+    #[test]
+    fn the_mean_speed_integrates_the_phases() {
+        let c = short_cycle();
+        assert_eq!(c.mean_rpm(0.0, 900.0), 3000.0);
+        assert_eq!(c.mean_rpm(600.0, 1200.0), 4500.0);
+        assert_eq!(c.mean_rpm(1500.0, 2100.0), 3000.0);
+        // Beyond the end the last phase goes on; an empty interval gives the speed there.
+        assert_eq!(c.mean_rpm(3000.0, 9000.0), 0.0);
+        assert_eq!(c.mean_rpm(100.0, 100.0), 3000.0);
+    }
+
+    #[test]
+    fn the_calibration_log_carries_the_commanded_speed_since_the_previous_record() {
+        let spec = MachineSpec::reference();
+        let cfg = CampaignConfig {
+            measure_every_s: 1800.0,
+            ..CampaignConfig::new(1)
+        };
+        let ds = calibrate(&spec, &[short_cycle()], &cfg).unwrap();
+        assert!(ds.records.iter().all(|r| r.spindle_rpm.is_some()));
+        let rpm = |r: &Record| r.spindle_rpm.unwrap_or(f64::NAN);
+        // The spindle-test records logged while the duty runs (every 300 s, first block at 0 s,
+        // second at 1800 s): 3000 rpm up to 900 s, 6000 rpm up to 1800 s.
+        let running: Vec<(f64, f64)> = ds
+            .of(Instrument::Spindle)
+            .filter(|r| rpm(r) > 0.0)
+            .map(|r| (r.time_s, rpm(r)))
+            .collect();
+        assert!(running.iter().any(|r| r.1 == 3000.0) && running.iter().any(|r| r.1 == 6000.0));
+        for &(t, n) in &running {
+            let expected = if t <= 900.0 + 1e-6 { 3000.0 } else { 6000.0 };
+            assert_eq!(n, expected, "t = {t}");
+        }
+        // Every record of a block (the stop log, the sweeps, the grid) is stopped, apart from the
+        // spindle test at the block's start, which closes the interval the duty ran in.
+        let block_start = ds
+            .records
+            .iter()
+            .find(|r| r.instrument == Instrument::Spindle && (r.time_s - 1800.0).abs() < 1e-6)
+            .unwrap();
+        assert_eq!(rpm(block_start), 6000.0);
+        assert!(ds
+            .records
+            .iter()
+            .filter(|r| r.instrument != Instrument::Spindle)
+            .all(|r| rpm(r) == 0.0));
+        // The duty stops at 1800 s: nothing runs after.
+        assert!(ds
+            .records
+            .iter()
+            .filter(|r| r.time_s > 1800.0 + 1e-6)
+            .all(|r| rpm(r) == 0.0));
+    }
 }

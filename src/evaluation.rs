@@ -157,6 +157,10 @@ pub struct CampaignReport {
     pub training: Vec<(u64, TrainSummary)>,
     /// Every evaluated run.
     pub runs: Vec<RunReport>,
+    /// Whether the hybrid used the commanded spindle speed (`--spindle-speed`, opt-in; absent
+    /// from the file when not).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub hybrid_uses_spindle_speed: bool,
 }
 
 /// Summarises a compensated run.
@@ -483,6 +487,7 @@ pub fn run_campaign_with_cycles(
         evaluation_states: Vec::new(),
         training: Vec::new(),
         runs: Vec::new(),
+        hybrid_uses_spindle_speed: settings.uses_spindle_speed(),
     };
     // Seeds are independent: run them in parallel, collect in seed order.
     let per_seed: Vec<Result<SeedResult, EvalError>> = seeds
@@ -570,6 +575,9 @@ pub fn write_campaign_table(
             r.reduction * 100.0, r.mad_um, r.mape.unwrap_or(f64::NAN) * 100.0, r.rmse_um, r.r2.unwrap_or(f64::NAN))?;
     }
     writeln!(out, "(µm; primed = compensated; red% = 1 − RMS|E'|/RMS|E|; MAD/MAPE/RMSE/R2 of the predicted vs true error, components pooled; MAPE = mean|e|/mean|y|)")?;
+    if rep.hybrid_uses_spindle_speed {
+        writeln!(out, "hybrid: with the commanded spindle speed as heat input (--spindle-speed, opt-in: DESIGN §3 as written allows temperature readings and commanded axis positions only)")?;
+    }
     writeln!(out, "summary over all diagonals, states and seeds:")?;
     for p in ["hybrid", "volumetric", "linear"] {
         if let Some((med, min, max_after, rmse)) = headline(&rep.runs, p) {

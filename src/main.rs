@@ -143,6 +143,11 @@ struct CampaignArgs {
     /// Overwrite existing output files.
     #[arg(long)]
     force: bool,
+    /// Opt-in: the hybrid's spindle part also takes the commanded spindle speed as heat input
+    /// (outside DESIGN §3's boundary as written, which allows temperature readings and
+    /// commanded axis positions; see the README).
+    #[arg(long)]
+    spindle_speed: bool,
     #[command(flatten)]
     rrd: RrdArgs,
 }
@@ -200,6 +205,11 @@ struct TrainArgs {
     /// Overwrite an existing output file.
     #[arg(long)]
     force: bool,
+    /// Opt-in, hybrid only: the spindle part also takes the commanded spindle speed (the
+    /// dataset's `spindle_rpm` column) as heat input; `run --compensate` then feeds it the
+    /// program's speed (see the README).
+    #[arg(long)]
+    spindle_speed: bool,
 }
 
 #[derive(clap::Args)]
@@ -602,7 +612,10 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
         None => None,
     };
     let rrd = args.rrd.checked(args.force)?;
-    let settings = evaluation::predictor_settings(&machine);
+    let mut settings = evaluation::predictor_settings(&machine);
+    if args.spindle_speed {
+        settings = settings.with_spindle_speed_input();
+    }
     let progress = Progress::new(0, "units");
     let (rep, models) =
         evaluation::run_campaign_with_progress(&machine, &args.seeds, &settings, &progress)?;
@@ -668,10 +681,18 @@ fn train(args: TrainArgs) -> Result<()> {
     let text = std::fs::read_to_string(&args.data)
         .with_context(|| format!("{name}: cannot read dataset"))?;
     let data = Dataset::from_csv(&text, &name)?;
-    let settings = Settings {
+    let mut settings = Settings {
         seed: args.seed,
         ..vmc_twin::evaluation::predictor_settings(&machine)
     };
+    if args.spindle_speed {
+        anyhow::ensure!(
+            args.kind == "hybrid",
+            "--spindle-speed applies to the hybrid model only (its spindle part), not to --kind {}",
+            args.kind
+        );
+        settings = settings.with_spindle_speed_input();
+    }
     let geometry = machine.geometry();
     let (json, summary) = match args.kind.as_str() {
         "hybrid" => {

@@ -611,6 +611,60 @@ mod tests {
         assert_eq!(poses.node_steps, plan.duration_s().floor() as usize);
     }
 
+    /// Integrates the commanded spindle speed it is told, and counts the readings.
+    #[derive(Default)]
+    struct SpeedLog {
+        last_t_s: Option<f64>,
+        revolutions_min: f64,
+        readings: usize,
+    }
+
+    impl Controller for SpeedLog {
+        fn axis_command_mm(&mut self, p_mm: [f64; 3], _r: &SensorReadings) -> [f64; 3] {
+            p_mm
+        }
+        fn on_readings(&mut self, _r: &SensorReadings) {
+            self.readings += 1;
+        }
+        fn on_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+            if let Some(t0) = self.last_t_s {
+                self.revolutions_min += rpm * (time_s - t0);
+            }
+            self.last_t_s = Some(time_s);
+        }
+    }
+
+    #[test]
+    fn the_controller_is_told_the_commanded_spindle_speed_at_every_step() {
+        let spec = MachineSpec::reference();
+        // 60 s at 5000 rpm, then 30 s stopped: 5000 revolutions.
+        let plan = crate::program::plan_source(
+            "G21 G90\nS5000 M3\nG4 P60\nM5\nG4 P30\nM2\n",
+            "speed.ngc",
+            &spec,
+            spec.axes.home_mm,
+        )
+        .unwrap();
+        let mut twin = Twin::new(&spec, 1).unwrap();
+        let mut log = SpeedLog::default();
+        let mut points = CountPoints::default();
+        execute(
+            &mut twin,
+            &plan,
+            &SimConfig::default(),
+            Some(&mut log),
+            &mut points,
+        )
+        .unwrap();
+        // rpm × s / 60 = revolutions; whole 1 s steps, the speed sampled mid-step.
+        let revolutions = log.revolutions_min / 60.0;
+        assert!(
+            (revolutions - 5000.0).abs() <= 5000.0 / 60.0,
+            "{revolutions}"
+        );
+        assert!(log.readings >= 90, "{}", log.readings);
+    }
+
     /// Commands the programmed point shifted by `offset_mm` along X.
     struct Shift(f64);
 

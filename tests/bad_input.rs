@@ -448,3 +448,61 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         .unwrap_or_else(|| panic!("no reduction line in\n{out}"));
     assert!(reduction >= 80.0, "{reduction} %\n{out}");
 }
+
+#[test]
+fn the_opt_in_spindle_speed_needs_a_hybrid_and_a_logged_speed() {
+    let t = Tmp::new("rpm");
+    succeed(
+        &t.0,
+        &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
+    );
+    let text = std::fs::read_to_string(t.0.join("cal.csv")).unwrap();
+    assert!(text.lines().next().unwrap().contains(",dir,spindle_rpm,"));
+    assert_eq!(
+        one_line_error(
+            &t.0,
+            &[
+                "train",
+                "--data",
+                "cal.csv",
+                "--kind",
+                "linear",
+                "--spindle-speed"
+            ]
+        ),
+        "--spindle-speed applies to the hybrid model only (its spindle part), not to --kind linear"
+    );
+    // A dataset from a machine whose controller did not log the speed.
+    let col = text
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "spindle_rpm")
+        .unwrap();
+    let stripped: String = text
+        .lines()
+        .map(|l| {
+            let mut c: Vec<&str> = l.split(',').collect();
+            c.remove(col);
+            c.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(t.0.join("no_rpm.csv"), stripped).unwrap();
+    assert_eq!(
+        one_line_error(&t.0, &["train", "--data", "no_rpm.csv", "--spindle-speed"]),
+        "the spindle-speed features need the `spindle_rpm` column on every record; record 0 \
+         (cycle `cal_3000rpm`, t = 0 s) has none"
+    );
+    assert!(!t.0.join("model.json").exists());
+    // Trained with it, the model compensates in the loop, fed the program's speed.
+    succeed(&t.0, &["train", "--data", "cal.csv", "--spindle-speed"]);
+    let model = std::fs::read_to_string(t.0.join("model.json")).unwrap();
+    assert!(model.contains("\"spindle_speed_exponents\""));
+    let prog = repo("trajectories/diag_xy.ngc").display().to_string();
+    let out = succeed(
+        &t.0,
+        &["run", &prog, "--model", "model.json", "--compensate"],
+    );
+    assert!(out.contains("compensated"), "{out}");
+}

@@ -375,9 +375,9 @@ impl Dataset {
             let spindle_rpm = match rpm_col.map(|i| cells[i]) {
                 None | Some("") => None,
                 Some(c) => {
-                    let v: f64 = c.parse().map_err(|_| {
-                        bad(SPINDLE_RPM_COLUMN, format!("not a number: \"{c}\""))
-                    })?;
+                    let v: f64 = c
+                        .parse()
+                        .map_err(|_| bad(SPINDLE_RPM_COLUMN, format!("not a number: \"{c}\"")))?;
                     if !(v.is_finite() && (0.0..=PLAUSIBLE_MAX).contains(&v)) {
                         return Err(bad(
                             SPINDLE_RPM_COLUMN,

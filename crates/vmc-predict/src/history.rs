@@ -332,7 +332,10 @@ mod tests {
         let mut f = [0.0; 4];
         h.features_into(&mut f);
         let g = 1.0 - (-1.0f64).exp();
-        assert!((f[0] - 2.0).abs() < 1e-12 && (f[2] - 4.0).abs() < 1e-12, "{f:?}");
+        assert!(
+            (f[0] - 2.0).abs() < 1e-12 && (f[2] - 4.0).abs() < 1e-12,
+            "{f:?}"
+        );
         assert!((f[1] - 2.0 * g).abs() < 1e-12, "{f:?}");
         assert!((f[3] - 4.0 * g).abs() < 1e-12, "{f:?}");
         // Stopped for one τ, logged once: the present input is zero, the filter decays by e^-1.

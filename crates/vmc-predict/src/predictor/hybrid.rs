@@ -133,10 +133,7 @@ impl HybridPredictor {
             &parts.spindle_history_sensors,
             ("spindle_history_taus_s", "spindle_history_sensors"),
         )?;
-        let speed = SpeedHistory::new(
-            &parts.spindle_speed_exponents,
-            &parts.spindle_speed_taus_s,
-        );
+        let speed = SpeedHistory::new(&parts.spindle_speed_exponents, &parts.spindle_speed_taus_s);
         if let Some(t) = crate::history::invalid_tau(&parts.spindle_speed_taus_s) {
             return Err(PredictError::Inconsistent {
                 reason: format!("spindle_speed_taus_s holds an unusable time constant ({t})"),
@@ -338,20 +335,21 @@ pub fn train_hybrid(
     geometry: &MachineGeometry,
     settings: &Settings,
 ) -> Result<(HybridPredictor, TrainSummary), PredictError> {
-    let sel = SensorSelection::new(ds, settings)?.with_history(
-        ds,
-        &settings.history_taus_s,
-        &settings.history_sensors,
-        (
-            &settings.spindle_history_taus_s,
-            &settings.spindle_history_sensors,
-        ),
-    )?
-    .with_spindle_speed(
-        ds,
-        &settings.spindle_speed_exponents,
-        &settings.spindle_speed_taus_s,
-    )?;
+    let sel = SensorSelection::new(ds, settings)?
+        .with_history(
+            ds,
+            &settings.history_taus_s,
+            &settings.history_sensors,
+            (
+                &settings.spindle_history_taus_s,
+                &settings.spindle_history_sensors,
+            ),
+        )?
+        .with_spindle_speed(
+            ds,
+            &settings.spindle_speed_exponents,
+            &settings.spindle_speed_taus_s,
+        )?;
     let split = CycleSplit::new(ds, settings)?;
     // Build every table before training anything, so data errors surface at once.
     const NEEDED_FOR: [&str; 3] = [
@@ -810,6 +808,69 @@ mod tests {
         let err = train_hybrid(&ds, &td::geometry(), &bad).unwrap_err();
         assert!(err.to_string().contains("spindle_history_sensors"), "{err}");
         assert!(err.to_string().contains("nope"), "{err}");
+    }
+
+    #[test]
+    fn spindle_speed_features_reach_the_spindle_part_alone_and_survive_the_model_file() {
+        let mut ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+        let settings = Settings {
+            hidden_candidates: vec![6],
+            max_epochs: 20,
+            ..Settings::default()
+        }
+        .with_spindle_speed_input();
+        // Without the `spindle_rpm` column the error names the first record lacking it.
+        let err = train_hybrid(&ds, &td::geometry(), &settings).unwrap_err();
+        assert!(
+            matches!(err, PredictError::MissingSpindleSpeed { index: 0, .. }),
+            "{err}"
+        );
+        assert!(err.to_string().contains("spindle_rpm"), "{err}");
+        // A logged speed: running in the first hour of each cycle.
+        for r in &mut ds.records {
+            r.spindle_rpm = Some(if r.time_s < 3600.0 { 6000.0 } else { 0.0 });
+        }
+        let (mut p, _) = train_hybrid(&ds, &td::geometry(), &settings).unwrap();
+        let n = ds.sensor_names.len();
+        // Per exponent (1, 2, 3): the present heat input and three filters.
+        assert_eq!(p.parts().spindle_net.linear.n_in(), n + 3 * 4);
+        for part in &p.parts().axis_nets {
+            assert_eq!(part.linear.n_in(), 1 + n + n);
+        }
+        assert_eq!(p.parts().squareness.n_in(), n);
+        let text = p.to_json_string().unwrap();
+        assert!(text.contains("\"version\": 7"), "{text}");
+        let mut back = HybridPredictor::from_json_str(&text).unwrap();
+        let q = [100.0, 50.0, -80.0];
+        let hot = td::temps_degc(6.0, 7200.0);
+        let rest = p.elementary_errors(q, &hot);
+        for k in 0..=30 {
+            let t = 60.0 * f64::from(k);
+            p.observe_spindle_speed(t, 9000.0);
+            back.observe_spindle_speed(t, 9000.0);
+        }
+        let ran = p.elementary_errors(q, &hot);
+        assert_eq!(ran, back.elementary_errors(q, &hot));
+        // The speed moves the spindle drift and leaves the axis parts alone.
+        assert_ne!(ran.spindle, rest.spindle);
+        assert_eq!(ran.axes, rest.axes);
+        assert_eq!(ran.squareness, rest.squareness);
+        // A model without speed features ignores the speed.
+        let (mut plain, _) = train_hybrid(
+            &ds,
+            &td::geometry(),
+            &Settings {
+                hidden_candidates: vec![6],
+                max_epochs: 20,
+                ..Settings::default()
+            },
+        )
+        .unwrap();
+        let before = plain.elementary_errors(q, &hot);
+        plain.observe_spindle_speed(0.0, 0.0);
+        plain.observe_spindle_speed(600.0, 9000.0);
+        assert_eq!(plain.elementary_errors(q, &hot), before);
+        assert!(!plain.to_json_string().unwrap().contains("spindle_speed"));
     }
 
     #[test]

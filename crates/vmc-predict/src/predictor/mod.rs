@@ -391,6 +391,27 @@ impl Default for Settings {
     }
 }
 
+impl Settings {
+    /// These settings with the commanded spindle speed as the spindle part's heat input
+    /// (opt-in, see [`Self::spindle_speed_exponents`]): the same grey-box bank as `fit-thermal`'s
+    /// speed inputs ([`crate::thermal_fit::FeatureSpec`]'s defaults: exponents 1, 2, 3 and
+    /// filters of 15 min, 1 h, 3 h), chosen there from physics, not tuned here.
+    #[must_use]
+    pub fn with_spindle_speed_input(self) -> Self {
+        let bank = crate::thermal_fit::FeatureSpec::default();
+        Self {
+            spindle_speed_exponents: bank.speed_exponents,
+            spindle_speed_taus_s: bank.time_constants_s,
+            ..self
+        }
+    }
+
+    /// Whether the hybrid's spindle part uses the commanded spindle speed.
+    pub fn uses_spindle_speed(&self) -> bool {
+        !self.spindle_speed_exponents.is_empty()
+    }
+}
+
 /// How a network's data were split into training and validation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum SplitKind {
