@@ -11,7 +11,7 @@
 //! as true (`|E|-sp`: what a perfect spindle part would leave, before non-repeatability).
 //!
 //! `cargo run --release --example residual_breakdown -- 1 2 3` (add `dev` for the selection-only
-//! states)
+//! states, `rpm` for the opt-in commanded spindle speed, `--spindle-speed`)
 
 use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::evaluation::follow_to_state;
@@ -31,11 +31,13 @@ fn main() {
             base.spindle_history_taus_s = v.split(',').map(|x| x.parse().unwrap()).collect();
         } else if let Some(v) = a.strip_prefix("shist=") {
             base.spindle_history_sensors = v.split(',').map(String::from).collect();
+        } else if a == "rpm" {
+            base = base.with_spindle_speed_input();
         }
     }
     let seeds: Vec<u64> = std::env::args()
         .skip(1)
-        .filter(|a| a != "dev" && !a.contains('='))
+        .filter(|a| a != "dev" && a != "rpm" && !a.contains('='))
         .map(|s| s.parse().expect("seed"))
         .collect();
     let spec = MachineSpec::reference();
@@ -102,6 +104,7 @@ fn main() {
                         twin.advance(1.0, &stopped).unwrap();
                         let r = twin.sensor_readings();
                         hs.observe_readings(r.time_s, &r.values_degc);
+                        hs.observe_spindle_speed(r.time_s, 0.0);
                     }
                 }
                 let temps = twin.sensor_readings().values_degc;
