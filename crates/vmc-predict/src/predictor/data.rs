@@ -115,17 +115,9 @@ impl SensorSelection {
         if spindle.0.is_empty() {
             self.spindle_idx.clear();
         }
-        let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
-        for r in &ds.records {
-            match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {
-                Some((_, v)) => v.push(r),
-                None => by_cycle.push((&r.cycle, vec![r])),
-            }
-        }
         let n = self.cols.len();
         let mut x = vec![0.0; n];
-        for (cycle, mut recs) in by_cycle {
-            recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+        for (cycle, recs) in records_by_cycle(ds) {
             let mut h = ReadingHistory::of_sensors(taus_s, n, &self.history_idx);
             let mut hs = ReadingHistory::of_sensors(spindle.0, n, &self.spindle_idx);
             let at = self.history.entry(cycle.to_string()).or_default();
@@ -183,15 +175,7 @@ impl SensorSelection {
                 time_s: r.time_s,
             });
         }
-        let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
-        for r in &ds.records {
-            match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {
-                Some((_, v)) => v.push(r),
-                None => by_cycle.push((&r.cycle, vec![r])),
-            }
-        }
-        for (cycle, mut recs) in by_cycle {
-            recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+        for (cycle, recs) in records_by_cycle(ds) {
             let mut h = SpeedHistory::new(exponents, taus_s);
             let at = self.speed.entry(cycle.to_string()).or_default();
             for r in recs {
@@ -459,6 +443,22 @@ pub(crate) fn mix_seed(seed: u64, net_index: u64) -> u64 {
 }
 
 /// Refuses time constants that are not finite and > 0 (`field` names the setting).
+/// The records of each cycle (first-appearance order of the cycles), each cycle's in time
+/// order: the stream a controller logging the cycle would have seen.
+fn records_by_cycle(ds: &Dataset) -> Vec<(&str, Vec<&Record>)> {
+    let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
+    for r in &ds.records {
+        match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {
+            Some((_, v)) => v.push(r),
+            None => by_cycle.push((&r.cycle, vec![r])),
+        }
+    }
+    for (_, recs) in &mut by_cycle {
+        recs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    }
+    by_cycle
+}
+
 fn check_taus(field: &'static str, taus_s: &[f64]) -> Result<(), PredictError> {
     match crate::history::invalid_tau(taus_s) {
         Some(t) => Err(PredictError::BadSettings {
