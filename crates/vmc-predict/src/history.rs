@@ -24,6 +24,19 @@ pub fn invalid_tau(taus_s: &[f64]) -> Option<f64> {
         .find(|t| !(t.is_finite() && *t > 0.0))
 }
 
+/// Largest heat-input exponent of a speed accepted: friction heat grows at most with the cube of
+/// the speed, and higher powers of a real speed overflow.
+pub const MAX_SPEED_EXPONENT: f64 = 10.0;
+
+/// The first heat-input exponent of `exponents` outside (0, [`MAX_SPEED_EXPONENT`]] (or not
+/// finite), if any.
+pub fn invalid_speed_exponent(exponents: &[f64]) -> Option<f64> {
+    exponents
+        .iter()
+        .copied()
+        .find(|e| !(e.is_finite() && *e > 0.0 && *e <= MAX_SPEED_EXPONENT))
+}
+
 /// Filter state over a stream of readings of `n` sensors, of which some are filtered.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReadingHistory {
@@ -172,7 +185,8 @@ pub struct SpeedHistory {
 }
 
 impl SpeedHistory {
-    /// Features of `exponents` (each in (0, 10]) through filters of `taus_s` (each > 0 s).
+    /// Features of `exponents` (each in (0, [`MAX_SPEED_EXPONENT`]]) through filters of `taus_s`
+    /// (each > 0 s).
     pub fn new(exponents: &[f64], taus_s: &[f64]) -> Self {
         Self {
             exponents: exponents.to_vec(),
@@ -214,17 +228,16 @@ impl SpeedHistory {
         if h <= 0.0 {
             return;
         }
+        for (q, &e) in self.last_q.iter_mut().zip(&self.exponents) {
+            *q = (rpm.abs() / 1000.0).powf(e);
+        }
         let nt = self.taus_s.len();
-        for (k, &e) in self.exponents.iter().enumerate() {
-            let q = (rpm.abs() / 1000.0).powf(e);
-            for (y, &tau) in self.filtered[k * nt..(k + 1) * nt]
-                .iter_mut()
-                .zip(&self.taus_s)
-            {
-                let a = (-h / tau).exp();
+        for (j, &tau) in self.taus_s.iter().enumerate() {
+            let a = (-h / tau).exp();
+            for (k, &q) in self.last_q.iter().enumerate() {
+                let y = &mut self.filtered[k * nt + j];
                 *y = a * *y + (1.0 - a) * q;
             }
-            self.last_q[k] = q;
         }
         self.last_t_s = t_s;
     }

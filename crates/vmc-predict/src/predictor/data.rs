@@ -155,10 +155,13 @@ impl SensorSelection {
             return Ok(self);
         }
         check_taus("spindle_speed_taus_s", taus_s)?;
-        if let Some(e) = exponents.iter().find(|e| !(**e > 0.0 && **e <= 10.0)) {
+        if let Some(e) = crate::history::invalid_speed_exponent(exponents) {
             return Err(PredictError::BadSettings {
                 field: "spindle_speed_exponents",
-                reason: format!("heat-input exponents must lie in (0, 10], got {e}"),
+                reason: format!(
+                    "heat-input exponents must lie in (0, {}], got {e}",
+                    crate::history::MAX_SPEED_EXPONENT
+                ),
             });
         }
         self.speed_exponents = exponents.to_vec();

@@ -71,9 +71,8 @@ impl Default for FeatureSpec {
     }
 }
 
-/// Largest speed exponent accepted: friction heat grows at most with the cube of the speed,
-/// and higher powers of a real speed column overflow.
-pub const MAX_SPEED_EXPONENT: f64 = 10.0;
+/// Largest speed exponent accepted (the same rule as the predictor's speed input).
+pub use crate::history::MAX_SPEED_EXPONENT;
 
 /// True for an input column that is a speed (unit `rpm`), from its name.
 pub fn is_speed(name: &str) -> bool {
@@ -89,11 +88,7 @@ impl FeatureSpec {
                 reason: format!("every time constant must be finite and > 0 s, got {t}"),
             });
         }
-        if let Some(k) = self
-            .speed_exponents
-            .iter()
-            .find(|k| !(k.is_finite() && **k > 0.0 && **k <= MAX_SPEED_EXPONENT))
-        {
+        if let Some(k) = crate::history::invalid_speed_exponent(&self.speed_exponents) {
             return Err(ThermalFitError::BadSettings {
                 field: "speed_exponents",
                 reason: if k.abs() < 1e6 {
