@@ -22,7 +22,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 
-use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::{self, Settings};
@@ -31,7 +31,7 @@ use vmc_twin::twin::Twin;
 
 fn compensation_query(c: &mut Criterion) {
     let spec = MachineSpec::reference();
-    let data = campaign::calibrate(
+    let data = calibration::calibrate(
         &spec,
         &ThermalCycle::calibration_set(),
         &CampaignConfig::new(1),
@@ -97,7 +97,7 @@ fn campaign_one_seed(c: &mut Criterion) {
     g.bench_function("one_seed", |b| {
         b.iter(|| {
             black_box(
-                vmc_twin::evaluation::run_campaign(&spec, &[1], &Settings::default())
+                vmc_twin::study::run_campaign(&spec, &[1], &Settings::default())
                     .unwrap()
                     .0
                     .runs

@@ -1,15 +1,15 @@
 //! Diagnosis (truth side): predicted vs true elementary errors of one axis along its travel on a
 //! cold machine, or at held-out evaluation state STATE (index into
-//! `campaign::evaluation_states`, 0 = cold). `cargo run --release --example axis_profile -- SEED
+//! `calibration::evaluation_states`, 0 = cold). `cargo run --release --example axis_profile -- SEED
 //! AXIS [STATE]` (AXIS 0, 1, 2).
 //!
 //! The truth printed is the twin's error functions, without the approach: the predictor learns
 //! the positive approach, which lies half a reversal above them in the axis's own positioning
 //! error (0.25–0.3 µm on the reference machine).
-use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::evaluation::follow_to_state;
+use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::study::follow_to_state;
 use vmc_twin::twin::Twin;
 
 fn main() {
@@ -19,7 +19,7 @@ fn main() {
         .collect();
     let (seed, axis) = (a[0], a[1] as usize);
     let spec = MachineSpec::reference();
-    let data = campaign::calibrate(
+    let data = calibration::calibrate(
         &spec,
         &ThermalCycle::calibration_set(),
         &CampaignConfig::new(seed),
@@ -30,14 +30,14 @@ fn main() {
         &spec.geometry(),
         &Settings {
             seed,
-            ..vmc_twin::evaluation::predictor_settings(&spec)
+            ..vmc_twin::study::predictor_settings(&spec)
         },
     )
     .unwrap();
     let mut twin = Twin::new(&spec, seed).unwrap();
     if let Some(&si) = a.get(2) {
         // Drive to the state, the predictor following the readings as the controller does.
-        let state = &campaign::evaluation_states(seed)[si as usize];
+        let state = &calibration::evaluation_states(seed)[si as usize];
         println!("state {}", state.name);
         h = follow_to_state(&mut twin, state, h).unwrap();
     }

@@ -1,7 +1,7 @@
 //! Diagnosis: validation RMSE (calibration cycles only) of each hybrid network for several
 //! history-feature settings.
 //! `cargo run --release --example history_probe -- SEED`
-use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, Settings};
 
@@ -11,7 +11,7 @@ fn main() {
         .map_or(1, |s| s.parse().expect("seed"));
     let spec = MachineSpec::reference();
     let geom = spec.geometry();
-    let data = campaign::calibrate(
+    let data = calibration::calibrate(
         &spec,
         &ThermalCycle::calibration_set(),
         &CampaignConfig::new(seed),

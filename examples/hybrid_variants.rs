@@ -6,15 +6,15 @@
 //! `seedoff=`, and the opt-in commanded spindle speed: `rpmexp=` heat-input exponents, `rpmtaus=`
 //! their filters' time constants, s) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
 //! Prints per seed the kept nets, then the headline figures and the eight worst runs.
-use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::evaluation::{self, diagonal_plans};
+use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::study::{self, diagonal_plans};
 
 fn main() {
     let spec = MachineSpec::reference();
     // The campaign's settings (ambient history on), unless the arguments change them.
-    let mut settings = evaluation::predictor_settings(&spec);
+    let mut settings = study::predictor_settings(&spec);
     let mut seed_off = 0u64;
     let mut members = 1u64;
     let mut seeds = vec![1u64, 2, 3];
@@ -65,7 +65,7 @@ fn main() {
     let plans = diagonal_plans(&spec).unwrap();
     let mut runs = Vec::new();
     for &seed in &seeds {
-        let data = campaign::calibrate(&spec, &ThermalCycle::calibration_set(), &{
+        let data = calibration::calibrate(&spec, &ThermalCycle::calibration_set(), &{
             let mut c = cfg_of(seed);
             if let Some(v) = every {
                 c.measure_every_s = v;
@@ -107,15 +107,15 @@ fn main() {
         let states = if dev {
             vmc_twin::placement::validation_states(seed)
         } else {
-            campaign::evaluation_states(seed)
+            calibration::evaluation_states(seed)
         };
-        let r = evaluation::evaluate_predictor(&spec, seed, "hybrid", &h, &states, &plans).unwrap();
+        let r = study::evaluate_predictor(&spec, seed, "hybrid", &h, &states, &plans).unwrap();
         let mx = r.iter().map(|x| x.max_after_um).fold(0.0, f64::max);
         let qm = (r.iter().map(|x| x.rms_after_um.powi(2)).sum::<f64>() / r.len() as f64).sqrt();
         println!("seed {seed}: nets {kept:?} max {mx:.2} qmean rms {qm:.3}");
         runs.extend(r);
     }
-    let (med, worst, max, rmse) = evaluation::headline(&runs, "hybrid").unwrap();
+    let (med, worst, max, rmse) = study::headline(&runs, "hybrid").unwrap();
     let over = runs.iter().filter(|r| r.max_after_um > 2.0).count();
     // The worst runs, with the max of each component (µm).
     let mut worst_runs: Vec<_> = runs.iter().collect();

@@ -13,11 +13,11 @@
 //! `cargo run --release --example residual_breakdown -- 1 2 3` (add `dev` for the selection-only
 //! states, `rpm` for the opt-in commanded spindle speed, `--spindle-speed`)
 
-use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::evaluation::follow_to_state;
+use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::predict::synthesis::first_order_error_mm;
+use vmc_twin::study::follow_to_state;
 use vmc_twin::twin::{sub_seed, Twin};
 
 fn main() {
@@ -25,7 +25,7 @@ fn main() {
     // the held-out ones.
     let dev = std::env::args().any(|a| a == "dev");
     // `staus=…` and `shist=…`: spindle-only history features (as in `hybrid_variants`).
-    let mut base = vmc_twin::evaluation::predictor_settings(&MachineSpec::reference());
+    let mut base = vmc_twin::study::predictor_settings(&MachineSpec::reference());
     for a in std::env::args().skip(1) {
         if let Some(v) = a.strip_prefix("staus=") {
             base.spindle_history_taus_s = v.split(',').map(|x| x.parse().unwrap()).collect();
@@ -42,9 +42,9 @@ fn main() {
         .collect();
     let spec = MachineSpec::reference();
     let geom = spec.geometry();
-    let grid = campaign::volume_grid(&spec, 3);
+    let grid = calibration::volume_grid(&spec, 3);
     for seed in seeds {
-        let data = campaign::calibrate(
+        let data = calibration::calibrate(
             &spec,
             &ThermalCycle::calibration_set(),
             &CampaignConfig::new(seed),
@@ -80,7 +80,7 @@ fn main() {
         let states = if dev {
             vmc_twin::placement::validation_states(seed)
         } else {
-            campaign::evaluation_states(seed)
+            calibration::evaluation_states(seed)
         };
         for (si, state) in states.iter().enumerate() {
             let mut twin =

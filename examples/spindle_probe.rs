@@ -13,7 +13,7 @@
 //!   keeps from the predictor, shown only to say what it would be worth.
 //!
 //! `cargo run --release --example spindle_probe -- SEED`
-use vmc_twin::campaign::{self, ThermalCycle};
+use vmc_twin::calibration::{self, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::linreg::LinearModel;
 use vmc_twin::predict::nn::Samples;
@@ -78,7 +78,7 @@ fn samples(spec: &MachineSpec, seed: u64, k: u64, cycle: &ThermalCycle) -> Vec<S
     let mut t = 0.0;
     while t < end - 1e-9 {
         let to = (t + 30.0).min(end);
-        campaign::drive_with(&mut twin, cycle, 0.0, to, 1.0, Some(&mut nose)).unwrap();
+        calibration::drive_with(&mut twin, cycle, 0.0, to, 1.0, Some(&mut nose)).unwrap();
         let rpm = cycle.phase_at(0.5 * (t + to)).spindle_rpm;
         if before > 0.0 && rpm == 0.0 {
             since_stop = 0.0;

@@ -11,7 +11,7 @@
 //!
 //! `cargo run --release --example travel_probe -- SEED [every=MIN] [noise=µm]` — `every=30
 //! noise=0.3` thins and blurs the training samples like the campaign's laser blocks.
-use vmc_twin::campaign::{self, ThermalCycle};
+use vmc_twin::calibration::{self, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::linreg::LinearModel;
 use vmc_twin::predict::nn::Samples;
@@ -52,7 +52,7 @@ fn rows(
     let mut t = 0.0;
     while t < end - 1e-9 {
         let to = (t + 60.0).min(end);
-        campaign::drive(&mut twin, cycle, 0.0, to, 1.0).unwrap();
+        calibration::drive(&mut twin, cycle, 0.0, to, 1.0).unwrap();
         // The commanded speeds over the step (the duty is constant within a phase).
         let v = cycle.phase_at(0.5 * (t + to)).axis_speed_mm_per_min;
         for (f, tau) in filt.iter_mut().zip(TAUS_S) {

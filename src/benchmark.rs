@@ -9,13 +9,13 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::campaign::{self, CampaignConfig, ThermalCycle};
-use crate::evaluation::{self, EvalError};
+use crate::calibration::{self, CampaignConfig, ThermalCycle};
 use crate::machine::MachineSpec;
 use crate::predict::controller::Compensator;
 use crate::predict::predictor::{self, Settings};
 use crate::program;
 use crate::sim::{self, SampleMode, SimConfig};
+use crate::study::{self, EvalError};
 use crate::twin::Twin;
 
 /// One measured row: what, the figure, its unit.
@@ -48,14 +48,14 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// # Errors
 /// Campaign or training errors.
 pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> {
-    let data = campaign::calibrate(
+    let data = calibration::calibrate(
         spec,
         &ThermalCycle::calibration_set(),
         &CampaignConfig::new(1),
     )?;
     let settings = Settings {
         seed: 1,
-        ..evaluation::predictor_settings(spec)
+        ..study::predictor_settings(spec)
     };
     let (model, _) = predictor::train_hybrid(&data, &spec.geometry(), &settings)?;
     let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
@@ -138,7 +138,7 @@ pub fn run_8h(
     let mut twin = Twin::new(spec, 1)?;
     let mut n = 0;
     for k in 0..16 {
-        campaign::drive(&mut twin, cycle, 0.0, k as f64 * 1800.0, 1.0)?;
+        calibration::drive(&mut twin, cycle, 0.0, k as f64 * 1800.0, 1.0)?;
         let mut count = sim::CountPoints::default();
         sim::execute(&mut twin, plan, cfg, None, &mut count)?;
         n += count.points;
@@ -177,10 +177,10 @@ pub fn campaign_with(
     seeds: &[u64],
 ) -> Result<(f64, usize), EvalError> {
     let t = Instant::now();
-    let (rep, _) = evaluation::run_campaign_with_cycles(
+    let (rep, _) = study::run_campaign_with_cycles(
         spec,
         seeds,
-        &evaluation::predictor_settings(spec),
+        &study::predictor_settings(spec),
         cycles,
         &(),
     )?;

@@ -8,10 +8,9 @@
 pub use vmc_predict as predict;
 
 pub mod benchmark;
-pub mod campaign;
+pub mod calibration;
 pub mod collision;
 pub mod errors;
-pub mod evaluation;
 pub mod gcode;
 pub mod instruments;
 pub mod interp;
@@ -25,5 +24,6 @@ pub mod record;
 pub mod report;
 pub mod sensors;
 pub mod sim;
+pub mod study;
 pub mod thermal;
 pub mod twin;

@@ -8,8 +8,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
-use vmc_twin::campaign;
-use vmc_twin::evaluation;
+use vmc_twin::calibration;
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::placement;
 use vmc_twin::program;
@@ -17,6 +16,7 @@ use vmc_twin::progress::Progress;
 use vmc_twin::record;
 use vmc_twin::report::{self, RunLog};
 use vmc_twin::sim::{self, Observer, RunStart, SampleMode, SimConfig};
+use vmc_twin::study;
 use vmc_twin::twin::Twin;
 
 mod thermal_cli;
@@ -402,7 +402,7 @@ fn run(args: RunArgs) -> Result<()> {
                     machine.machine.name
                 )
             })?;
-            Some(evaluation::LoopController(ctrl))
+            Some(study::LoopController(ctrl))
         }
         (Some(path), false) => anyhow::bail!(
             "{}: a model was given without --compensate; add --compensate to put it in the loop",
@@ -570,10 +570,10 @@ fn calibrate(args: CalibrateArgs) -> Result<()> {
         );
     }
     report::check_writable(&args.out, args.force)?;
-    let cycles = campaign::ThermalCycle::calibration_set();
-    let mut cfg = campaign::CampaignConfig::new(args.seed);
+    let cycles = calibration::ThermalCycle::calibration_set();
+    let mut cfg = calibration::CampaignConfig::new(args.seed);
     cfg.measure_every_s = args.measure_every_min * 60.0;
-    let data = campaign::calibrate(&machine, &cycles, &cfg)?;
+    let data = calibration::calibrate(&machine, &cycles, &cfg)?;
     report::write_atomic(&args.out, data.to_csv().as_bytes(), args.force)?;
     let names: Vec<&str> = cycles.iter().map(|c| c.name.as_str()).collect();
     println!(
@@ -612,17 +612,17 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
         None => None,
     };
     let rrd = args.rrd.checked(args.force)?;
-    let mut settings = evaluation::predictor_settings(&machine);
+    let mut settings = study::predictor_settings(&machine);
     if args.spindle_speed {
         settings = settings.with_spindle_speed_input();
     }
     let progress = Progress::new(0, "units");
     let (rep, models) =
-        evaluation::run_campaign_with_progress(&machine, &args.seeds, &settings, &progress)?;
+        study::run_campaign_with_progress(&machine, &args.seeds, &settings, &progress)?;
     progress.finish();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    evaluation::write_campaign_table(&rep, &mut out)?;
+    study::write_campaign_table(&rep, &mut out)?;
     if let Some((path, settings)) = rrd {
         let seeds: Vec<String> = args.seeds.iter().map(|s| s.to_string()).collect();
         let id = format!(
@@ -683,7 +683,7 @@ fn train(args: TrainArgs) -> Result<()> {
     let data = Dataset::from_csv(&text, &name)?;
     let mut settings = Settings {
         seed: args.seed,
-        ..vmc_twin::evaluation::predictor_settings(&machine)
+        ..vmc_twin::study::predictor_settings(&machine)
     };
     if args.spindle_speed {
         anyhow::ensure!(
@@ -887,7 +887,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             "campaign (seed 1: calibration, 3 trainings, 147 held-out runs) vs calibration cycles:"
         )?;
         writeln!(out, "  {:>8} {:>8} {:>10}", "cycles", "runs", "wall s")?;
-        let m = vmc_twin::campaign::ThermalCycle::calibration_set().len();
+        let m = vmc_twin::calibration::ThermalCycle::calibration_set().len();
         for n in [2, 4, m, 2 * m] {
             let (s, runs) =
                 benchmark::campaign_with(&spec, &benchmark::calibration_cycles(n), &[1])?;
@@ -895,7 +895,7 @@ fn bench(args: BenchArgs) -> Result<()> {
         }
         let (s, runs) = benchmark::campaign_with(
             &spec,
-            &vmc_twin::campaign::ThermalCycle::calibration_set(),
+            &vmc_twin::calibration::ThermalCycle::calibration_set(),
             &[1, 2, 3],
         )?;
         writeln!(out, "default campaign, seeds 1,2,3 ({runs} runs): {s:.2} s")?;

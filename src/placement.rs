@@ -6,7 +6,7 @@
 //!    machine's own thermistor model (noise σ, lag τ, 0.0625 °C quantisation, taken from its
 //!    first non-ambient sensor) — never the node temperatures themselves.
 //! 2. **Selection data**: the virtual calibration campaign (laser sweeps, squareness, 5-probe
-//!    spindle test; [`crate::campaign::calibrate`]) over *varied* scenarios: the typical
+//!    spindle test; [`crate::calibration::calibrate`]) over *varied* scenarios: the typical
 //!    calibration cycles (constant and progressive duty, axis-heavy, slow ambient drift, ambient
 //!    steps) plus four selection-only cycles ([`validation_cycles`]: random duty, ambient steps,
 //!    a sinusoidal ambient swing, a restart), drawn from their own seed stream. None of the
@@ -31,13 +31,13 @@ use rand::SeedableRng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::{self, CampaignConfig, EvalState, ThermalCycle};
-use crate::evaluation::{self, EvalError, RunReport};
+use crate::calibration::{self, CampaignConfig, EvalState, ThermalCycle};
 use crate::machine::{MachineError, MachineSpec};
 use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{self, Settings};
 use crate::predict::selection::{self, Selection, SelectionConfig, SelectionError};
 use crate::sensors::SensorSpec;
+use crate::study::{self, EvalError, RunReport};
 use crate::thermal::{AmbientProfile, AMBIENT_NODE};
 use crate::twin::sub_seed;
 
@@ -181,7 +181,7 @@ pub fn validation_cycles(seed: u64, stream: u64) -> Vec<ThermalCycle> {
         state = sub_seed(state, 1);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    let phase = |hours: f64, rpm: f64, duty: f64| campaign::Phase {
+    let phase = |hours: f64, rpm: f64, duty: f64| calibration::Phase {
         duration_s: hours * 3600.0,
         spindle_rpm: rpm,
         axis_speed_mm_per_min: [5000.0 * duty, 4000.0 * duty, 2500.0 * duty],
@@ -189,7 +189,7 @@ pub fn validation_cycles(seed: u64, stream: u64) -> Vec<ThermalCycle> {
     let rpm = |u: f64| 1000.0 + (u * 9.0).floor() * 1000.0;
     let mut v = Vec::new();
     // Random duty: 8 steps of 30 min, then 3 h of cooling.
-    let mut phases: Vec<campaign::Phase> = (0..8)
+    let mut phases: Vec<calibration::Phase> = (0..8)
         .map(|_| {
             let r = rpm(next());
             phase(0.5, r, next())
@@ -339,11 +339,11 @@ pub fn study_among(
     let candidates = candidates_among(spec, only)?;
     let cand_spec = with_sensors(spec, candidates.clone())?;
     let scenarios = selection_cycles(cfg.seed);
-    let data = campaign::calibrate(&cand_spec, &scenarios, &CampaignConfig::new(cfg.seed))
+    let data = calibration::calibrate(&cand_spec, &scenarios, &CampaignConfig::new(cfg.seed))
         .map_err(EvalError::from)?;
     let selection = selection::select_sensors(&data, &cfg.selection)?;
     let typical = typical_part(&data);
-    let plans = evaluation::diagonal_plans(&cand_spec)?;
+    let plans = study::diagonal_plans(&cand_spec)?;
     let states = validation_states(cfg.seed);
     let mut validation: Vec<SetResult> = Vec::new();
     for p in &selection.proposals {
@@ -465,7 +465,7 @@ fn evaluate_set(
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
         .collect();
     let set_spec = with_sensors(cand_spec, sensors)?;
-    let settings = evaluation::with_history_features(
+    let settings = study::with_history_features(
         Settings {
             seed,
             sensors: names.to_vec(),
@@ -475,7 +475,7 @@ fn evaluate_set(
     );
     let (hybrid, _) =
         predictor::train_hybrid(data, &set_spec.geometry(), &settings).map_err(EvalError::from)?;
-    Ok(evaluation::evaluate_predictor(
+    Ok(study::evaluate_predictor(
         &set_spec, seed, label, &hybrid, states, plans,
     )?)
 }
@@ -490,7 +490,7 @@ fn compare(
     selection_typical: &Dataset,
 ) -> Result<Vec<SetResult>, PlacementError> {
     let cal = ThermalCycle::calibration_set();
-    let plans = evaluation::diagonal_plans(cand_spec)?;
+    let plans = study::diagonal_plans(cand_spec)?;
     // One calibration dataset per seed, with every candidate logged; each set trains on its
     // columns. The selection seed's typical cycles are part of the selection data.
     let datasets: Vec<Dataset> = cfg
@@ -500,7 +500,7 @@ fn compare(
             if seed == cfg.seed {
                 Ok(selection_typical.clone())
             } else {
-                campaign::calibrate(cand_spec, &cal, &CampaignConfig::new(seed))
+                calibration::calibrate(cand_spec, &cal, &CampaignConfig::new(seed))
                     .map_err(EvalError::from)
             }
         })
@@ -509,7 +509,7 @@ fn compare(
     for (label, names) in sets {
         let mut runs: Vec<RunReport> = Vec::new();
         for (seed, data) in cfg.compare_seeds.iter().zip(&datasets) {
-            let states = campaign::evaluation_states(*seed);
+            let states = calibration::evaluation_states(*seed);
             runs.extend(evaluate_set(
                 cand_spec,
                 candidates,
@@ -533,7 +533,7 @@ fn summarise(label: &str, names: &[String], runs: &[RunReport]) -> SetResult {
         label: label.to_string(),
         sensors: names.to_vec(),
         runs: runs.len(),
-        median_reduction: evaluation::median(&mut red).unwrap_or(f64::NAN),
+        median_reduction: study::median(&mut red).unwrap_or(f64::NAN),
         worst_reduction: runs
             .iter()
             .map(|r| r.reduction)
@@ -608,14 +608,14 @@ mod tests {
     #[test]
     fn selection_scenarios_are_not_evaluation_states() {
         let sel: Vec<String> = selection_cycles(1).iter().map(|c| c.name.clone()).collect();
-        for s in campaign::evaluation_states(1) {
+        for s in calibration::evaluation_states(1) {
             assert!(!sel.contains(&s.cycle.name), "{} is held out", s.cycle.name);
         }
     }
 
     #[test]
     fn validation_states_are_selection_only_and_the_lowest_score_is_chosen() {
-        let held_out: Vec<String> = campaign::evaluation_states(1)
+        let held_out: Vec<String> = calibration::evaluation_states(1)
             .into_iter()
             .map(|s| s.cycle.name)
             .collect();

@@ -7,15 +7,15 @@
 //! inputs frozen at a cold reading (so it knows only the cold geometry) does not reach 80 % on
 //! the warm runs.
 
-use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::evaluation::{self, RunReport};
+use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, HybridPredictor, Settings};
+use vmc_twin::study::{self, RunReport};
 
 const SEEDS: [u64; 3] = [1, 2, 3];
 
 fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
-    let data = campaign::calibrate(
+    let data = calibration::calibrate(
         spec,
         &ThermalCycle::calibration_set(),
         &CampaignConfig::new(seed),
@@ -23,7 +23,7 @@ fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
     .expect("campaign runs");
     let settings = Settings {
         seed,
-        ..vmc_twin::evaluation::predictor_settings(spec)
+        ..vmc_twin::study::predictor_settings(spec)
     };
     predictor::train_hybrid(&data, &spec.geometry(), &settings)
         .expect("training succeeds")
@@ -53,13 +53,13 @@ fn is_warm(r: &RunReport) -> bool {
 #[test]
 fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_state_and_seed() {
     let spec = MachineSpec::reference();
-    let plans = evaluation::diagonal_plans(&spec).unwrap();
+    let plans = study::diagonal_plans(&spec).unwrap();
     let mut runs = Vec::new();
     for seed in SEEDS {
         let model = trained(&spec, seed);
-        let states = campaign::evaluation_states(seed);
+        let states = calibration::evaluation_states(seed);
         runs.extend(
-            evaluation::evaluate_predictor(&spec, seed, "hybrid", &model, &states, &plans).unwrap(),
+            study::evaluate_predictor(&spec, seed, "hybrid", &model, &states, &plans).unwrap(),
         );
     }
     // 7 diagonals × 7 states × 3 seeds.
@@ -112,7 +112,7 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
 #[test]
 fn a_predictor_blind_to_temperature_does_not_reach_80_percent_on_warm_runs() {
     let spec = MachineSpec::reference();
-    let plans = evaluation::diagonal_plans(&spec).unwrap();
+    let plans = study::diagonal_plans(&spec).unwrap();
     let seed = SEEDS[0];
     let model = trained(&spec, seed);
     let cold_degc = vec![20.0; model.sensor_names().len()];
@@ -120,11 +120,9 @@ fn a_predictor_blind_to_temperature_does_not_reach_80_percent_on_warm_runs() {
         inner: model.clone(),
         cold_degc,
     };
-    let states = campaign::evaluation_states(seed);
-    let blind =
-        evaluation::evaluate_predictor(&spec, seed, "frozen", &frozen, &states, &plans).unwrap();
-    let full =
-        evaluation::evaluate_predictor(&spec, seed, "hybrid", &model, &states, &plans).unwrap();
+    let states = calibration::evaluation_states(seed);
+    let blind = study::evaluate_predictor(&spec, seed, "frozen", &frozen, &states, &plans).unwrap();
+    let full = study::evaluate_predictor(&spec, seed, "hybrid", &model, &states, &plans).unwrap();
     let mean = |runs: &[RunReport]| {
         let warm: Vec<f64> = runs
             .iter()

@@ -439,9 +439,9 @@ fn mutated_fixtures_never_panic_and_name_the_field() {
 /// A small real dataset: every 25th record of the reference machine's calibration campaign
 /// (all instruments, every cycle), as the CSV `calibrate` writes.
 fn small_dataset_csv() -> String {
-    use vmc_twin::campaign::{self, CampaignConfig, ThermalCycle};
+    use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
     let spec = MachineSpec::reference();
-    let mut ds = campaign::calibrate(
+    let mut ds = calibration::calibrate(
         &spec,
         &ThermalCycle::calibration_set(),
         &CampaignConfig::new(1),

@@ -9,12 +9,12 @@
 //! positioning error moves the workpiece, +1 for the Z head), so its sign is the direction in
 //! which the twin's axis really last moved.
 
-use vmc_twin::evaluation::{self, LoopController};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::ErrorPredictor;
 use vmc_twin::sensors::SensorReadings;
 use vmc_twin::sim::{self, CollectPoints, Controller, SimConfig};
+use vmc_twin::study::{self, LoopController};
 use vmc_twin::twin::Twin;
 
 /// Predicts no error: only the compensator's direction tracking matters here.
@@ -64,7 +64,7 @@ fn the_inferred_approach_direction_is_the_twins_at_every_diagonal_point() {
     );
     let side = [-1.0, -1.0, 1.0];
     let names: Vec<String> = with.sensors.iter().map(|s| s.name.clone()).collect();
-    let plans = evaluation::diagonal_plans(&with).unwrap();
+    let plans = study::diagonal_plans(&with).unwrap();
     let mut negatives = [0usize; 3];
     for (diag, plan) in &plans {
         let run = |spec: &MachineSpec, ctrl: Option<&mut dyn Controller>| {

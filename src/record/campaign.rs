@@ -13,15 +13,15 @@
 //!   points exactly (checked);
 //! - `report`: the campaign summary and the table of hybrid runs (markdown).
 
-use crate::campaign::{evaluation_states, run_at_state_observed};
-use crate::evaluation::{
-    diagonal_plans, eval_noise_seed, headline, CampaignReport, LoopController, RunReport,
-    TrainedModels,
-};
+use crate::calibration::{evaluation_states, run_at_state_observed};
 use crate::machine::MachineSpec;
 use crate::predict::controller::Compensator;
 use crate::report::norm;
 use crate::sim::CollectPoints;
+use crate::study::{
+    diagonal_plans, eval_noise_seed, headline, CampaignReport, LoopController, RunReport,
+    TrainedModels,
+};
 
 use super::{Diagonal, RecordError, RecordSettings, Recorder, RrdFile};
 

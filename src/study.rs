@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::campaign::{self, CampaignConfig, EvalState, ThermalCycle};
+use crate::calibration::{self, CampaignConfig, EvalState, ThermalCycle};
 use crate::machine::MachineSpec;
 use crate::motion::Plan;
 use crate::predict::controller::Compensator;
@@ -94,7 +94,7 @@ pub fn follow_to_state<P: ErrorPredictor>(
 ) -> Result<P, TwinError> {
     twin.set_ambient(state.cycle.ambient.clone())?;
     let mut follow = LoopController(Compensator::new(predictor));
-    campaign::drive_with(twin, &state.cycle, 0.0, state.at_s, 1.0, Some(&mut follow))?;
+    calibration::drive_with(twin, &state.cycle, 0.0, state.at_s, 1.0, Some(&mut follow))?;
     Ok(follow.0.into_inner())
 }
 
@@ -286,7 +286,8 @@ pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>
             let ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
             let mut ctrl = LoopController(ctrl);
             let noise = eval_noise_seed(seed, si, di);
-            let points = campaign::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
+            let points =
+                calibration::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
             progress.advance(
                 units::RUN,
                 &format!("seed {seed}: {name} {diag} at {}", state.name),
@@ -402,7 +403,7 @@ fn campaign_for_seed(
 ) -> Result<SeedResult, EvalError> {
     let geometry = spec.geometry();
     progress.advance(0, &format!("seed {seed}: calibration campaign"));
-    let data = campaign::calibrate(spec, cal_cycles, &CampaignConfig::new(seed))?;
+    let data = calibration::calibrate(spec, cal_cycles, &CampaignConfig::new(seed))?;
     let s = Settings {
         seed,
         ..settings.clone()
@@ -414,7 +415,7 @@ fn campaign_for_seed(
     progress.advance(units::TRAINING, &format!("seed {seed}: training"));
     let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
     progress.advance(units::TRAINING, &format!("seed {seed}: evaluation"));
-    let states = campaign::evaluation_states(seed);
+    let states = calibration::evaluation_states(seed);
     let mut runs =
         evaluate_predictor_with_progress(spec, seed, "hybrid", &hybrid, &states, plans, progress)?;
     runs.extend(evaluate_predictor_with_progress(
@@ -477,7 +478,7 @@ pub fn run_campaign_with_cycles(
 ) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
     let cal_cycles = cal_cycles.to_vec();
     let plans = diagonal_plans(spec)?;
-    let n_runs = (campaign::evaluation_states(0).len() * plans.len()) as u64;
+    let n_runs = (calibration::evaluation_states(0).len() * plans.len()) as u64;
     progress.add_total(
         seeds.len() as u64 * (units::CALIBRATION + 3 * units::TRAINING + 3 * n_runs * units::RUN),
     );
@@ -504,7 +505,7 @@ pub fn run_campaign_with_cycles(
     report.evaluation_states = seeds
         .first()
         .map(|&s| {
-            campaign::evaluation_states(s)
+            calibration::evaluation_states(s)
                 .iter()
                 .map(|s| s.name.clone())
                 .collect()
