@@ -11,7 +11,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::collision::CollisionSpec;
+use crate::collision_spec::CollisionSpec;
 use crate::errors::ErrorFieldSpec;
 use crate::motion::MotionLimits;
 use crate::predict::synthesis::{Chain, MachineGeometry};
@@ -173,7 +173,7 @@ impl MachineSpec {
 
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, MachineError> {
-        let text = crate::program::read_text(path).map_err(|err| MachineError::Io {
+        let text = crate::files::read_text(path).map_err(|err| MachineError::Io {
             path: path.display().to_string(),
             err,
         })?;
@@ -599,5 +599,51 @@ mod tests {
         spec.sensors[0].node = "nowhere".into();
         let (_, msg) = invalid_field(&spec);
         assert!(msg.contains("nowhere") && msg.contains("BXH"), "{msg}");
+    }
+
+    /// The reference sensors sit on nodes of the reference network, carry the study's names, and
+    /// read their nodes within noise, quantisation and lag through a 1 h warm-up at 9000 rpm.
+    #[test]
+    fn reference_sensors_sit_on_their_nodes_and_track_them_through_a_warm_up() {
+        use crate::sensors::{validate_sensors, SensorBank};
+        use crate::thermal::{Activity, ThermalNetwork, AMBIENT_NODE};
+        let spec = reference();
+        let mut net = ThermalNetwork::new(&spec.thermal, 20.0).unwrap();
+        validate_sensors(&spec.sensors, net.node_names()).unwrap();
+        let names: Vec<&str> = spec.sensors.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["BXH", "BYH", "BXB", "BYB", "XD", "XG", "YAv", "YAr", "ZH", "ZB", "ZT", "Amb"]
+        );
+        let mut bank = SensorBank::new(&spec.sensors, net.node_names(), 11).unwrap();
+        bank.update(0.0, net.temps_degc(), 20.0).unwrap();
+        // Spindle at 9000 rpm, axes parked mid-travel and moving at the calibration's speeds.
+        let duty = Activity {
+            spindle_rpm: 9000.0,
+            axis_pos_mm: [280.0, 200.0, -225.0],
+            axis_speed_mm_per_min: [4000.0, 3000.0, 2000.0],
+            coolant: false,
+        };
+        for _ in 0..3600 {
+            net.advance(1.0, &duty).unwrap();
+            bank.update(1.0, net.temps_degc(), net.ambient_degc())
+                .unwrap();
+        }
+        let r = bank.read();
+        assert_eq!(r.values_degc.len(), 12);
+        for s in &spec.sensors {
+            let truth = if s.node == AMBIENT_NODE {
+                20.0
+            } else {
+                net.temp_degc(&s.node).unwrap()
+            };
+            let v = r.value_degc(&s.name).unwrap();
+            // Noise σ 0.02 °C, half a quantum 0.031 °C, 20 s lag on a ≤ 0.2 °C/min slope: < 0.2 °C.
+            assert!((v - truth).abs() < 0.2, "{}: {v} vs node {truth}", s.name);
+        }
+        assert!(
+            r.value_degc("BYB").unwrap() > 25.0,
+            "spindle sensor must have warmed: {r:?}"
+        );
     }
 }

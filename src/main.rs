@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use vmc_twin::calibration;
+use vmc_twin::files;
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::placement;
 use vmc_twin::program;
@@ -357,8 +358,8 @@ fn run(args: RunArgs) -> Result<()> {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("{}: cannot create output folder", dir.display()))?;
             let files = (dir.join("samples.csv"), dir.join("summary.json"));
-            report::check_writable(&files.0, args.force)?;
-            report::check_writable(&files.1, args.force)?;
+            files::check_writable(&files.0, args.force)?;
+            files::check_writable(&files.1, args.force)?;
             Some(files)
         }
         None => None,
@@ -553,9 +554,9 @@ fn run(args: RunArgs) -> Result<()> {
         wrote_recording(&mut out, &path, bytes, "")?;
     }
     if let Some((csv, json)) = out_files {
-        report::write_atomic(&csv, log.samples_csv().as_bytes(), args.force)?;
+        files::write_atomic(&csv, log.samples_csv().as_bytes(), args.force)?;
         let text = serde_json::to_string_pretty(&summary)?;
-        report::write_atomic(&json, text.as_bytes(), args.force)?;
+        files::write_atomic(&json, text.as_bytes(), args.force)?;
         writeln!(out, "wrote {} and {}", csv.display(), json.display())?;
     }
     Ok(())
@@ -569,12 +570,12 @@ fn calibrate(args: CalibrateArgs) -> Result<()> {
             args.measure_every_min
         );
     }
-    report::check_writable(&args.out, args.force)?;
+    files::check_writable(&args.out, args.force)?;
     let cycles = calibration::ThermalCycle::calibration_set();
     let mut cfg = calibration::CampaignConfig::new(args.seed);
     cfg.measure_every_s = args.measure_every_min * 60.0;
     let data = calibration::calibrate(&machine, &cycles, &cfg)?;
-    report::write_atomic(&args.out, data.to_csv().as_bytes(), args.force)?;
+    files::write_atomic(&args.out, data.to_csv().as_bytes(), args.force)?;
     let names: Vec<&str> = cycles.iter().map(|c| c.name.as_str()).collect();
     println!(
         "calibration campaign on {} (seed {}): cycles {}; {} records, {} sensors → {}",
@@ -605,7 +606,7 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
                 }
             }
             for f in &files {
-                report::check_writable(f, args.force)?;
+                files::check_writable(f, args.force)?;
             }
             Some(dir.clone())
         }
@@ -649,7 +650,7 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
     }
     if let Some(dir) = out_files {
         let path = dir.join("report.json");
-        report::write_atomic(
+        files::write_atomic(
             &path,
             serde_json::to_string_pretty(&rep)?.as_bytes(),
             args.force,
@@ -660,7 +661,7 @@ fn run_campaign(args: CampaignArgs) -> Result<()> {
                 ("volumetric", m.volumetric.to_json_string()?),
                 ("linear", m.linear.to_json_string()?),
             ] {
-                report::write_atomic(
+                files::write_atomic(
                     &dir.join(format!("model_{k}_seed{}.json", m.seed)),
                     text.as_bytes(),
                     args.force,
@@ -676,7 +677,7 @@ fn train(args: TrainArgs) -> Result<()> {
     use vmc_twin::predict::dataset::Dataset;
     use vmc_twin::predict::predictor::{self, Settings};
     let machine = load_machine(args.machine.as_deref(), args.sensors.as_deref())?;
-    report::check_writable(&args.out, args.force)?;
+    files::check_writable(&args.out, args.force)?;
     let name = args.data.display().to_string();
     let text = std::fs::read_to_string(&args.data)
         .with_context(|| format!("{name}: cannot read dataset"))?;
@@ -709,7 +710,7 @@ fn train(args: TrainArgs) -> Result<()> {
         }
         other => anyhow::bail!("--kind must be hybrid, volumetric or linear, got \"{other}\""),
     };
-    report::write_atomic(&args.out, json.as_bytes(), args.force)?;
+    files::write_atomic(&args.out, json.as_bytes(), args.force)?;
     println!(
         "trained {} model on {name} ({} records, sensors {}):",
         args.kind,
@@ -809,9 +810,9 @@ fn select_and_write(
             args.count
         );
     }
-    report::check_writable(&args.out, args.force)?;
+    files::check_writable(&args.out, args.force)?;
     if let Some(j) = &args.json {
-        report::check_writable(j, args.force)?;
+        files::check_writable(j, args.force)?;
     }
     let rep = placement::study_among(machine, cfg, only)?;
     let stdout = std::io::stdout();
@@ -828,10 +829,10 @@ fn select_and_write(
         args.seed,
         args.out.display()
     );
-    report::write_atomic(&args.out, set.to_toml(&header).as_bytes(), args.force)?;
+    files::write_atomic(&args.out, set.to_toml(&header).as_bytes(), args.force)?;
     writeln!(out, "wrote {}", args.out.display())?;
     if let Some(j) = &args.json {
-        report::write_atomic(j, placement::report_json(&rep)?.as_bytes(), args.force)?;
+        files::write_atomic(j, placement::report_json(&rep)?.as_bytes(), args.force)?;
         writeln!(out, "wrote {}", j.display())?;
     }
     Ok(())

@@ -39,32 +39,17 @@ pub enum ProgramError {
     },
 }
 
-/// Reads a text file; bytes that are not UTF-8 are an `InvalidData` error naming their line,
-/// column and value (instead of the standard library's location-free message).
-pub fn read_text(path: &Path) -> std::io::Result<String> {
-    let bytes = std::fs::read(path)?;
-    String::from_utf8(bytes).map_err(|e| {
-        let bad_at = e.utf8_error().valid_up_to();
-        let bytes = e.as_bytes();
-        let before = &bytes[..bad_at];
-        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        // Characters (not bytes) before the bad byte on its line; the prefix is valid UTF-8.
-        let col = 1 + String::from_utf8_lossy(&before[line_start..])
-            .chars()
-            .count();
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "not UTF-8 text: line {line}, column {col}: byte 0x{:02X}",
-                bytes[bad_at]
-            ),
-        )
-    })
-}
+/// The diagonal tests of the campaign (face diagonals XY, YZ, XZ and the four body diagonals
+/// of ISO 230-6): (report name, program text).
+pub const DIAGONALS: [(&str, &str); 7] = [
+    ("XY", include_str!("../trajectories/diag_xy.ngc")),
+    ("YZ", include_str!("../trajectories/diag_yz.ngc")),
+    ("XZ", include_str!("../trajectories/diag_xz.ngc")),
+    ("PPP", include_str!("../trajectories/diag_ppp.ngc")),
+    ("NPP", include_str!("../trajectories/diag_npp.ngc")),
+    ("PNP", include_str!("../trajectories/diag_pnp.ngc")),
+    ("PPN", include_str!("../trajectories/diag_ppn.ngc")),
+];
 
 /// Most thermal integration steps one `run` may take (machine time / thermal step).
 pub const MAX_THERMAL_STEPS: f64 = 2.0e7;
@@ -143,7 +128,7 @@ pub fn load_plan(
 /// The program file's display name and text.
 fn read_program(path: &Path) -> Result<(String, String), ProgramError> {
     let file = path.display().to_string();
-    match read_text(path) {
+    match crate::files::read_text(path) {
         Ok(text) => Ok((file, text)),
         Err(err) => Err(ProgramError::Io { file, err }),
     }

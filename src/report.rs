@@ -1,13 +1,10 @@
 //! Run reports: summary statistics, the terminal table, `samples.csv` and `summary.json`.
 //!
-//! Units are in every column and field name. Files are written atomically (temporary file in the
-//! same folder, then rename) and an existing file is never replaced unless the caller allows it.
+//! Units are in every column and field name. Files are written through [`crate::files`].
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
 
 use serde::Serialize;
-use thiserror::Error;
 
 use crate::sensors::SensorReadings;
 use crate::sim::{Observer, PointRecord};
@@ -278,82 +275,6 @@ pub fn write_summary(s: &RunSummary, out: &mut dyn Write) -> std::io::Result<()>
     Ok(())
 }
 
-/// A file could not be written.
-#[derive(Debug, Error)]
-pub enum OutputError {
-    /// The file exists and overwriting was not allowed.
-    #[error("{0}: already exists (pass --force to overwrite)")]
-    Exists(PathBuf),
-    /// The path names a folder, not a file.
-    #[error("{0}: is a folder; give a file name")]
-    IsFolder(PathBuf),
-    /// The file's folder does not exist.
-    #[error("{path}: the folder {folder} does not exist")]
-    NoFolder {
-        /// The file.
-        path: PathBuf,
-        /// Its folder.
-        folder: PathBuf,
-    },
-    /// An I/O failure.
-    #[error("{path}: {err}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        err: std::io::Error,
-    },
-}
-
-/// Checks up front, before any work, that `path` may be written: it is not a folder, its
-/// folder exists, and the file does not exist unless `force`.
-pub fn check_writable(path: &Path, force: bool) -> Result<(), OutputError> {
-    if path.is_dir() {
-        return Err(OutputError::IsFolder(path.to_path_buf()));
-    }
-    if let Some(folder) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !folder.is_dir() {
-            return Err(OutputError::NoFolder {
-                path: path.to_path_buf(),
-                folder: folder.to_path_buf(),
-            });
-        }
-    }
-    if path.exists() && !force {
-        return Err(OutputError::Exists(path.to_path_buf()));
-    }
-    Ok(())
-}
-
-/// Writes `contents` to `path` atomically (temporary file + rename). Refuses to replace an
-/// existing file unless `force`.
-pub fn write_atomic(path: &Path, contents: &[u8], force: bool) -> Result<(), OutputError> {
-    check_writable(path, force)?;
-    let io = |err| OutputError::Io {
-        path: path.to_path_buf(),
-        err,
-    };
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(contents)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -367,36 +288,5 @@ mod tests {
         assert!((s.rms_um[3] - rms_norm).abs() < 1e-12);
         assert!((s.rms_um[0] - (9.0f64 / 2.0).sqrt()).abs() < 1e-12);
         assert!(error_stats(&[]).is_none());
-    }
-
-    #[test]
-    fn atomic_write_refuses_to_overwrite_without_force() {
-        let dir = std::env::temp_dir().join(format!("vmc-report-test-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let f = dir.join("a.txt");
-        let _ = std::fs::remove_file(&f);
-        write_atomic(&f, b"one", false).unwrap();
-        assert!(matches!(
-            write_atomic(&f, b"two", false),
-            Err(OutputError::Exists(_))
-        ));
-        assert_eq!(std::fs::read(&f).unwrap(), b"one");
-        write_atomic(&f, b"two", true).unwrap();
-        assert_eq!(std::fs::read(&f).unwrap(), b"two");
-        // A folder as the file, even with --force, and a missing folder: refused up front.
-        assert!(matches!(
-            check_writable(&dir, true),
-            Err(OutputError::IsFolder(_))
-        ));
-        let missing = dir.join("no-such-folder").join("m.json");
-        assert_eq!(
-            check_writable(&missing, true).unwrap_err().to_string(),
-            format!(
-                "{}: the folder {} does not exist",
-                missing.display(),
-                dir.join("no-such-folder").display()
-            )
-        );
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

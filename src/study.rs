@@ -27,16 +27,7 @@ use crate::sensors::SensorReadings;
 use crate::sim::{Controller, PointRecord, SimError};
 use crate::twin::{sub_seed, Twin, TwinError};
 
-/// The diagonal tests run by the campaign: (report name, program text).
-pub const DIAGONALS: [(&str, &str); 7] = [
-    ("XY", include_str!("../trajectories/diag_xy.ngc")),
-    ("YZ", include_str!("../trajectories/diag_yz.ngc")),
-    ("XZ", include_str!("../trajectories/diag_xz.ngc")),
-    ("PPP", include_str!("../trajectories/diag_ppp.ngc")),
-    ("NPP", include_str!("../trajectories/diag_npp.ngc")),
-    ("PNP", include_str!("../trajectories/diag_pnp.ngc")),
-    ("PPN", include_str!("../trajectories/diag_ppn.ngc")),
-];
+pub use crate::program::DIAGONALS;
 
 /// A campaign that could not run.
 #[derive(Debug, Error)]

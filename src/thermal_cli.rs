@@ -6,10 +6,10 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
+use vmc_twin::files;
 use vmc_twin::predict::thermal_fit::{
     self, Architecture, FeatureSpec, FitSettings, Split, TableRequest, ThermalModel,
 };
-use vmc_twin::report;
 
 /// Arguments of `fit-thermal`.
 #[derive(clap::Args)]
@@ -101,7 +101,7 @@ fn read_text(path: &PathBuf, what: &str) -> Result<String> {
 
 /// `vmc-twin fit-thermal`.
 pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
-    report::check_writable(&args.out, args.force)?;
+    files::check_writable(&args.out, args.force)?;
     let arch = Architecture::parse(&args.arch).with_context(|| {
         format!(
             "--arch must be auto, linear-mlp, mlp or linear, got \"{}\"",
@@ -174,7 +174,7 @@ pub fn fit_thermal(args: FitThermalArgs) -> Result<()> {
                 e => anyhow::Error::new(e),
             }
         })?;
-    report::write_atomic(&args.out, model.to_json().as_bytes(), args.force)?;
+    files::write_atomic(&args.out, model.to_json().as_bytes(), args.force)?;
     print!("{}", fit_report(&model, &table, &source));
     println!("wrote {}", args.out.display());
     Ok(())
@@ -266,7 +266,7 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
 
 /// `vmc-twin predict-thermal`.
 pub fn predict_thermal(args: PredictThermalArgs) -> Result<()> {
-    report::check_writable(&args.out, args.force)?;
+    files::check_writable(&args.out, args.force)?;
     let model_name = args.model.display().to_string();
     let model = ThermalModel::from_json(&read_text(&args.model, "model")?, &model_name)?;
     let source = args.data.display().to_string();
@@ -319,7 +319,7 @@ pub fn predict_thermal(args: PredictThermalArgs) -> Result<()> {
         }
         csv.push('\n');
     }
-    report::write_atomic(&args.out, csv.as_bytes(), args.force)?;
+    files::write_atomic(&args.out, csv.as_bytes(), args.force)?;
     println!(
         "predict-thermal: {} rows of {source} with model {model_name} ({} outputs{}) → {}",
         table.len(),

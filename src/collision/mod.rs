@@ -47,7 +47,7 @@
 //! and the deepest point), and one per segment and axis out of travel, move by move in plan
 //! order, through a [`CheckObserver`] (the shape a recorder needs to draw them).
 
-pub mod spec;
+pub use crate::collision_spec as spec;
 #[cfg(test)]
 mod tests;
 

@@ -47,7 +47,7 @@ fn the_reference_machine_has_collision_geometry_and_its_diagonals_are_clean() {
     let s = Scene::new(&m, None).expect("reference has [collision]");
     assert_eq!(s.moving.len(), 3);
     assert_eq!(s.statics.len(), 1);
-    for (name, text) in crate::study::DIAGONALS {
+    for (name, text) in crate::program::DIAGONALS {
         let plan = program::plan_source_unchecked(text, name, &m, m.axes.home_mm).unwrap();
         let mut out = Vec::new();
         let sum = check_plan(&plan, &m, Some(&s), &mut out).unwrap();

@@ -1,5 +1,5 @@
 //! G-code syntax: text → blocks of words. Syntax only; what the words mean is the business of
-//! [`crate::interp`].
+//! the interpreter (`interp`), which builds on this module.
 //!
 //! Dialect: the RS274/NGC subset of LinuxCNC that a 3-axis mill needs.
 //! - One block per line. Letters are case-insensitive; spaces and tabs may appear anywhere

@@ -4,7 +4,7 @@
 //!
 //! All coordinates are in the machine frame of the interpreter and planner: the commanded tool
 //! tip relative to the table (ISO 841), mm. Bodies fixed to the table (the table itself, vises,
-//! stock) are static in that frame; see the module doc of [`crate::collision`].
+//! stock) are static in that frame; the collision module checks motion against them.
 
 use std::path::Path;
 
@@ -278,7 +278,7 @@ impl FixtureSpec {
     /// Reads and validates a fixture file.
     pub fn load(path: &Path) -> Result<Self, CollisionSpecError> {
         let name = path.display().to_string();
-        let text = crate::program::read_text(path).map_err(|err| CollisionSpecError::Io {
+        let text = crate::files::read_text(path).map_err(|err| CollisionSpecError::Io {
             path: name.clone(),
             err,
         })?;

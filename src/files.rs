@@ -1,0 +1,219 @@
+//! Files: reading text, checking outputs before any work, and writing atomically.
+//!
+//! Every file the tool reads goes through [`read_text`] (UTF-8 errors name line and column);
+//! every file it writes goes through [`write_atomic`] (temporary file in the same folder, then
+//! rename), and an existing file is never replaced unless the caller allows it (`--force`).
+//! Outputs are checked with [`check_writable`] / [`prepare_output_folder`] before any
+//! simulation starts, so a wrong path costs no minutes of work.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+/// Reads a text file; bytes that are not UTF-8 are an `InvalidData` error naming their line,
+/// column and value (instead of the standard library's location-free message).
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    let bytes = std::fs::read(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let bad_at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let before = &bytes[..bad_at];
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        // Characters (not bytes) before the bad byte on its line; the prefix is valid UTF-8.
+        let col = 1 + String::from_utf8_lossy(&before[line_start..])
+            .chars()
+            .count();
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text: line {line}, column {col}: byte 0x{:02X}",
+                bytes[bad_at]
+            ),
+        )
+    })
+}
+
+/// Reads a text file, naming the file and what it holds in the error
+/// (`FILE: cannot read WHAT: why`).
+///
+/// # Errors
+/// [`ReadError`] when the file cannot be read or is not UTF-8.
+pub fn read_named(path: &Path, what: &'static str) -> Result<String, ReadError> {
+    read_text(path).map_err(|err| ReadError {
+        path: path.to_path_buf(),
+        what,
+        err,
+    })
+}
+
+/// A file could not be read.
+#[derive(Debug, Error)]
+#[error("{}: cannot read {what}: {err}", path.display())]
+pub struct ReadError {
+    /// The file.
+    pub path: PathBuf,
+    /// What it should hold (e.g. `dataset`).
+    pub what: &'static str,
+    /// Why.
+    pub err: std::io::Error,
+}
+
+/// A file could not be written.
+#[derive(Debug, Error)]
+pub enum OutputError {
+    /// The file exists and overwriting was not allowed.
+    #[error("{0}: already exists (pass --force to overwrite)")]
+    Exists(PathBuf),
+    /// The path names a folder, not a file.
+    #[error("{0}: is a folder; give a file name")]
+    IsFolder(PathBuf),
+    /// The file's folder does not exist.
+    #[error("{path}: the folder {folder} does not exist")]
+    NoFolder {
+        /// The file.
+        path: PathBuf,
+        /// Its folder.
+        folder: PathBuf,
+    },
+    /// The output folder could not be created.
+    #[error("{}: cannot create output folder: {err}", path.display())]
+    Folder {
+        /// The folder.
+        path: PathBuf,
+        /// Why.
+        err: std::io::Error,
+    },
+    /// An I/O failure.
+    #[error("{path}: {err}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        err: std::io::Error,
+    },
+}
+
+/// Checks up front, before any work, that `path` may be written: it is not a folder, its
+/// folder exists, and the file does not exist unless `force`.
+pub fn check_writable(path: &Path, force: bool) -> Result<(), OutputError> {
+    if path.is_dir() {
+        return Err(OutputError::IsFolder(path.to_path_buf()));
+    }
+    if let Some(folder) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !folder.is_dir() {
+            return Err(OutputError::NoFolder {
+                path: path.to_path_buf(),
+                folder: folder.to_path_buf(),
+            });
+        }
+    }
+    if path.exists() && !force {
+        return Err(OutputError::Exists(path.to_path_buf()));
+    }
+    Ok(())
+}
+
+/// Writes `contents` to `path` atomically (temporary file + rename). Refuses to replace an
+/// existing file unless `force`.
+pub fn write_atomic(path: &Path, contents: &[u8], force: bool) -> Result<(), OutputError> {
+    check_writable(path, force)?;
+    let io = |err| OutputError::Io {
+        path: path.to_path_buf(),
+        err,
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(contents)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io)
+}
+
+/// Creates the output folder `dir` (with its parents) and checks that each of `names` may be
+/// written in it (see [`check_writable`]); gives the files' paths in the order of `names`.
+///
+/// # Errors
+/// The folder cannot be created, or a file may not be written.
+pub fn prepare_output_folder(
+    dir: &Path,
+    names: &[String],
+    force: bool,
+) -> Result<Vec<PathBuf>, OutputError> {
+    std::fs::create_dir_all(dir).map_err(|err| OutputError::Folder {
+        path: dir.to_path_buf(),
+        err,
+    })?;
+    let files: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
+    for f in &files {
+        check_writable(f, force)?;
+    }
+    Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_refuses_to_overwrite_without_force() {
+        let dir = std::env::temp_dir().join(format!("vmc-report-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("a.txt");
+        let _ = std::fs::remove_file(&f);
+        write_atomic(&f, b"one", false).unwrap();
+        assert!(matches!(
+            write_atomic(&f, b"two", false),
+            Err(OutputError::Exists(_))
+        ));
+        assert_eq!(std::fs::read(&f).unwrap(), b"one");
+        write_atomic(&f, b"two", true).unwrap();
+        assert_eq!(std::fs::read(&f).unwrap(), b"two");
+        // A folder as the file, even with --force, and a missing folder: refused up front.
+        assert!(matches!(
+            check_writable(&dir, true),
+            Err(OutputError::IsFolder(_))
+        ));
+        let missing = dir.join("no-such-folder").join("m.json");
+        assert_eq!(
+            check_writable(&missing, true).unwrap_err().to_string(),
+            format!(
+                "{}: the folder {} does not exist",
+                missing.display(),
+                dir.join("no-such-folder").display()
+            )
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_file_that_is_not_utf8_is_refused_with_its_line_and_column() {
+        let dir = std::env::temp_dir().join(format!("vmc-files-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("bad.ngc");
+        std::fs::write(&f, b"G0 X1\nG1 X\xE92\n").unwrap();
+        let e = read_named(&f, "program").unwrap_err().to_string();
+        assert!(
+            e.ends_with("cannot read program: not UTF-8 text: line 2, column 5: byte 0xE9"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
