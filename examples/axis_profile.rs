@@ -30,7 +30,7 @@ fn main() {
         &spec.geometry(),
         &Settings {
             seed,
-            ..vmc_twin::study::predictor_settings(&spec)
+            ..Settings::for_machine(&spec)
         },
     )
     .unwrap();

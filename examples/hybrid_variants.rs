@@ -14,7 +14,7 @@ use vmc_twin::study::{self, diagonal_plans};
 fn main() {
     let spec = MachineSpec::reference();
     // The campaign's settings (ambient history on), unless the arguments change them.
-    let mut settings = study::predictor_settings(&spec);
+    let mut settings = Settings::for_machine(&spec);
     let mut seed_off = 0u64;
     let mut members = 1u64;
     let mut seeds = vec![1u64, 2, 3];

@@ -25,7 +25,7 @@ fn main() {
     // the held-out ones.
     let dev = std::env::args().any(|a| a == "dev");
     // `staus=…` and `shist=…`: spindle-only history features (as in `hybrid_variants`).
-    let mut base = vmc_twin::study::predictor_settings(&MachineSpec::reference());
+    let mut base = Settings::for_machine(&MachineSpec::reference());
     for a in std::env::args().skip(1) {
         if let Some(v) = a.strip_prefix("staus=") {
             base.spindle_history_taus_s = v.split(',').map(|x| x.parse().unwrap()).collect();

@@ -15,6 +15,7 @@ use crate::predict::controller::Compensator;
 use crate::predict::predictor::{self, Settings};
 use crate::program;
 use crate::sim::{self, SampleMode, SimConfig};
+use crate::study::ForMachine;
 use crate::study::{self, EvalError};
 use crate::twin::Twin;
 
@@ -55,7 +56,7 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
     )?;
     let settings = Settings {
         seed: 1,
-        ..study::predictor_settings(spec)
+        ..Settings::for_machine(spec)
     };
     let (model, _) = predictor::train_hybrid(&data, &spec.geometry(), &settings)?;
     let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
@@ -177,13 +178,8 @@ pub fn campaign_with(
     seeds: &[u64],
 ) -> Result<(f64, usize), EvalError> {
     let t = Instant::now();
-    let (rep, _) = study::run_campaign_with_cycles(
-        spec,
-        seeds,
-        &study::predictor_settings(spec),
-        cycles,
-        &(),
-    )?;
+    let (rep, _) =
+        study::run_campaign_with_cycles(spec, seeds, &Settings::for_machine(spec), cycles, &())?;
     Ok((t.elapsed().as_secs_f64(), rep.runs.len()))
 }
 

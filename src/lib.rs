@@ -9,8 +9,10 @@ pub use vmc_predict as predict;
 
 pub mod benchmark;
 pub mod calibration;
+pub mod cli;
 pub mod collision;
 pub mod collision_spec;
+pub mod commands;
 pub mod errors;
 pub mod files;
 pub mod gcode;

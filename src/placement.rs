@@ -34,7 +34,7 @@ use serde::{Deserialize, Serialize};
 use crate::calibration::{self, CampaignConfig, EvalState, ThermalCycle};
 use crate::machine::{MachineError, MachineSpec};
 use crate::predict::dataset::Dataset;
-use crate::predict::predictor::{self, Settings};
+use crate::predict::predictor::{self, ModelKind, Settings};
 use crate::predict::selection::{self, Selection, SelectionConfig, SelectionError};
 use crate::sensors::SensorSpec;
 use crate::study::{self, EvalError, RunReport};
@@ -370,7 +370,6 @@ pub fn study_among(
                     &states,
                     &plans,
                     &cfg.settings,
-                    p.rule.name(),
                 )?;
                 summarise(p.rule.name(), &p.sensors, &runs)
             }
@@ -458,7 +457,6 @@ fn evaluate_set(
     states: &[EvalState],
     plans: &[(&str, crate::motion::Plan)],
     settings: &Settings,
-    label: &str,
 ) -> Result<Vec<RunReport>, PlacementError> {
     let sensors: Vec<SensorSpec> = names
         .iter()
@@ -476,7 +474,12 @@ fn evaluate_set(
     let (hybrid, _) =
         predictor::train_hybrid(data, &set_spec.geometry(), &settings).map_err(EvalError::from)?;
     Ok(study::evaluate_predictor(
-        &set_spec, seed, label, &hybrid, states, plans,
+        &set_spec,
+        seed,
+        ModelKind::Hybrid,
+        &hybrid,
+        states,
+        plans,
     )?)
 }
 
@@ -519,7 +522,6 @@ fn compare(
                 &states,
                 &plans,
                 &cfg.settings,
-                label,
             )?);
         }
         out.push(summarise(label, names, &runs));

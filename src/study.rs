@@ -12,22 +12,27 @@
 //! three components pooled. MAPE is mean|e| / mean|y| (robust to small |y|).
 
 use rayon::prelude::*;
-use serde::Serialize;
 use thiserror::Error;
 
 use crate::calibration::{self, CampaignConfig, EvalState, ThermalCycle};
 use crate::machine::MachineSpec;
 use crate::motion::Plan;
 use crate::predict::controller::Compensator;
-use crate::predict::metrics::Metrics;
-use crate::predict::predictor::{self, ErrorPredictor, PredictError, Settings, TrainSummary};
+use crate::predict::predictor::{
+    self, ErrorPredictor, ModelKind, PredictError, Settings, TrainSummary,
+};
 use crate::program::{self, ProgramError};
-use crate::report::error_stats;
 use crate::sensors::SensorReadings;
-use crate::sim::{Controller, PointRecord, SimError};
+use crate::sim::{Controller, SimError};
 use crate::twin::{sub_seed, Twin, TwinError};
 
 pub use crate::program::DIAGONALS;
+pub use report::{
+    headline, median, run_report, write_campaign_summary, write_run_table, CampaignReport,
+    Headline, RunReport, PREDICTORS,
+};
+
+mod report;
 
 /// A campaign that could not run.
 #[derive(Debug, Error)]
@@ -89,117 +94,6 @@ pub fn follow_to_state<P: ErrorPredictor>(
     Ok(follow.0.into_inner())
 }
 
-/// One evaluated run: one predictor, one diagonal, one thermal state, one seed.
-#[derive(Debug, Clone, Serialize)]
-pub struct RunReport {
-    /// `hybrid`, `volumetric` or `linear`.
-    pub predictor: String,
-    /// `XY`, `YZ`, `XZ`, `PPP`, `NPP`, `PNP`, `PPN`.
-    pub diagonal: String,
-    /// Thermal state (`cold`, `<cycle>@<h>h`).
-    pub thermal_state: String,
-    /// Machine seed.
-    pub seed: u64,
-    /// Measurement points.
-    pub points: usize,
-    /// RMS of |E| without compensation, µm.
-    pub rms_before_um: f64,
-    /// RMS of |E| with compensation, µm.
-    pub rms_after_um: f64,
-    /// Max |E| without compensation, µm.
-    pub max_before_um: f64,
-    /// Max |E| with compensation, µm.
-    pub max_after_um: f64,
-    /// 1 − RMS after / RMS before, of |E| (fraction).
-    pub reduction: f64,
-    /// 1 − max after / max before, of |E| (fraction).
-    pub max_reduction: f64,
-    /// RMS of Ex, Ey, Ez before, µm.
-    pub rms_before_xyz_um: [f64; 3],
-    /// RMS of Ex, Ey, Ez after, µm.
-    pub rms_after_xyz_um: [f64; 3],
-    /// Max |Ex|, |Ey|, |Ez| before, µm.
-    pub max_before_xyz_um: [f64; 3],
-    /// Max |Ex|, |Ey|, |Ez| after, µm.
-    pub max_after_xyz_um: [f64; 3],
-    /// Prediction: mean absolute deviation, µm.
-    pub mad_um: f64,
-    /// Prediction: mean|e| / mean|y| (fraction).
-    pub mape: Option<f64>,
-    /// Prediction: RMSE, µm.
-    pub rmse_um: f64,
-    /// Prediction: coefficient of determination.
-    pub r2: Option<f64>,
-    /// The measurement points of the run (for recordings; not written to report.json).
-    #[serde(skip)]
-    pub samples: Vec<PointRecord>,
-}
-
-/// The whole campaign's result.
-#[derive(Debug, Clone, Serialize)]
-pub struct CampaignReport {
-    /// Machine name.
-    pub machine: String,
-    /// Calibration cycles (used for training).
-    pub calibration_cycles: Vec<String>,
-    /// Held-out evaluation states.
-    pub evaluation_states: Vec<String>,
-    /// Training summaries, per seed and predictor.
-    pub training: Vec<(u64, TrainSummary)>,
-    /// Every evaluated run.
-    pub runs: Vec<RunReport>,
-    /// Whether the hybrid used the commanded spindle speed (`--spindle-speed`, opt-in; absent
-    /// from the file when not).
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub hybrid_uses_spindle_speed: bool,
-}
-
-/// Summarises a compensated run.
-pub fn run_report(
-    predictor: &str,
-    diagonal: &str,
-    state: &str,
-    seed: u64,
-    points: &[PointRecord],
-) -> Option<RunReport> {
-    let before: Vec<[f64; 3]> = points.iter().map(|p| p.error_before_um).collect();
-    let after: Vec<[f64; 3]> = points.iter().filter_map(|p| p.error_after_um).collect();
-    let b = error_stats(&before)?;
-    let a = error_stats(&after)?;
-    let mut y = Vec::with_capacity(3 * points.len());
-    let mut yhat = Vec::with_capacity(3 * points.len());
-    for p in points {
-        let q = p.compensated_command_mm?;
-        for ((e, c), qk) in p.error_before_um.iter().zip(&p.commanded_mm).zip(&q) {
-            y.push(*e);
-            yhat.push((c - qk) * 1e3);
-        }
-    }
-    let m = Metrics::of(&y, &yhat).ok()?;
-    Some(RunReport {
-        predictor: predictor.into(),
-        diagonal: diagonal.into(),
-        thermal_state: state.into(),
-        seed,
-        points: points.len(),
-        rms_before_um: b.rms_um[3],
-        rms_after_um: a.rms_um[3],
-        max_before_um: b.max_abs_um[3],
-        max_after_um: a.max_abs_um[3],
-        reduction: 1.0 - a.rms_um[3] / b.rms_um[3],
-        max_reduction: 1.0 - a.max_abs_um[3] / b.max_abs_um[3],
-        rms_before_xyz_um: [b.rms_um[0], b.rms_um[1], b.rms_um[2]],
-        rms_after_xyz_um: [a.rms_um[0], a.rms_um[1], a.rms_um[2]],
-        max_before_xyz_um: [b.max_abs_um[0], b.max_abs_um[1], b.max_abs_um[2]],
-        max_after_xyz_um: [a.max_abs_um[0], a.max_abs_um[1], a.max_abs_um[2]],
-        mad_um: m.mad,
-        mape: m.mape,
-        rmse_um: m.rmse,
-        r2: m.r2,
-        samples: points.to_vec(),
-    })
-}
-
 /// Seed of the evaluation noise (sensors, repeatability, reversal) of the run of diagonal
 /// `diagonal_index` at state `state_index` on machine `seed`: never the calibration's streams
 /// (those use 1000 + k).
@@ -248,19 +142,19 @@ pub fn diagonal_plans(spec: &MachineSpec) -> Result<Vec<(&'static str, Plan)>, E
 pub fn evaluate_predictor<P: ErrorPredictor + Clone + Send + Sync>(
     spec: &MachineSpec,
     seed: u64,
-    name: &str,
+    kind: ModelKind,
     predictor: &P,
     states: &[EvalState],
     plans: &[(&str, Plan)],
 ) -> Result<Vec<RunReport>, EvalError> {
-    evaluate_predictor_with_progress(spec, seed, name, predictor, states, plans, &())
+    evaluate_predictor_with_progress(spec, seed, kind, predictor, states, plans, &())
 }
 
 /// [`evaluate_predictor`], reporting each finished run to `progress`.
 pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>(
     spec: &MachineSpec,
     seed: u64,
-    name: &str,
+    kind: ModelKind,
     predictor: &P,
     states: &[EvalState],
     plans: &[(&str, Plan)],
@@ -281,9 +175,9 @@ pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>
                 calibration::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
             progress.advance(
                 units::RUN,
-                &format!("seed {seed}: {name} {diag} at {}", state.name),
+                &format!("seed {seed}: {} {diag} at {}", kind.name(), state.name),
             );
-            Ok(run_report(name, diag, &state.name, seed, &points))
+            Ok(run_report(kind, diag, &state.name, seed, &points))
         })
         .collect();
     let mut out = Vec::with_capacity(results.len());
@@ -365,13 +259,22 @@ pub fn with_spindle_nose_rate(settings: Settings, spec: &MachineSpec) -> Setting
     }
 }
 
-/// The predictor settings used for a machine: the defaults with the ambient history feature
-/// ([`with_ambient_history`]) and the spindle nose rate ([`with_spindle_nose_rate`]).
-pub fn predictor_settings(spec: &MachineSpec) -> Settings {
-    with_history_features(Settings::default(), spec)
+/// The predictor settings that run for a machine (`campaign`, `train`, `select-sensors`):
+/// [`Settings::default`] with the history features that need to know where the machine's
+/// sensors sit ([`with_history_features`]). The knowledge crate knows sensor names only, so
+/// this default lives with the machine.
+pub trait ForMachine {
+    /// The settings for the sensors of `spec`.
+    fn for_machine(spec: &MachineSpec) -> Self;
 }
 
-/// `settings` with both history features of [`predictor_settings`] for the sensors of `spec`
+impl ForMachine for Settings {
+    fn for_machine(spec: &MachineSpec) -> Self {
+        with_history_features(Settings::default(), spec)
+    }
+}
+
+/// `settings` with both history features of [`ForMachine::for_machine`] for the sensors of `spec`
 /// (restricted to `settings.sensors` when that is not empty).
 pub fn with_history_features(settings: Settings, spec: &MachineSpec) -> Settings {
     with_spindle_nose_rate(with_ambient_history(settings, spec), spec)
@@ -407,19 +310,32 @@ fn campaign_for_seed(
     let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
     progress.advance(units::TRAINING, &format!("seed {seed}: evaluation"));
     let states = calibration::evaluation_states(seed);
-    let mut runs =
-        evaluate_predictor_with_progress(spec, seed, "hybrid", &hybrid, &states, plans, progress)?;
+    let mut runs = evaluate_predictor_with_progress(
+        spec,
+        seed,
+        ModelKind::Hybrid,
+        &hybrid,
+        &states,
+        plans,
+        progress,
+    )?;
     runs.extend(evaluate_predictor_with_progress(
         spec,
         seed,
-        "volumetric",
+        ModelKind::Volumetric,
         &volumetric,
         &states,
         plans,
         progress,
     )?);
     runs.extend(evaluate_predictor_with_progress(
-        spec, seed, "linear", &linear, &states, plans, progress,
+        spec,
+        seed,
+        ModelKind::Linear,
+        &linear,
+        &states,
+        plans,
+        progress,
     )?);
     Ok(SeedResult {
         training: vec![(seed, hs), (seed, vs), (seed, ls)],
@@ -517,70 +433,6 @@ pub struct TrainedModels {
     pub linear: predictor::LinearPredictor,
 }
 
-/// Median of a list (NaN-free); None if empty.
-pub fn median(v: &mut [f64]) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
-}
-
-/// Per-predictor headline figures over all runs: (median reduction, min reduction, max |E| after µm, mean prediction RMSE µm).
-pub fn headline(runs: &[RunReport], predictor: &str) -> Option<(f64, f64, f64, f64)> {
-    let r: Vec<&RunReport> = runs.iter().filter(|r| r.predictor == predictor).collect();
-    if r.is_empty() {
-        return None;
-    }
-    let mut red: Vec<f64> = r.iter().map(|r| r.reduction).collect();
-    let min = red.iter().cloned().fold(f64::INFINITY, f64::min);
-    let max_after = r.iter().map(|r| r.max_after_um).fold(0.0, f64::max);
-    let rmse = r.iter().map(|r| r.rmse_um).sum::<f64>() / r.len() as f64;
-    Some((median(&mut red)?, min, max_after, rmse))
-}
-
-/// Writes the campaign report as terminal tables: per run, then per predictor.
-pub fn write_campaign_table(
-    rep: &CampaignReport,
-    out: &mut dyn std::io::Write,
-) -> std::io::Result<()> {
-    writeln!(
-        out,
-        "vmc-twin campaign on {}: calibrated on {}; evaluated on held-out states {}",
-        rep.machine,
-        rep.calibration_cycles.join(", "),
-        rep.evaluation_states.join(", ")
-    )?;
-    writeln!(out, "{:<10} {:<5} {:<24} {:>4} | {:>7} {:>7} {:>7} {:>7} | {:>7} {:>7} {:>7} {:>7} | {:>6} | {:>6} {:>6} {:>6} {:>6}",
-        "predictor", "diag", "thermal state", "seed",
-        "rmsEx", "rmsEy", "rmsEz", "rms|E|", "rmsEx'", "rmsEy'", "rmsEz'", "rms|E'|", "red%", "MAD", "MAPE%", "RMSE", "R2")?;
-    for r in &rep.runs {
-        writeln!(out, "{:<10} {:<5} {:<24} {:>4} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>6.1} | {:>6.2} {:>6.1} {:>6.2} {:>6.3}",
-            r.predictor, r.diagonal, r.thermal_state, r.seed,
-            r.rms_before_xyz_um[0], r.rms_before_xyz_um[1], r.rms_before_xyz_um[2], r.rms_before_um,
-            r.rms_after_xyz_um[0], r.rms_after_xyz_um[1], r.rms_after_xyz_um[2], r.rms_after_um,
-            r.reduction * 100.0, r.mad_um, r.mape.unwrap_or(f64::NAN) * 100.0, r.rmse_um, r.r2.unwrap_or(f64::NAN))?;
-    }
-    writeln!(out, "(µm; primed = compensated; red% = 1 − RMS|E'|/RMS|E|; MAD/MAPE/RMSE/R2 of the predicted vs true error, components pooled; MAPE = mean|e|/mean|y|)")?;
-    if rep.hybrid_uses_spindle_speed {
-        writeln!(out, "hybrid: with the commanded spindle speed as heat input (--spindle-speed, opt-in: DESIGN §3 as written allows temperature readings and commanded axis positions only)")?;
-    }
-    writeln!(out, "summary over all diagonals, states and seeds:")?;
-    for p in ["hybrid", "volumetric", "linear"] {
-        if let Some((med, min, max_after, rmse)) = headline(&rep.runs, p) {
-            let n = rep.runs.iter().filter(|r| r.predictor == p).count();
-            writeln!(out, "  {p:<10} runs {n:>4}  median reduction {:>5.1} %  worst run {:>5.1} %  max residual |E| {:>5.2} µm  mean prediction RMSE {:>5.2} µm",
-                med * 100.0, min * 100.0, max_after, rmse)?;
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -588,7 +440,7 @@ mod tests {
     #[test]
     fn history_features_go_to_the_sensors_on_their_nodes_and_only_those_in_the_model() {
         let spec = MachineSpec::reference();
-        let s = predictor_settings(&spec);
+        let s = Settings::for_machine(&spec);
         // Each feature is on (one time constant) for the sensor on its node.
         assert_eq!(s.history_sensors, vec!["Amb".to_string()]);
         assert_eq!(s.history_taus_s.len(), 1);
@@ -615,7 +467,7 @@ mod tests {
         no_air
             .sensors
             .retain(|s| s.node != crate::thermal::AMBIENT_NODE);
-        let s = predictor_settings(&no_air);
+        let s = Settings::for_machine(&no_air);
         assert!(s.history_taus_s.is_empty() && s.history_sensors.is_empty());
         assert_eq!(s.spindle_history_sensors, vec!["BYB".to_string()]);
     }

@@ -23,7 +23,7 @@ fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
     .expect("campaign runs");
     let settings = Settings {
         seed,
-        ..vmc_twin::study::predictor_settings(spec)
+        ..Settings::for_machine(spec)
     };
     predictor::train_hybrid(&data, &spec.geometry(), &settings)
         .expect("training succeeds")

@@ -16,11 +16,12 @@
 use crate::calibration::{evaluation_states, run_at_state_observed};
 use crate::machine::MachineSpec;
 use crate::predict::controller::Compensator;
+use crate::predict::predictor::ModelKind;
 use crate::report::norm;
 use crate::sim::CollectPoints;
 use crate::study::{
     diagonal_plans, eval_noise_seed, headline, CampaignReport, LoopController, RunReport,
-    TrainedModels,
+    TrainedModels, PREDICTORS,
 };
 
 use super::{Diagonal, RecordError, RecordSettings, Recorder, RrdFile};
@@ -50,7 +51,7 @@ pub fn pick_representative(rep: &CampaignReport) -> Option<Representative> {
     let hybrid: Vec<&RunReport> = rep
         .runs
         .iter()
-        .filter(|r| r.seed == seed && r.predictor == "hybrid")
+        .filter(|r| r.seed == seed && r.predictor == ModelKind::Hybrid)
         .collect();
     let diag = if hybrid.iter().any(|r| r.diagonal == "PPP") {
         "PPP".to_string()
@@ -97,7 +98,7 @@ pub fn record_campaign(
         .collect();
     // Every held-out hybrid run: |E| before and after.
     rec.reset_time();
-    for r in rep.runs.iter().filter(|r| r.predictor == "hybrid") {
+    for r in rep.runs.iter().filter(|r| r.predictor == ModelKind::Hybrid) {
         let base = format!(
             "runs/seed{}/{}/{}",
             r.seed,
@@ -188,7 +189,7 @@ pub fn record_campaign(
         .runs
         .iter()
         .find(|r| {
-            r.predictor == "hybrid"
+            r.predictor == ModelKind::Hybrid
                 && r.seed == pick.seed
                 && r.diagonal == pick.diagonal
                 && r.thermal_state == pick.state
@@ -221,18 +222,21 @@ pub fn campaign_markdown(rep: &CampaignReport, pick: &Representative, magnify: f
         pick.title()
     ));
     s.push_str("| predictor | runs | median reduction of RMS abs E | worst run | max residual abs E (µm) | mean prediction RMSE (µm) |\n|---|---|---|---|---|---|\n");
-    for p in ["hybrid", "volumetric", "linear"] {
-        if let Some((med, min, max_after, rmse)) = headline(&rep.runs, p) {
-            let n = rep.runs.iter().filter(|r| r.predictor == p).count();
+    for p in PREDICTORS {
+        if let Some(h) = headline(&rep.runs, p) {
             s.push_str(&format!(
-                "| {p} | {n} | {:.1} % | {:.1} % | {max_after:.2} | {rmse:.2} |\n",
-                med * 100.0,
-                min * 100.0
+                "| {} | {} | {:.1} % | {:.1} % | {:.2} | {:.2} |\n",
+                p.name(),
+                h.runs,
+                h.median_reduction * 100.0,
+                h.worst_reduction * 100.0,
+                h.max_after_um,
+                h.mean_rmse_um
             ));
         }
     }
     s.push_str("\n## Hybrid predictor, every held-out run (µm)\n\n| seed | state | diagonal | RMS abs E before | after | reduction | max abs E after |\n|---|---|---|---|---|---|---|\n");
-    for r in rep.runs.iter().filter(|r| r.predictor == "hybrid") {
+    for r in rep.runs.iter().filter(|r| r.predictor == ModelKind::Hybrid) {
         s.push_str(&format!(
             "| {} | {} | {} | {:.2} | {:.2} | {:.1} % | {:.2} |\n",
             r.seed,

@@ -35,6 +35,7 @@
 //! before any simulation starts.
 
 pub mod campaign;
+pub mod check;
 pub mod layout;
 mod recorder;
 pub mod scene;
@@ -86,6 +87,9 @@ pub enum RecordError {
     /// A replayed run did not reproduce the evaluated one.
     #[error("recording: {0}")]
     Replay(String),
+    /// The twin that draws the motion could not be built.
+    #[error("recording: {0}")]
+    Twin(#[from] crate::twin::TwinError),
 }
 
 /// Checks up front that a recording can be written to `path`: the name ends in `.rrd`, the

@@ -1,0 +1,512 @@
+//! The command line: argument structs (clap) and their conversion into the validated configs of
+//! [`crate::commands`]. Raw arguments are checked here once; the use cases take configs.
+//!
+//! Options that several commands share are one flattened group each ([`MachineArg`],
+//! [`SensorsArg`], [`ForceArg`], [`RrdArgs`]), so a flag means the same everywhere.
+
+mod thermal;
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+
+use crate::commands::{self, RrdOutput};
+use crate::predict::predictor::ModelKind;
+use crate::record;
+
+pub use thermal::{FitThermalArgs, PredictThermalArgs};
+
+/// `vmc-twin`: the whole command line.
+#[derive(Parser)]
+#[command(
+    name = "vmc-twin",
+    version,
+    about = "Digital twin of a 3-axis vertical machining center: run G-code on a machine with thermally drifting geometric errors and see where the tool really was"
+)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Run a G-code program on the twin and report the tool-tip error at each measurement point.
+    Run(RunArgs),
+    /// Run the virtual calibration campaign (laser sweeps, spindle test, squareness, volumetric
+    /// grid, temperatures over typical thermal cycles) and write the dataset as CSV.
+    Calibrate(CalibrateArgs),
+    /// The main job: calibration campaign, training of the hybrid predictor and the two
+    /// baselines, every face and body diagonal under held-out thermal states without and with
+    /// compensation, and the report.
+    Campaign(CampaignArgs),
+    /// Train a predictor on a calibration dataset (CSV) and write the model (JSON).
+    Train(TrainArgs),
+    /// Fit a thermal-drift model (linear + MLP on filtered temperatures) on measured data (CSV),
+    /// evaluate it on the held-out last cycle and write it (JSON).
+    FitThermal(FitThermalArgs),
+    /// Predict the drift columns of a CSV file with a model from `fit-thermal`.
+    PredictThermal(PredictThermalArgs),
+    /// Choose K temperature sensor locations among every thermal node (read as a sensor would),
+    /// print the ranking with its evidence, compare compensation with the selected, default,
+    /// random and all locations on held-out runs, and write the sensor set (TOML).
+    SelectSensors(SelectArgs),
+    /// Would this program crash the machine? Checks every move for travel limits and for
+    /// contact of tool, holder and spindle nose with the table, fixture and stock.
+    Check(CheckArgs),
+    /// Measure the speed figures (compensation query, 8 h of machine time, campaign) and how
+    /// they scale with the interpolation cycle and the number of calibration cycles.
+    Bench(BenchArgs),
+}
+
+/// `--machine`.
+#[derive(clap::Args)]
+pub struct MachineArg {
+    /// Machine description (TOML); default: the embedded reference machine.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+}
+
+/// `--sensors`.
+#[derive(clap::Args)]
+pub struct SensorsArg {
+    /// Sensor set (TOML `[[sensors]]`, e.g. from `select-sensors`) replacing the machine's own.
+    #[arg(long)]
+    pub sensors: Option<PathBuf>,
+}
+
+/// `--force`.
+#[derive(clap::Args)]
+pub struct ForceArg {
+    /// Overwrite existing output files.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Rerun recording options (run and campaign).
+#[derive(clap::Args)]
+pub struct RrdArgs {
+    /// Write a Rerun recording (.rrd) of the run; open it with `rerun FILE.rrd`.
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rrd: Option<PathBuf>,
+    /// Error magnification of the drawn paths and arrows in the recording (default 2000: a
+    /// 20 µm error is drawn as 40 mm).
+    #[arg(long, requires = "rrd", value_name = "K")]
+    pub magnify: Option<f64>,
+}
+
+impl RrdArgs {
+    /// Recording settings, checked; the output path checked before any simulation.
+    fn checked(&self, force: bool) -> Result<Option<RrdOutput>> {
+        let Some(path) = &self.rrd else {
+            return Ok(None);
+        };
+        let settings = record::RecordSettings {
+            magnify: self.magnify.unwrap_or(record::DEFAULT_MAGNIFY),
+            ..Default::default()
+        };
+        settings
+            .validate()
+            .context("--magnify must be a positive number")?;
+        record::check_rrd_path(path, force)?;
+        Ok(Some(RrdOutput {
+            path: path.clone(),
+            settings,
+        }))
+    }
+}
+
+/// Model class of `train --kind`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum KindArg {
+    /// 4 MLPs + kinematic synthesis.
+    Hybrid,
+    /// One MLP from position and temperatures to the volumetric error.
+    Volumetric,
+    /// Linear regression.
+    Linear,
+}
+
+impl From<KindArg> for ModelKind {
+    fn from(k: KindArg) -> Self {
+        match k {
+            KindArg::Hybrid => ModelKind::Hybrid,
+            KindArg::Volumetric => ModelKind::Volumetric,
+            KindArg::Linear => ModelKind::Linear,
+        }
+    }
+}
+
+/// Arguments of `run`.
+#[derive(clap::Args)]
+pub struct RunArgs {
+    /// G-code program to run (e.g. trajectories/diag_xy.ngc).
+    pub program: PathBuf,
+    #[command(flatten)]
+    pub machine: MachineArg,
+    #[command(flatten)]
+    pub sensors: SensorsArg,
+    /// Seed of the machine's random error parts and noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Thermal loading program(s) to run first (repeatable, run in order).
+    #[arg(long)]
+    pub warmup: Vec<PathBuf>,
+    /// Folder for samples.csv and summary.json (created if missing).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub force: ForceArg,
+    /// Also measure at every interpolation cycle during motion (not only at dwells).
+    #[arg(long)]
+    pub every_cycle: bool,
+    /// Interpolation cycle, ms (with --every-cycle).
+    #[arg(long, default_value_t = 1.0)]
+    pub interp_cycle_ms: f64,
+    /// Thermal integration and sensor sampling step, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub thermal_step_s: f64,
+    /// Trained model (JSON, from `train` or `campaign --out`) for compensation.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Put the model in the control loop: each point is reported before and after compensation.
+    #[arg(long, requires = "model")]
+    pub compensate: bool,
+    #[command(flatten)]
+    pub rrd: RrdArgs,
+}
+
+impl RunArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine or sensor set, a non-positive cycle or step, a model
+    /// without `--compensate`, a bad recording path or magnification.
+    pub fn config(self) -> Result<commands::run::RunConfig> {
+        let machine = commands::load_machine(
+            self.machine.machine.as_deref(),
+            self.sensors.sensors.as_deref(),
+        )?;
+        if !(self.interp_cycle_ms > 0.0 && self.interp_cycle_ms.is_finite()) {
+            anyhow::bail!(
+                "--interp-cycle-ms must be > 0, got {}",
+                self.interp_cycle_ms
+            );
+        }
+        if !(self.thermal_step_s > 0.0 && self.thermal_step_s.is_finite()) {
+            anyhow::bail!("--thermal-step-s must be > 0, got {}", self.thermal_step_s);
+        }
+        if let (Some(path), false) = (&self.model, self.compensate) {
+            anyhow::bail!(
+                "{}: a model was given without --compensate; add --compensate to put it in the loop",
+                path.display()
+            );
+        }
+        let force = self.force.force;
+        let rrd = self.rrd.checked(force)?;
+        Ok(commands::run::RunConfig {
+            program: self.program,
+            machine,
+            seed: self.seed,
+            warmups: self.warmup,
+            out_dir: self.out,
+            force,
+            every_cycle: self.every_cycle,
+            interp_cycle_s: self.interp_cycle_ms * 1e-3,
+            thermal_step_s: self.thermal_step_s,
+            model: self.model,
+            rrd,
+        })
+    }
+}
+
+/// Arguments of `calibrate`.
+#[derive(clap::Args)]
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    pub machine: MachineArg,
+    #[command(flatten)]
+    pub sensors: SensorsArg,
+    /// Machine realisation (seed of its random error parts).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output dataset file.
+    #[arg(short = 'o', long, default_value = "calibration.csv")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub force: ForceArg,
+    /// Minutes between measurement blocks.
+    #[arg(long, default_value_t = 30.0)]
+    pub measure_every_min: f64,
+}
+
+impl CalibrateArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine or sensor set, a measurement interval under a minute.
+    pub fn config(self) -> Result<commands::calibrate::CalibrateConfig> {
+        let machine = commands::load_machine(
+            self.machine.machine.as_deref(),
+            self.sensors.sensors.as_deref(),
+        )?;
+        if !(self.measure_every_min >= 1.0 && self.measure_every_min.is_finite()) {
+            anyhow::bail!(
+                "--measure-every-min must be at least 1 (minute), got {:e}",
+                self.measure_every_min
+            );
+        }
+        Ok(commands::calibrate::CalibrateConfig {
+            machine,
+            seed: self.seed,
+            out: self.out,
+            force: self.force.force,
+            measure_every_s: self.measure_every_min * 60.0,
+        })
+    }
+}
+
+/// Arguments of `campaign`.
+#[derive(clap::Args)]
+pub struct CampaignArgs {
+    #[command(flatten)]
+    pub machine: MachineArg,
+    #[command(flatten)]
+    pub sensors: SensorsArg,
+    /// Machine realisations to calibrate and evaluate (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [1u64, 2, 3])]
+    pub seeds: Vec<u64>,
+    /// Folder for report.json and the trained models (created if missing).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub force: ForceArg,
+    /// Opt-in: the hybrid's spindle part also takes the commanded spindle speed as heat input
+    /// (see docs/decisions on the spindle-speed input).
+    #[arg(long)]
+    pub spindle_speed: bool,
+    /// Also print the full table, one row per run (it is always in report.json).
+    #[arg(long)]
+    pub runs: bool,
+    #[command(flatten)]
+    pub rrd: RrdArgs,
+}
+
+impl CampaignArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine or sensor set, no seed or a seed given twice, a bad
+    /// recording path or magnification.
+    pub fn config(self) -> Result<commands::campaign::CampaignConfig> {
+        let machine = commands::load_machine(
+            self.machine.machine.as_deref(),
+            self.sensors.sensors.as_deref(),
+        )?;
+        if self.seeds.is_empty() {
+            anyhow::bail!("--seeds needs at least one seed");
+        }
+        commands::check_distinct_seeds("--seeds", &self.seeds)?;
+        let force = self.force.force;
+        Ok(commands::campaign::CampaignConfig {
+            machine,
+            seeds: self.seeds,
+            out_dir: self.out,
+            force,
+            spindle_speed: self.spindle_speed,
+            print_runs: self.runs,
+            rrd: self.rrd.checked(force)?,
+        })
+    }
+}
+
+/// Arguments of `train`.
+#[derive(clap::Args)]
+pub struct TrainArgs {
+    /// Calibration dataset (CSV, as written by `vmc-twin calibrate`).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Model class: hybrid (4 MLPs + kinematic synthesis), volumetric (one MLP) or linear.
+    #[arg(long, value_enum, default_value = "hybrid")]
+    pub kind: KindArg,
+    /// Machine description for the nominal geometry and sensor check; default: reference.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub sensors: SensorsArg,
+    /// Seed of the network initialisation.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output model file.
+    #[arg(short = 'o', long, default_value = "model.json")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub force: ForceArg,
+    /// Opt-in, hybrid only: the spindle part also takes the commanded spindle speed (the
+    /// dataset's `spindle_rpm` column) as heat input; `run --compensate` then feeds it the
+    /// program's speed.
+    #[arg(long)]
+    pub spindle_speed: bool,
+}
+
+impl TrainArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine or sensor set, `--spindle-speed` with a baseline.
+    pub fn config(self) -> Result<commands::train::TrainConfig> {
+        let machine =
+            commands::load_machine(self.machine.as_deref(), self.sensors.sensors.as_deref())?;
+        let kind = ModelKind::from(self.kind);
+        if self.spindle_speed {
+            anyhow::ensure!(
+                kind == ModelKind::Hybrid,
+                "--spindle-speed applies to the hybrid model only (its spindle part), not to --kind {}",
+                kind.name()
+            );
+        }
+        Ok(commands::train::TrainConfig {
+            data: self.data,
+            kind,
+            machine,
+            seed: self.seed,
+            out: self.out,
+            force: self.force.force,
+            spindle_speed: self.spindle_speed,
+        })
+    }
+}
+
+/// Arguments of `select-sensors`.
+#[derive(clap::Args)]
+pub struct SelectArgs {
+    /// Candidate locations: `all` (every thermal node + ambient) or a comma-separated list of
+    /// node names (ambient is always a candidate: it is the cold reference).
+    #[arg(long, default_value = "all")]
+    pub candidates: String,
+    /// Sensors to select besides ambient.
+    #[arg(long, default_value_t = 11)]
+    pub count: usize,
+    #[command(flatten)]
+    pub machine: MachineArg,
+    /// Machine realisation of the selection campaign.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Machine seeds of the comparison on held-out runs (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [1u64])]
+    pub compare_seeds: Vec<u64>,
+    /// Random sets of K locations in the comparison.
+    #[arg(long, default_value_t = 3)]
+    pub random_draws: usize,
+    /// Only select; skip the comparison.
+    #[arg(long)]
+    pub no_compare: bool,
+    /// Output sensor set (TOML `[[sensors]]`, usable with `--sensors` or in a machine file).
+    #[arg(short = 'o', long, default_value = "sensors.toml")]
+    pub out: PathBuf,
+    /// Also write the study as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub force: ForceArg,
+}
+
+impl SelectArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine, a comparison seed given twice, candidates that are not
+    /// thermal nodes (or named twice, or empty), a count of 0 or above the candidates.
+    pub fn config(self) -> Result<commands::select_sensors::SelectConfig> {
+        let machine = commands::load_machine(self.machine.machine.as_deref(), None)?;
+        commands::check_distinct_seeds("--compare-seeds", &self.compare_seeds)?;
+        let only = commands::select_sensors::parse_candidates(&self.candidates, &machine)?;
+        Ok(commands::select_sensors::SelectConfig {
+            machine,
+            only,
+            count: self.count,
+            seed: self.seed,
+            compare_seeds: if self.no_compare {
+                Vec::new()
+            } else {
+                self.compare_seeds
+            },
+            random_draws: self.random_draws,
+            out: self.out,
+            json: self.json,
+            force: self.force.force,
+        })
+    }
+}
+
+/// Arguments of `check`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// G-code program to check.
+    pub program: PathBuf,
+    /// Machine description (TOML) with a [collision] section; default: the reference machine.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Fixture file (TOML): vise, clamps and stock on the table.
+    #[arg(long)]
+    pub fixture: Option<PathBuf>,
+    /// Also write a Rerun recording: the program's motion with every problem drawn at its time
+    /// and place (magenta points on `paths/events`, entries in the `events` log).
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rrd: Option<PathBuf>,
+    /// Overwrite an existing recording.
+    #[arg(long)]
+    pub force: bool,
+}
+
+impl CheckArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine, a bad recording path.
+    pub fn config(self) -> Result<commands::check::CheckConfig> {
+        let machine = commands::load_machine(self.machine.as_deref(), None)?;
+        if let Some(path) = &self.rrd {
+            record::check_rrd_path(path, self.force)?;
+        }
+        Ok(commands::check::CheckConfig {
+            program: self.program,
+            machine,
+            fixture: self.fixture,
+            rrd: self.rrd,
+            force: self.force,
+        })
+    }
+}
+
+/// Arguments of `bench`.
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Repeats of the cheap measurements (median reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Skip the campaign scaling (the slowest part, ~1 min).
+    #[arg(long)]
+    pub quick: bool,
+}
+
+impl BenchArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// `--repeats 0`.
+    pub fn config(self) -> Result<commands::bench::BenchConfig> {
+        if self.repeats == 0 {
+            anyhow::bail!("--repeats must be at least 1");
+        }
+        Ok(commands::bench::BenchConfig {
+            repeats: self.repeats,
+            quick: self.quick,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests;

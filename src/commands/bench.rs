@@ -1,0 +1,73 @@
+//! `vmc-twin bench`: the speed figures (compensation query, 8 h of machine time, campaign) and
+//! how they scale.
+
+use std::io::Write;
+
+use anyhow::Result;
+
+use crate::benchmark;
+use crate::calibration::ThermalCycle;
+use crate::machine::MachineSpec;
+
+/// What to measure, validated.
+pub struct BenchConfig {
+    /// Repeats of the cheap measurements (≥ 1; the median is reported).
+    pub repeats: usize,
+    /// Skip the campaign scaling.
+    pub quick: bool,
+}
+
+/// Measures and prints the figures.
+///
+/// # Errors
+/// Simulation errors, the writer's.
+pub fn bench(cfg: &BenchConfig, out: &mut dyn Write) -> Result<()> {
+    let spec = MachineSpec::reference();
+    writeln!(
+        out,
+        "vmc-twin bench on {} ({} threads; release build: {})",
+        spec.machine.name,
+        rayon::current_num_threads(),
+        !cfg!(debug_assertions)
+    )?;
+    for r in benchmark::query(&spec, cfg.repeats)? {
+        writeln!(out, "  {:<90} {:>12.1} {}", r.what, r.value, r.unit)?;
+    }
+    writeln!(
+        out,
+        "8 h of machine time, XY diagonal every 30 min, error at every interpolation sample:"
+    )?;
+    writeln!(
+        out,
+        "  {:>10} {:>12} {:>10} {:>14}",
+        "cycle ms", "samples", "wall s", "ns / sample"
+    )?;
+    for ms in [4.0, 2.0, 1.0, 0.5, 0.25] {
+        let (s, n) = benchmark::machine_8h(&spec, ms, cfg.repeats.min(3))?;
+        writeln!(
+            out,
+            "  {ms:>10} {n:>12} {s:>10.3} {:>14.0}",
+            s * 1e9 / n.max(1) as f64
+        )?;
+    }
+    if !cfg.quick {
+        writeln!(
+            out,
+            "campaign (seed 1: calibration, 3 trainings, 147 held-out runs) vs calibration cycles:"
+        )?;
+        writeln!(out, "  {:>8} {:>8} {:>10}", "cycles", "runs", "wall s")?;
+        let m = ThermalCycle::calibration_set().len();
+        for n in [2, 4, m, 2 * m] {
+            let (s, runs) =
+                benchmark::campaign_with(&spec, &benchmark::calibration_cycles(n), &[1])?;
+            writeln!(out, "  {n:>8} {runs:>8} {s:>10.2}")?;
+        }
+        let (s, runs) =
+            benchmark::campaign_with(&spec, &ThermalCycle::calibration_set(), &[1, 2, 3])?;
+        writeln!(out, "default campaign, seeds 1,2,3 ({runs} runs): {s:.2} s")?;
+    }
+    if let Some(m) = benchmark::peak_rss_mib() {
+        writeln!(out, "peak resident memory of this process: {m:.0} MiB")?;
+    }
+    Ok(())
+}

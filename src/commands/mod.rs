@@ -1,0 +1,87 @@
+//! The use cases behind the command line, as library functions: each takes a validated config
+//! (built by [`crate::cli`] or by a program of its own) and a writer for what it prints, and
+//! writes its files through [`crate::files`]. Progress bars go to stderr.
+
+pub mod bench;
+pub mod calibrate;
+pub mod campaign;
+pub mod check;
+pub mod run;
+pub mod select_sensors;
+pub mod thermal;
+pub mod train;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+use crate::files;
+use crate::machine::MachineSpec;
+use crate::placement;
+use crate::record::RecordSettings;
+
+/// A Rerun recording to write: where, and how to draw.
+#[derive(Debug, Clone)]
+pub struct RrdOutput {
+    /// The `.rrd` file (checked before any simulation).
+    pub path: PathBuf,
+    /// Drawing settings (error magnification).
+    pub settings: RecordSettings,
+}
+
+/// The machine of a command: the file given, or the embedded reference machine; with `sensors`,
+/// its sensor set replaced by the one of that file.
+///
+/// # Errors
+/// An unreadable or invalid machine file or sensor set, or a sensor set that does not fit.
+pub fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<MachineSpec> {
+    let spec = match path {
+        Some(p) => MachineSpec::load(p)?,
+        None => MachineSpec::reference(),
+    };
+    let Some(file) = sensors else {
+        return Ok(spec);
+    };
+    let name = file.display().to_string();
+    let text = files::read_named(file, "sensor set")?;
+    let set = placement::SensorSet::from_toml_str(&text, &name)?;
+    let spec = placement::with_sensors(&spec, set.sensors).with_context(|| {
+        format!(
+            "{name}: sensor set does not fit machine {}",
+            spec.machine.name
+        )
+    })?;
+    Ok(spec)
+}
+
+/// Refuses a seed given twice: its runs would count twice in the medians.
+///
+/// # Errors
+/// The first seed given twice, named with its `option`.
+pub fn check_distinct_seeds(option: &str, seeds: &[u64]) -> Result<()> {
+    for (i, s) in seeds.iter().enumerate() {
+        if seeds[..i].contains(s) {
+            anyhow::bail!("{option}: seed {s} is given twice (its runs would count twice)");
+        }
+    }
+    Ok(())
+}
+
+/// Says which recording was written and its size (`wrote FILE (x.xx MB<extra>)`).
+///
+/// # Errors
+/// The writer's.
+pub fn wrote_recording(
+    out: &mut dyn Write,
+    path: &Path,
+    bytes: u64,
+    extra: &str,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "wrote {} ({:.2} MB{extra})",
+        path.display(),
+        bytes as f64 / 1e6
+    )
+}

@@ -1,0 +1,298 @@
+//! `vmc-twin run`: a G-code program on the twin, optionally after warm-ups and with a model in
+//! the control loop; the error at every measurement point, before and after compensation.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+use super::{wrote_recording, RrdOutput};
+use crate::files;
+use crate::machine::MachineSpec;
+use crate::motion::Plan;
+use crate::predict::controller::Compensator;
+use crate::predict::predictor::{AnyPredictor, PredictError};
+use crate::program;
+use crate::progress::Progress;
+use crate::record;
+use crate::report::{self, RunLog, RunSummary};
+use crate::sim::{self, Observer, RunStart, SampleMode, SimConfig};
+use crate::study::LoopController;
+use crate::twin::Twin;
+
+/// What to run, validated.
+pub struct RunConfig {
+    /// The G-code program.
+    pub program: PathBuf,
+    /// The machine (with its sensor set).
+    pub machine: MachineSpec,
+    /// Seed of the machine's random error parts and noise.
+    pub seed: u64,
+    /// Thermal loading programs run first, in order.
+    pub warmups: Vec<PathBuf>,
+    /// Folder for `samples.csv` and `summary.json`.
+    pub out_dir: Option<PathBuf>,
+    /// Overwrite existing output files.
+    pub force: bool,
+    /// Measure at every interpolation cycle during motion, not only at dwells.
+    pub every_cycle: bool,
+    /// Interpolation cycle, s (> 0).
+    pub interp_cycle_s: f64,
+    /// Thermal integration and sensor sampling step, s (> 0).
+    pub thermal_step_s: f64,
+    /// A trained model to put in the control loop.
+    pub model: Option<PathBuf>,
+    /// A Rerun recording to write.
+    pub rrd: Option<RrdOutput>,
+}
+
+/// The compensating controller of a run.
+type RunController = LoopController<AnyPredictor>;
+
+/// Runs the program and prints the report to `out`.
+///
+/// # Errors
+/// Unreadable or invalid programs, a run too large, outputs that may not be written, a model
+/// that does not fit the machine, simulation errors.
+pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
+    let machine = &cfg.machine;
+    // Check everything the user gave before minutes of simulation: programs and outputs.
+    let (warmups, plan) = load_plans(cfg)?;
+    let out_files = match &cfg.out_dir {
+        Some(dir) => {
+            let names = ["samples.csv", "summary.json"].map(String::from);
+            let files = files::prepare_output_folder(dir, &names, cfg.force)?;
+            Some((files[0].clone(), files[1].clone()))
+        }
+        None => None,
+    };
+    let mut controller = match &cfg.model {
+        Some(path) => Some(compensator(path, machine, out)?),
+        None => None,
+    };
+    let (log, recorder) = simulate(cfg, &warmups, &plan, controller.as_mut())?;
+
+    let warmup_names: Vec<String> = cfg
+        .warmups
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    let program_name = cfg.program.display().to_string();
+    let summary = log
+        .summary(&program_name, &machine.machine.name, cfg.seed, &warmup_names)
+        .with_context(|| format!("{program_name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion"))?;
+    // The report goes to `out` and, with --rrd, into the recording.
+    let text = report_text(cfg, &log, &summary)?;
+    out.write_all(text.as_bytes())?;
+    if let (Some((rec, file)), Some(rrd)) = (recorder, &cfg.rrd) {
+        let md = record::run_markdown(&text, rrd.settings.magnify, controller.is_some());
+        rec.finish(Some(&md))?;
+        let path = file.path().to_path_buf();
+        let bytes = file.finish()?;
+        wrote_recording(out, &path, bytes, "")?;
+    }
+    if let Some((csv, json)) = out_files {
+        files::write_atomic(&csv, log.samples_csv().as_bytes(), cfg.force)?;
+        let text = serde_json::to_string_pretty(&summary)?;
+        files::write_atomic(&json, text.as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {} and {}", csv.display(), json.display())?;
+    }
+    Ok(())
+}
+
+/// The warm-up plans and the program's plan, each starting where the previous one ends; the
+/// run's size checked.
+fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
+    let mut start = cfg.machine.axes.home_mm;
+    let mut warmups = Vec::new();
+    for w in &cfg.warmups {
+        let plan = program::load_plan(w, &cfg.machine, start)?;
+        start = plan.end_mm();
+        warmups.push(plan);
+    }
+    let plan = program::load_plan(&cfg.program, &cfg.machine, start)?;
+    let total_s = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
+    program::check_run_size(
+        &cfg.program.display().to_string(),
+        total_s,
+        cfg.thermal_step_s,
+        plan.duration_s(),
+        cfg.every_cycle.then_some(cfg.interp_cycle_s),
+    )?;
+    Ok((warmups, plan))
+}
+
+/// The model of `path` as a compensator for `machine` (retooled to the machine's tool offset
+/// when it is a hybrid model, which `out` is told).
+fn compensator(path: &Path, machine: &MachineSpec, out: &mut dyn Write) -> Result<RunController> {
+    // An I/O error names the file already; a content error does not.
+    let model = AnyPredictor::load_json(path).map_err(|e| match e {
+        PredictError::Io { .. } => anyhow::Error::new(e),
+        _ => anyhow::Error::new(e).context(path.display().to_string()),
+    })?;
+    let does_not_fit = || {
+        format!(
+            "{}: model does not fit machine {}",
+            path.display(),
+            machine.machine.name
+        )
+    };
+    let trained_tool_mm = model.geometry().tool_offset_mm;
+    let (model, retooled) = model
+        .for_machine_geometry(&machine.geometry())
+        .with_context(does_not_fit)?;
+    if retooled {
+        writeln!(
+            out,
+            "note: {} was calibrated with tool offset {:?} mm; its elementary errors are \
+             synthesised for this machine's tool offset {:?} mm",
+            path.display(),
+            trained_tool_mm,
+            machine.tool.offset_mm
+        )?;
+    }
+    let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
+    let ctrl = Compensator::for_machine(model, &names).with_context(does_not_fit)?;
+    Ok(LoopController(ctrl))
+}
+
+/// Runs the warm-ups, then the program (measured), on a fresh twin; with a recording if asked.
+fn simulate(
+    cfg: &RunConfig,
+    warmups: &[Plan],
+    plan: &Plan,
+    mut controller: Option<&mut RunController>,
+) -> Result<(RunLog, Option<(record::Recorder, record::RrdFile)>)> {
+    let machine = &cfg.machine;
+    let mut twin = Twin::new(machine, cfg.seed)?;
+    let sim_cfg = SimConfig {
+        thermal_step_s: cfg.thermal_step_s,
+        interp_cycle_s: cfg.interp_cycle_s,
+        sample_mode: if cfg.every_cycle {
+            SampleMode::EveryCycle
+        } else {
+            SampleMode::Dwells
+        },
+        // The run report splits each error into cold geometry and thermal part.
+        report_thermal_part: true,
+    };
+    let warm_cfg = SimConfig {
+        sample_mode: SampleMode::Dwells,
+        ..sim_cfg
+    };
+    let total_s: f64 = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
+    let mut progress = Progress::new(total_s.ceil() as u64, "s");
+    let mut recording = match &cfg.rrd {
+        Some(rrd) => Some(open_recording(cfg, rrd, plan, controller.is_some())?),
+        None => None,
+    };
+    let mut null = sim::NullObserver;
+    for (p, name) in warmups.iter().zip(&cfg.warmups) {
+        let rec: &mut dyn Observer = match recording.as_mut() {
+            Some((r, _)) => r,
+            None => &mut null,
+        };
+        let mut obs = sim::Tee(rec, &mut progress);
+        obs.on_run_start(&RunStart {
+            label: format!("warm-up {}", name.display()),
+            time_s: twin.time_s(),
+            duration_s: p.duration_s(),
+            measured: false,
+        });
+        // The controller follows the readings (and the commanded motion) through the warm-up,
+        // as on the machine: a model with history features needs the thermal past.
+        let ctrl = controller
+            .as_deref_mut()
+            .map(|c| c as &mut dyn sim::Controller);
+        sim::execute(&mut twin, p, &warm_cfg, ctrl, &mut obs)?;
+    }
+    let mut log = RunLog::default();
+    {
+        let rec: &mut dyn Observer = match recording.as_mut() {
+            Some((r, _)) => r,
+            None => &mut null,
+        };
+        let mut watch = sim::Tee(rec, &mut progress);
+        let mut obs = sim::Tee(&mut log, &mut watch);
+        obs.on_run_start(&RunStart {
+            label: cfg.program.display().to_string(),
+            time_s: twin.time_s(),
+            duration_s: plan.duration_s(),
+            measured: true,
+        });
+        let ctrl = controller.map(|c| c as &mut dyn sim::Controller);
+        sim::execute(&mut twin, plan, &sim_cfg, ctrl, &mut obs)
+            .with_context(|| cfg.program.display().to_string())?;
+    }
+    progress.finish();
+    Ok((log, recording))
+}
+
+/// The recording of a run, its id naming everything that makes the run.
+fn open_recording(
+    cfg: &RunConfig,
+    rrd: &RrdOutput,
+    plan: &Plan,
+    compensated: bool,
+) -> Result<(record::Recorder, record::RrdFile)> {
+    let id = format!(
+        "vmc-twin run {} on {} seed {} warm-up [{}] compensated {compensated}",
+        cfg.program.display(),
+        cfg.machine.machine.name,
+        cfg.seed,
+        cfg.warmups
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+    );
+    let file = record::RrdFile::create(
+        &rrd.path,
+        cfg.force,
+        &id,
+        record::layout::run_blueprint(rrd.settings.magnify),
+    )?;
+    let diagonal = record::Diagonal::of_plan(plan);
+    let rec = record::Recorder::new(&file, &cfg.machine, rrd.settings, diagonal)?;
+    Ok((rec, file))
+}
+
+/// The printed report: the thermal state, the first readings, the per-point table, the summary.
+fn report_text(cfg: &RunConfig, log: &RunLog, summary: &RunSummary) -> Result<String> {
+    let mut out: Vec<u8> = Vec::new();
+    writeln!(
+        out,
+        "vmc-twin run: {} on {} (seed {})",
+        cfg.program.display(),
+        cfg.machine.machine.name,
+        cfg.seed
+    )?;
+    if cfg.warmups.is_empty() {
+        writeln!(out, "thermal state: cold start (machine at ambient)")?;
+    } else {
+        let names: Vec<String> = cfg
+            .warmups
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
+        writeln!(
+            out,
+            "thermal state: after warm-up {} ({:.1} h)",
+            names.join(", "),
+            summary.time_span_s[0] / 3600.0
+        )?;
+    }
+    if let Some(temps) = log.sensor_degc.first() {
+        let list: Vec<String> = log
+            .sensor_names
+            .iter()
+            .zip(temps)
+            .map(|(n, t)| format!("{n} {t:.2}"))
+            .collect();
+        writeln!(out, "sensors at the first point (°C): {}", list.join(", "))?;
+    }
+    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")?;
+    log.write_table(&mut out)?;
+    report::write_summary(summary, &mut out)?;
+    Ok(String::from_utf8_lossy(&out).to_string())
+}

@@ -1,0 +1,254 @@
+//! `fit-thermal` and `predict-thermal`: thermal-drift models from a user's CSV measurements
+//! (file handling and the printed report; the model is `vmc_predict::thermal_fit`).
+
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use crate::files;
+use crate::predict::thermal_fit::{self, FitSettings, Split, TableRequest, ThermalModel};
+
+/// What to fit, validated.
+pub struct FitThermalConfig {
+    /// Measurements (CSV).
+    pub data: PathBuf,
+    /// Input columns.
+    pub inputs: Vec<String>,
+    /// Output (drift) columns.
+    pub outputs: Vec<String>,
+    /// Output model file (JSON).
+    pub out: PathBuf,
+    /// Overwrite an existing output file.
+    pub force: bool,
+    /// Time column (None: the only one whose name starts with "time").
+    pub time: Option<String>,
+    /// Start of the held-out part, s.
+    pub holdout_from_s: Option<f64>,
+    /// Column whose rise from 0 starts a cycle.
+    pub cycle_col: Option<String>,
+    /// Features, forms, candidates, seed.
+    pub settings: FitSettings,
+}
+
+/// What to predict.
+pub struct PredictThermalConfig {
+    /// Model file from `fit-thermal`.
+    pub model: PathBuf,
+    /// Measurements with the model's input columns.
+    pub data: PathBuf,
+    /// Output predictions (CSV).
+    pub out: PathBuf,
+    /// Overwrite an existing output file.
+    pub force: bool,
+    /// Time column (None: the only one whose name starts with "time").
+    pub time: Option<String>,
+}
+
+/// `vmc-twin fit-thermal`: fits the model, writes it and prints its evaluation.
+///
+/// # Errors
+/// An output that may not be written, unreadable or unusable measurements, a fit failure.
+pub fn fit_thermal(cfg: &FitThermalConfig, out: &mut dyn Write) -> Result<()> {
+    files::check_writable(&cfg.out, cfg.force)?;
+    let source = cfg.data.display().to_string();
+    let text = files::read_named(&cfg.data, "measurements")?;
+    // Header first, to know whether the default cycle column exists.
+    let header: Vec<String> = text
+        .lines()
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(|s| s.trim().trim_matches('"').to_string())
+        .collect();
+    // The cycle column also places the validation cycle when the held-out start is given.
+    let cycle_col = cfg.cycle_col.clone().or_else(|| {
+        header
+            .iter()
+            .any(|h| h == "spindle_rpm")
+            .then(|| "spindle_rpm".to_string())
+    });
+    let mut required: Vec<(String, &'static str)> = cfg
+        .inputs
+        .iter()
+        .map(|n| (n.clone(), "input"))
+        .chain(cfg.outputs.iter().map(|n| (n.clone(), "output")))
+        .collect();
+    if let Some(c) = &cycle_col {
+        required.push((c.clone(), "cycle"));
+    }
+    let request = TableRequest {
+        time: cfg.time.clone(),
+        required,
+        optional: Vec::new(),
+        min_rows: 20,
+    };
+    let table = thermal_fit::read_csv(&text, &source, &request)?;
+    let split = Split::resolve(
+        &table.time_s,
+        cfg.holdout_from_s,
+        cycle_col
+            .as_deref()
+            .and_then(|c| table.column(c).map(|v| (c, v))),
+        cfg.settings.val_fraction,
+    )?;
+    let model = thermal_fit::fit(&table, &cfg.inputs, &cfg.outputs, &split, &cfg.settings)
+        .map_err(|e| {
+            match e {
+                // A value of the file, not a setting: name the file.
+                e @ (thermal_fit::ThermalFitError::NonFiniteFeature { .. }
+                | thermal_fit::ThermalFitError::TooLarge { .. }) => {
+                    anyhow::Error::new(e).context(source.clone())
+                }
+                e => anyhow::Error::new(e),
+            }
+        })?;
+    files::write_atomic(&cfg.out, model.to_json().as_bytes(), cfg.force)?;
+    out.write_all(fit_report(&model, &table, &source).as_bytes())?;
+    writeln!(out, "wrote {}", cfg.out.display())?;
+    Ok(())
+}
+
+/// The terminal report of a fit (the same figures are in the model's `evaluation`).
+fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) -> String {
+    let mut s = String::new();
+    let Some(ev) = &model.evaluation else {
+        return s;
+    };
+    let net = |n: &Option<(usize, Vec<usize>)>| {
+        n.as_ref()
+            .map(|(h, e)| format!("{} × hidden {h} (LM epochs {e:?})", e.len()))
+            .unwrap_or_else(|| "not used".into())
+    };
+    let _ = writeln!(
+        s,
+        "fit-thermal: {source}, {} rows, {} inputs → {} features, {} outputs; architecture {}: \
+         linear ridge {}, residual net {}, direct net {}",
+        table.len(),
+        model.inputs.len(),
+        model.features.width(&model.input_names()),
+        model.outputs.len(),
+        model.architecture.name(),
+        ev.ridge,
+        net(&ev.residual_net),
+        net(&ev.direct_net),
+    );
+    let _ = writeln!(
+        s,
+        "split (time-ordered): {}; selection: train {} rows (t < {} s), validation {} rows; \
+         final fit on both ({} rows for the nets); held out {} rows",
+        ev.split.rule, ev.n_train, ev.split.val_from_s, ev.n_val, ev.n_fit_net, ev.n_holdout
+    );
+    let _ = writeln!(
+        s,
+        "held-out evaluation (RMS in each output's unit; ratio = residual RMS / raw drift RMS; \
+         form chosen on validation):"
+    );
+    let _ = writeln!(
+        s,
+        "  {:<10} {:>8} {:>8} {:>8} {:>7} {:<10} {:>8} {:>7}  {:<8} | validation: linear  model",
+        "output", "raw_rms", "constant", "linear", "ratio", "form", "model", "ratio", "aim"
+    );
+    for c in &ev.channels {
+        let met = c.model_ratio.is_some_and(|r| r <= 0.25) && c.model_rmse < c.linear_rmse;
+        let pct = |r: Option<f64>| {
+            r.map(|v| format!("{:.1}%", 100.0 * v))
+                .unwrap_or_else(|| "-".into())
+        };
+        let _ = writeln!(
+            s,
+            "  {:<10} {:>8.3} {:>8.3} {:>8.3} {:>7} {:<10} {:>8.3} {:>7}  {:<8} | {:>17.3} {:>6.3}",
+            c.output.name,
+            c.raw_rms,
+            c.constant_rmse,
+            c.linear_rmse,
+            pct(c.linear_ratio),
+            c.form.name(),
+            c.model_rmse,
+            pct(c.model_ratio),
+            if met { "met" } else { "NOT met" },
+            c.val_linear_rmse,
+            c.val_model_rmse
+        );
+    }
+    let _ = writeln!(
+        s,
+        "aim: residual RMS ≤ 25 % of the raw drift RMS and below the linear baseline's"
+    );
+    s
+}
+
+/// `vmc-twin predict-thermal`: the model's predictions of a file's rows, written as CSV.
+///
+/// # Errors
+/// An output that may not be written, an unreadable model or data that does not fit it.
+pub fn predict_thermal(cfg: &PredictThermalConfig, out: &mut dyn Write) -> Result<()> {
+    files::check_writable(&cfg.out, cfg.force)?;
+    let model_name = cfg.model.display().to_string();
+    let model = ThermalModel::from_json(&files::read_named(&cfg.model, "model")?, &model_name)?;
+    let source = cfg.data.display().to_string();
+    let text = files::read_named(&cfg.data, "measurements")?;
+    let request = TableRequest {
+        time: cfg.time.clone(),
+        required: model
+            .inputs
+            .iter()
+            .map(|c| (c.name.clone(), "input"))
+            .collect(),
+        optional: model.outputs.iter().map(|c| c.name.clone()).collect(),
+        min_rows: 1,
+    };
+    let table = thermal_fit::read_csv(&text, &source, &request)
+        .with_context(|| format!("data does not fit model {model_name}"))?;
+    let inputs: Vec<&[f64]> = model
+        .inputs
+        .iter()
+        .filter_map(|c| table.column(&c.name))
+        .collect();
+    let pred = model
+        .predict(&table.time_s, &inputs)
+        .with_context(|| source.clone())?;
+    let measured: Vec<(&str, &[f64])> = model
+        .outputs
+        .iter()
+        .filter_map(|c| table.column(&c.name).map(|v| (c.name.as_str(), v)))
+        .collect();
+    let mut csv = String::from("time_s");
+    for c in &model.outputs {
+        let stem = c
+            .name
+            .strip_suffix(&format!("_{}", c.unit))
+            .filter(|_| !c.unit.is_empty())
+            .unwrap_or(&c.name);
+        let _ = write!(csv, ",{stem}_pred_{}", c.unit);
+    }
+    for (name, _) in &measured {
+        let _ = write!(csv, ",{name}");
+    }
+    csv.push('\n');
+    for (r, t) in table.time_s.iter().enumerate() {
+        let _ = write!(csv, "{t}");
+        for col in &pred {
+            let _ = write!(csv, ",{:.6}", col[r]);
+        }
+        for (_, col) in &measured {
+            let _ = write!(csv, ",{}", col[r]);
+        }
+        csv.push('\n');
+    }
+    files::write_atomic(&cfg.out, csv.as_bytes(), cfg.force)?;
+    writeln!(
+        out,
+        "predict-thermal: {} rows of {source} with model {model_name} ({} outputs{}) → {}",
+        table.len(),
+        model.outputs.len(),
+        if measured.is_empty() {
+            String::new()
+        } else {
+            format!(", {} measured columns kept", measured.len())
+        },
+        cfg.out.display()
+    )?;
+    Ok(())
+}
