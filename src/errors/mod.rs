@@ -67,14 +67,14 @@ impl ThermalTerm {
         // Validation ran first, so every name resolves; a missing one is skipped defensively.
         if spec.shape == ThermalShape::Screw {
             ThermalTerm::Screw {
-                gain: spec.gain_per_k,
+                gain: spec.gain(),
                 segments: spec.nodes.iter().filter_map(|n| node_index(n)).collect(),
                 fixed_end: spec.fixed_end,
             }
         } else {
             ThermalTerm::Weighted {
                 shape: spec.shape,
-                gain: spec.gain_per_k,
+                gain: spec.gain(),
                 nodes: spec
                     .weights
                     .iter()

@@ -49,8 +49,16 @@ pub enum FixedEnd {
 pub struct ThermalTermSpec {
     /// Spatial shape of the term.
     pub shape: ThermalShape,
-    /// Gain: value unit per kelvin (µm/K or µrad/K); for `screw`, µm per (K·m).
-    pub gain_per_k: f64,
+    /// Gain of a linear error's term (shapes other than `screw`), µm/K. Exactly one gain is
+    /// given, the one of the term's shape and the profile's unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain_um_per_k: Option<f64>,
+    /// Gain of an angular error's term, µrad/K.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain_urad_per_k: Option<f64>,
+    /// Gain of a `screw` term (expansion of the screw), µm per (K·m) of screw.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain_um_per_k_m: Option<f64>,
     /// For non-screw shapes: ΔT_eff = Σ weight · (T_node − T_ref). Weights summing to zero make a
     /// pure gradient term.
     #[serde(default)]
@@ -203,13 +211,56 @@ fn check_finite(field: &str, v: f64) -> Result<(), ErrorSpecError> {
 }
 
 impl ThermalTermSpec {
+    /// The term's gain in the unit of its field (the one given; 0 if none, which validation
+    /// refuses).
+    pub fn gain(&self) -> f64 {
+        self.gain_um_per_k
+            .or(self.gain_urad_per_k)
+            .or(self.gain_um_per_k_m)
+            .unwrap_or(0.0)
+    }
+
+    /// The name of the gain field a term of this shape takes in a profile of `unit`.
+    fn gain_field(&self, unit: ValueUnit) -> &'static str {
+        match (self.shape, unit) {
+            (ThermalShape::Screw, _) => "gain_um_per_k_m",
+            (_, ValueUnit::Um) => "gain_um_per_k",
+            (_, ValueUnit::Urad) => "gain_urad_per_k",
+        }
+    }
+
     fn validate(
         &self,
         field: &str,
+        unit: ValueUnit,
         constant_only: bool,
         has_node: &dyn Fn(&str) -> bool,
     ) -> Result<(), ErrorSpecError> {
-        check_finite(&format!("{field}.gain_per_k"), self.gain_per_k)?;
+        let want = self.gain_field(unit);
+        let given = [
+            ("gain_um_per_k", self.gain_um_per_k),
+            ("gain_urad_per_k", self.gain_urad_per_k),
+            ("gain_um_per_k_m", self.gain_um_per_k_m),
+        ];
+        for (name, value) in given {
+            match value {
+                Some(_) if name != want => {
+                    return Err(bad(
+                        format!("{field}.{name}"),
+                        format!("this term's gain is `{want}` (its shape and its error's unit)"),
+                    ))
+                }
+                Some(v) => check_finite(&format!("{field}.{name}"), v)?,
+                None if name == want => return Err(bad(format!("{field}.{want}"), "missing")),
+                None => {}
+            }
+        }
+        if self.shape == ThermalShape::Screw && unit != ValueUnit::Um {
+            return Err(bad(
+                format!("{field}.shape"),
+                "a screw term expands a linear error (µm)",
+            ));
+        }
         if constant_only && self.shape != ThermalShape::Constant {
             return Err(bad(
                 format!("{field}.shape"),
@@ -337,7 +388,7 @@ impl ErrorFieldSpec {
                     ));
                 }
                 for (i, t) in p.thermal.iter().enumerate() {
-                    t.validate(&format!("{field}.thermal[{i}]"), false, has_node)?;
+                    t.validate(&format!("{field}.thermal[{i}]"), p.unit, false, has_node)?;
                 }
             }
         }
@@ -397,7 +448,7 @@ impl ErrorFieldSpec {
                 ));
             }
             for (k, t) in c.thermal.iter().enumerate() {
-                t.validate(&format!("{field}.thermal[{k}]"), true, has_node)?;
+                t.validate(&format!("{field}.thermal[{k}]"), c.unit, true, has_node)?;
             }
         }
         Ok(())

@@ -191,6 +191,37 @@ fn an_unknown_node_and_a_missing_error_are_named() {
 }
 
 #[test]
+fn each_thermal_gain_is_named_in_its_unit() {
+    // A pitch (µrad) given a µm gain, a screw given a plain µm/K gain, a missing gain.
+    let mut spec = reference_spec();
+    let t = &mut spec.motion.get_mut("EAZ").unwrap().thermal[0];
+    t.gain_um_per_k = t.gain_urad_per_k.take();
+    let err = spec.validate(&|n| node_index(n).is_some()).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "errors.motion.EAZ.thermal[0].gain_um_per_k: this term's gain is `gain_urad_per_k` \
+         (its shape and its error's unit)"
+    );
+    let mut spec = reference_spec();
+    let t = &mut spec.motion.get_mut("EXX").unwrap().thermal[0];
+    t.gain_um_per_k = t.gain_um_per_k_m.take();
+    let err = spec.validate(&|n| node_index(n).is_some()).unwrap_err();
+    assert!(
+        err.to_string().starts_with(
+            "errors.motion.EXX.thermal[0].gain_um_per_k: this term's gain is `gain_um_per_k_m`"
+        ),
+        "{err}"
+    );
+    let mut spec = reference_spec();
+    spec.motion.get_mut("EXX").unwrap().thermal[0].gain_um_per_k_m = None;
+    let err = spec.validate(&|n| node_index(n).is_some()).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "errors.motion.EXX.thermal[0].gain_um_per_k_m: missing"
+    );
+}
+
+#[test]
 fn reversal_flips_with_direction_and_repeatability_is_seeded() {
     let spec = reference_spec();
     let mut a = ApproachErrors::new(&spec, 5);
