@@ -10,6 +10,7 @@ use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, Settings};
 use vmc_twin::study::follow_to_state;
+use vmc_twin::study::ForMachine;
 use vmc_twin::twin::Twin;
 
 fn main() {

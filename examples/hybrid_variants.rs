@@ -8,7 +8,8 @@
 //! Prints per seed the kept nets, then the headline figures and the eight worst runs.
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::predict::predictor::{self, ModelKind, Settings};
+use vmc_twin::study::ForMachine;
 use vmc_twin::study::{self, diagonal_plans};
 
 fn main() {
@@ -109,13 +110,20 @@ fn main() {
         } else {
             calibration::evaluation_states(seed)
         };
-        let r = study::evaluate_predictor(&spec, seed, "hybrid", &h, &states, &plans).unwrap();
+        let r =
+            study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &h, &states, &plans).unwrap();
         let mx = r.iter().map(|x| x.max_after_um).fold(0.0, f64::max);
         let qm = (r.iter().map(|x| x.rms_after_um.powi(2)).sum::<f64>() / r.len() as f64).sqrt();
         println!("seed {seed}: nets {kept:?} max {mx:.2} qmean rms {qm:.3}");
         runs.extend(r);
     }
-    let (med, worst, max, rmse) = study::headline(&runs, "hybrid").unwrap();
+    let h = study::headline(&runs, ModelKind::Hybrid).unwrap();
+    let (med, worst, max, rmse) = (
+        h.median_reduction,
+        h.worst_reduction,
+        h.max_after_um,
+        h.mean_rmse_um,
+    );
     let over = runs.iter().filter(|r| r.max_after_um > 2.0).count();
     // The worst runs, with the max of each component (µm).
     let mut worst_runs: Vec<_> = runs.iter().collect();

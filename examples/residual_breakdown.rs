@@ -18,6 +18,7 @@ use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::predict::synthesis::first_order_error_mm;
 use vmc_twin::study::follow_to_state;
+use vmc_twin::study::ForMachine;
 use vmc_twin::twin::{sub_seed, Twin};
 
 fn main() {

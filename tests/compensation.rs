@@ -9,7 +9,8 @@
 
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::predictor::{self, ErrorPredictor, HybridPredictor, Settings};
+use vmc_twin::predict::predictor::{self, ErrorPredictor, HybridPredictor, ModelKind, Settings};
+use vmc_twin::study::ForMachine;
 use vmc_twin::study::{self, RunReport};
 
 const SEEDS: [u64; 3] = [1, 2, 3];
@@ -59,7 +60,8 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
         let model = trained(&spec, seed);
         let states = calibration::evaluation_states(seed);
         runs.extend(
-            study::evaluate_predictor(&spec, seed, "hybrid", &model, &states, &plans).unwrap(),
+            study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans)
+                .unwrap(),
         );
     }
     // 7 diagonals × 7 states × 3 seeds.
@@ -121,8 +123,10 @@ fn a_predictor_blind_to_temperature_does_not_reach_80_percent_on_warm_runs() {
         cold_degc,
     };
     let states = calibration::evaluation_states(seed);
-    let blind = study::evaluate_predictor(&spec, seed, "frozen", &frozen, &states, &plans).unwrap();
-    let full = study::evaluate_predictor(&spec, seed, "hybrid", &model, &states, &plans).unwrap();
+    let blind = study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &frozen, &states, &plans)
+        .unwrap();
+    let full =
+        study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans).unwrap();
     let mean = |runs: &[RunReport]| {
         let warm: Vec<f64> = runs
             .iter()
