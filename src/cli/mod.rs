@@ -69,6 +69,20 @@ pub struct MachineArg {
     pub machine: Option<PathBuf>,
 }
 
+impl MachineArg {
+    /// The machine of this option (the reference machine without it), with the sensor set of
+    /// `sensors` if one is given.
+    ///
+    /// # Errors
+    /// See [`commands::load_machine`].
+    pub fn load(&self, sensors: Option<&SensorsArg>) -> Result<crate::machine::MachineSpec> {
+        commands::load_machine(
+            self.machine.as_deref(),
+            sensors.and_then(|s| s.sensors.as_deref()),
+        )
+    }
+}
+
 /// `--sensors`.
 #[derive(clap::Args)]
 pub struct SensorsArg {
@@ -185,10 +199,7 @@ impl RunArgs {
     /// An unreadable or invalid machine or sensor set, a non-positive cycle or step, a model
     /// without `--compensate`, a bad recording path or magnification.
     pub fn config(self) -> Result<commands::run::RunConfig> {
-        let machine = commands::load_machine(
-            self.machine.machine.as_deref(),
-            self.sensors.sensors.as_deref(),
-        )?;
+        let machine = self.machine.load(Some(&self.sensors))?;
         if !(self.interp_cycle_ms > 0.0 && self.interp_cycle_ms.is_finite()) {
             anyhow::bail!(
                 "--interp-cycle-ms must be > 0, got {}",
@@ -248,10 +259,7 @@ impl CalibrateArgs {
     /// # Errors
     /// An unreadable or invalid machine or sensor set, a measurement interval under a minute.
     pub fn config(self) -> Result<commands::calibrate::CalibrateConfig> {
-        let machine = commands::load_machine(
-            self.machine.machine.as_deref(),
-            self.sensors.sensors.as_deref(),
-        )?;
+        let machine = self.machine.load(Some(&self.sensors))?;
         if !(self.measure_every_min >= 1.0 && self.measure_every_min.is_finite()) {
             anyhow::bail!(
                 "--measure-every-min must be at least 1 (minute), got {:e}",
@@ -301,10 +309,7 @@ impl CampaignArgs {
     /// An unreadable or invalid machine or sensor set, no seed or a seed given twice, a bad
     /// recording path or magnification.
     pub fn config(self) -> Result<commands::campaign::CampaignConfig> {
-        let machine = commands::load_machine(
-            self.machine.machine.as_deref(),
-            self.sensors.sensors.as_deref(),
-        )?;
+        let machine = self.machine.load(Some(&self.sensors))?;
         if self.seeds.is_empty() {
             anyhow::bail!("--seeds needs at least one seed");
         }
@@ -420,7 +425,7 @@ impl SelectArgs {
     /// An unreadable or invalid machine, a comparison seed given twice, candidates that are not
     /// thermal nodes (or named twice, or empty), a count of 0 or above the candidates.
     pub fn config(self) -> Result<commands::select_sensors::SelectConfig> {
-        let machine = commands::load_machine(self.machine.machine.as_deref(), None)?;
+        let machine = self.machine.load(None)?;
         commands::check_distinct_seeds("--compare-seeds", &self.compare_seeds)?;
         let only = commands::select_sensors::parse_candidates(&self.candidates, &machine)?;
         Ok(commands::select_sensors::SelectConfig {
