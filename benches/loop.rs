@@ -1,6 +1,6 @@
-//! Benchmarks of the control loop and the simulation (DESIGN §13, issue 5/6).
+//! Benchmarks of the control loop and the simulation.
 //!
-//! `cargo bench --bench loop` — figures are recorded in the README ("Speed").
+//! `cargo bench --bench loop` — figures are recorded in docs/results.md.
 //!
 //! - `compensation_query`: one compensation of the hybrid predictor (fixed-point solve of
 //!   q = p − E_pred(q, T): all networks + first-order synthesis), from held sensor readings and a
@@ -10,7 +10,7 @@
 //!   motion sampled at the 1 ms interpolation cycle (error evaluated at every sample).
 //! - `campaign_one_seed`: calibration + training of the three predictors + 147 held-out runs.
 //!
-//! Figures, release build, 2-core machine (before → after the profile-driven work of issue 5/6;
+//! Figures, release build, 2-core machine (before → after the profile-driven work;
 //! "after" measured with `vmc-twin bench` on the idle machine, which runs the same workloads):
 //! - compensation query: 0.99 µs → 0.97 µs median (the hybrid grew linear parts and a reversal
 //!   lookup in between; the spindle MLP became a linear part).

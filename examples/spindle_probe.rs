@@ -9,8 +9,8 @@
 //! - the readings;
 //! - the readings and the nose rate (nose reading minus its 5 min low-pass filter), as the
 //!   predictor's spindle part;
-//! - those and low-pass filters of the spindle speed (τ = 2, 10, 30 min) — information DESIGN §3
-//!   keeps from the predictor, shown only to say what it would be worth.
+//! - those and low-pass filters of the spindle speed (τ = 2, 10, 30 min) — what the controller
+//!   commanded, shown to say what it is worth (the hybrid takes it with `--spindle-speed`).
 //!
 //! `cargo run --release --example spindle_probe -- SEED`
 use vmc_twin::calibration::{self, ThermalCycle};

@@ -1,4 +1,4 @@
-//! `vmc-twin bench`: the speed figures of DESIGN §13 and how they scale, measured in one
+//! `vmc-twin bench`: the speed figures (docs/results.md) and how they scale, measured in one
 //! command (the criterion benches in `benches/loop.rs` give the same first figures with
 //! confidence intervals; this command adds the scaling tables).
 //!

@@ -1,4 +1,4 @@
-//! Thermal cycles and the virtual calibration campaign; the held-out evaluation states (DESIGN §6, §9).
+//! Thermal cycles and the virtual calibration campaign; the held-out evaluation states.
 //!
 //! A [`ThermalCycle`] is a sequence of duty phases (spindle speed, axis speeds) under an ambient
 //! profile. During a phase the axes shuttle over 10–90 % of their travel at the phase's speeds

@@ -1,4 +1,4 @@
-//! Virtual instruments (DESIGN §6): what a metrologist measures on the machine, with the
+//! Virtual instruments: what a metrologist measures on the machine, with the
 //! instruments' noise and step sizes, while the machine keeps heating or cooling.
 //!
 //! Instruments are the one place besides the twin itself that touches truth: like real ones,

@@ -1,4 +1,4 @@
-//! Exact rigid-body kinematics of the 3-axis machine: the twin's truth (DESIGN §3, §7, App. A).
+//! Exact rigid-body kinematics of the 3-axis machine: the twin's truth.
 //!
 //! The tool tip relative to the workpiece is the full product of homogeneous transforms along the
 //! chain, with exact rotations built from the error angles (no small-angle linearisation):
@@ -418,7 +418,7 @@ mod tests {
         theta * d + theta * theta * r
     }
 
-    /// 4″ in rad: the upper end of the reference machine's angular errors (DESIGN §4: 1–4″).
+    /// 4″ in rad: the upper end of the reference machine's angular errors.
     const FOUR_ARCSEC_RAD: f64 = 19.39e-6;
     /// 10″ in rad: the envelope the brief asks the check to cover.
     const TEN_ARCSEC_RAD: f64 = 48.48e-6;
@@ -451,7 +451,7 @@ mod tests {
             prop_assert!((nominal.translation.vector - tip.coords).norm() < EXACT_MM);
         }
 
-        /// Reference machine (DESIGN §4): positioning ±50 µm, straightness ±5 µm, angles ±4″,
+        /// Reference machine: positioning ±50 µm, straightness ±5 µm, angles ±4″,
         /// squareness ±20 µrad. 1e-5 mm = 0.01 µm is Appendix A's bound; a 5×10⁵-case scan
         /// peaked at 0.0044 µm.
         #[test]

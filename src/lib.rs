@@ -4,7 +4,7 @@
 //! the geometric [`errors`] field, the [`thermal`] network, [`sensors`], the [`twin`] that ties
 //! them together, the G-code front end ([`gcode`] syntax, [`interp`] semantics), the [`motion`]
 //! planner, the [`sim`] loop, [`report`]s, Rerun [`record`]ings and [`progress`] bars. Knowledge side: the `vmc-predict` crate, re-exported
-//! as [`predict`]; it does not depend on this crate (the information boundary of DESIGN §3).
+//! as [`predict`]; it does not depend on this crate (the information boundary, docs/architecture.md).
 pub use vmc_predict as predict;
 
 pub mod benchmark;

@@ -1,4 +1,4 @@
-//! Machine descriptions (`machines/*.toml`, DESIGN §4): loading and validation.
+//! Machine descriptions (`machines/*.toml`; format: docs/file-formats.md): loading and validation.
 //!
 //! One file describes one machine: kinematic chain and travels, tool, motion limits, thermal
 //! network, temperature sensors, virtual instruments and the geometric error field. The reference
@@ -95,7 +95,7 @@ fn default_tool_diameter() -> f64 {
     10.0
 }
 
-/// Virtual instruments of the calibration campaign (DESIGN §6).
+/// Virtual instruments of the calibration campaign.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InstrumentSpec {

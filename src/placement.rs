@@ -1,4 +1,4 @@
-//! Where to put the thermometers (DESIGN §1, §5–§7; issue 4/6 part A).
+//! Where to put the thermometers.
 //!
 //! The study chose 11 of many candidate locations from a thermo-mechanical simulation campaign.
 //! This module does the same on the twin, in three steps:

@@ -1,4 +1,4 @@
-//! Virtual temperature sensors (thermistors) on thermal-network nodes (DESIGN §4, §6).
+//! Virtual temperature sensors (thermistors) on thermal-network nodes.
 //!
 //! Each sensor reads one node (or the prescribed ambient, node name `ambient`) through, in order:
 //! 1. a first-order lag, `τ dy/dt = T − y`, integrated exactly for T held over the step:
@@ -9,7 +9,7 @@
 //!    thermistors), then clamping to the measuring range (default −20…120 °C).
 //!
 //! [`SensorReadings`] is the only thing that crosses the information boundary at run time
-//! (DESIGN §3): plain names and values, no node temperatures, no parameters.
+//!: plain names and values, no node temperatures, no parameters.
 
 use crate::thermal::AMBIENT_NODE;
 use rand::rngs::StdRng;

@@ -1,4 +1,4 @@
-//! The simulation loop (DESIGN §2): one clock drives the thermal network, the planned motion,
+//! The simulation loop: one clock drives the thermal network, the planned motion,
 //! the (optional) compensating controller and the measurement of where the tool really was.
 //!
 //! Time advances in thermal steps (default 1 s). Within a step the heat load is what the program

@@ -1,4 +1,4 @@
-//! The whole study in one call (DESIGN §6–§9): calibration campaign → training of the three
+//! The whole study in one call: calibration campaign → training of the three
 //! predictors → every face and body diagonal under held-out thermal states, without and with
 //! compensation → report.
 //!
@@ -195,8 +195,8 @@ pub const AMBIENT_HISTORY_TAU_S: f64 = 8.0 * 3600.0;
 /// `settings` with the history feature of the machine's ambient sensors (those on the
 /// `ambient` node, which the operator knows measure the air): each network also sees the
 /// ambient reading minus its low-pass filter with [`AMBIENT_HISTORY_TAU_S`]. A machine without
-/// an ambient sensor gets no history feature. See `vmc_predict::history` and the README
-/// ("Tried for the 2 µm target") for how this was chosen and what it gives.
+/// an ambient sensor gets no history feature. See `vmc_predict::history` and
+/// docs/decisions/2026-11-23-ambient-history-feature.md for how this was chosen and what it gives.
 pub fn with_ambient_history(settings: Settings, spec: &MachineSpec) -> Settings {
     let (taus, ambient) = on_node(
         &settings,
@@ -248,8 +248,8 @@ pub const SPINDLE_NOSE_TAU_S: f64 = 300.0;
 /// rate. Why: the spindle's axial growth follows the front bearing, which no sensor touches; the
 /// heat it passes to the nose shows as the nose reading's rate, so the rate tells how much
 /// warmer than the nose the bearing is. The axis parts do not get it (as an input of every
-/// network it made things worse, README "Tried for the 2 µm target"). Chosen on the
-/// selection-only states of machine seeds 21–23, never on the held-out runs: README.
+/// network it made things worse). Chosen on the selection-only states of machine seeds 21–23,
+/// never on the held-out runs: docs/decisions/2026-11-23-spindle-nose-rate.md.
 pub fn with_spindle_nose_rate(settings: Settings, spec: &MachineSpec) -> Settings {
     let (taus, nose) = on_node(&settings, spec, SPINDLE_NOSE_NODE, SPINDLE_NOSE_TAU_S);
     Settings {

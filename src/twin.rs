@@ -1,4 +1,4 @@
-//! The twin: the simulated machine as it really is (truth side of DESIGN §3).
+//! The twin: the simulated machine as it really is (the truth side of the information boundary, docs/architecture.md).
 //!
 //! It owns the thermal network, the error field of one random realisation (seed), the
 //! approach-dependent random errors and the temperature sensors. The simulation loop advances it
@@ -418,7 +418,7 @@ mod tests {
             );
             max_norm_um = max_norm_um.max(max_um[3]);
         }
-        // The study (DESIGN §1): ~10 µm (5/7/2 µm in X/Y/Z) for 20 → 26 °C. A 6 K soak of a
+        // The study: ~10 µm (5/7/2 µm in X/Y/Z) for 20 → 26 °C. A 6 K soak of a
         // machine with steel screws cannot leave the diagonals still (≥ 3 µm), nor move them by
         // more than free steel expansion over the diagonal span would (11.5 µm/(K·m) · 6 K ·
         // ~0.6 m ≈ 40 µm; 25 µm allows for the partial compensation a real structure shows).

@@ -1,6 +1,6 @@
-//! Bad inputs on the real binary (issue 7, part B): each kind of bad program, machine file and
+//! Bad inputs on the real binary: each kind of bad program, machine file and
 //! option gives exactly one line on stderr, exit code 1 (not a panic's 101), with a location,
-//! and the message the README's table shows. Each guard added for a hang or a missing location
+//! and the message docs/usage.md shows. Each guard added for a hang or a missing location
 //! found by the property tests (`tests/fuzz.rs`) has its regression case here.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! `vmc-twin check` on the real binary (issue 7): one program per way to crash, a clean one, and
+//! `vmc-twin check` on the real binary: one program per way to crash, a clean one, and
 //! the refusal of `run` and `campaign` with the same travel message. Programs and the fixture are
 //! in `tests/data/collision/`; the expected reports are written out here line by line.
 

@@ -1,4 +1,4 @@
-//! Acceptance tests of the command line (issue 1/6): they run the real `vmc-twin` binary in a
+//! Acceptance tests of the command line: they run the real `vmc-twin` binary in a
 //! temporary folder, as a user would, and read what it prints and writes.
 //!
 //! Tolerances are physical: the table prints µm with 2 decimals (±0.005 µm), `samples.csv` with

@@ -1,4 +1,4 @@
-//! End-to-end acceptance of the compensation (issue 2/6): the twin is calibrated with virtual
+//! End-to-end acceptance of the compensation: the twin is calibrated with virtual
 //! instruments, the hybrid predictor is trained on that dataset only, and every face and body
 //! diagonal is run under held-out thermal states (atypical cycles never used in calibration,
 //! other noise seeds) with the predictor in the loop. Three machine realisations.
@@ -89,7 +89,7 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
     worst.sort_by(|a, b| a.0.total_cmp(&b.0));
     println!("worst runs: {:?}", &worst[..3]);
     // Regression guard on the largest compensated error over all 147 runs: measured 2.48 µm
-    // (README, "Compensation: the campaign"); the issue's target of 2 µm is not reached, so
+    // (docs/results.md); the aim of 2 µm is not reached, so
     // this only stops the figure from sliding back (2.06 µm before the bilinear axis parts,
     // chosen on development states, which raised it here; 2.31 µm without the ambient history
     // feature, 7 µm in the first version). The guard stays at 2.5 µm: the runs are

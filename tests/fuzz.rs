@@ -1,4 +1,4 @@
-//! Property ("fuzz") tests of everything that reads user files (issue 7, part B): the G-code
+//! Property ("fuzz") tests of everything that reads user files: the G-code
 //! front end (lexer, parser, interpreter, planner, travel and collision check), the machine
 //! and fixture loaders, calibration datasets and measured thermal-drift files. Properties, for
 //! every input: no panic; no hang (every accepted program is bounded in machine time, so the
@@ -9,7 +9,7 @@
 //!
 //! Inputs are drawn by proptest from a fixed seed (deterministic in CI). The number of cases per
 //! property is set so that the whole file runs in about 15 s in release on the 2-core CI machine;
-//! the counts are the `cases` below (their total is stated in the README).
+//! the counts are the `cases` below (their total is stated in docs/results.md).
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};

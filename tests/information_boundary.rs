@@ -1,4 +1,4 @@
-//! The information boundary of DESIGN §3, checked: the knowledge side (`vmc-predict`: predictors,
+//! The information boundary (docs/architecture.md), checked: the knowledge side (`vmc-predict`: predictors,
 //! controller, synthesis, datasets) cannot reach the twin's internals because it does not depend
 //! on the twin crate — and cannot, since the twin crate depends on it (Cargo forbids cycles).
 //! This test fails if someone adds such a dependency or names the twin in its sources.

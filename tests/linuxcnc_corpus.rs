@@ -1,4 +1,4 @@
-//! Runs LinuxCNC's interpreter test corpus (`../shared/gcode-corpus/linuxcnc`, see its
+//! Runs LinuxCNC's interpreter test corpus (`tests/data/linuxcnc`, see its
 //! SOURCE.md) through our interpreter.
 //!
 //! - `interp/<case>/`: if we accept the program, our Traverse/Feed/Arc sequence must equal the
@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use vmc_twin::interp::{run_program, CanonKind, CanonMove, GcodeError, InterpConfig, Plane};
 
 /// The corpus: `$VMC_LINUXCNC_CORPUS` if set, else the copy vendored in `tests/data/linuxcnc`
-/// (taken unchanged from `../shared/gcode-corpus/linuxcnc`, see its SOURCE.md).
+/// (taken unchanged from LinuxCNC's interpreter tests, see tests/data/linuxcnc/SOURCE.md).
 fn corpus_dir() -> PathBuf {
     let dir = match std::env::var_os("VMC_LINUXCNC_CORPUS") {
         Some(d) => PathBuf::from(d),

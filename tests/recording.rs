@@ -1,4 +1,4 @@
-//! Acceptance tests of the Rerun recordings (issue 3/6), checked with the real Rerun CLI.
+//! Acceptance tests of the Rerun recordings, checked with the real Rerun CLI.
 //!
 //! The CLI comes from the PyPI wheel `rerun-sdk==0.36.3` (same version as the Rust SDK). It is
 //! found through the environment variable `RERUN_BIN`, else at `target/rerun-venv/bin/rerun`;

@@ -1,4 +1,4 @@
-//! Sensor placement (issue 4/6 part A) through the real binary: `select-sensors` ranks the
+//! Sensor placement through the real binary: `select-sensors` ranks the
 //! candidate locations, writes a sensor set that the other commands accept with `--sensors`,
 //! compares compensation quality on held-out runs, and rejects bad requests clearly.
 

@@ -1,4 +1,4 @@
-//! `fit-thermal` and `predict-thermal` on real measurements (issue 5, part B): the real binary in
+//! `fit-thermal` and `predict-thermal` on real measurements: the real binary in
 //! a temporary folder, on a slice of a real spindle thermal test vendored in
 //! `tests/data/spindle-thermal/` (every 4th row of the first three cycles, see SOURCE.md), and
 //! the error paths a user meets with a wrong file.

@@ -1,5 +1,5 @@
 //! Would this program crash the machine? Collision and travel checks of a motion plan
-//! (DESIGN §11), on the rapier f64 geometry stack (parry3d-f64 0.31, the crate rapier3d-f64 0.36
+//!, on the rapier f64 geometry stack (parry3d-f64 0.31, the crate rapier3d-f64 0.36
 //! builds its colliders from).
 //!
 //! # Frames

@@ -1,4 +1,4 @@
-//! The twin's geometric error field (DESIGN §4, §5): the 18 motion errors, 3 squareness errors
+//! The twin's geometric error field: the 18 motion errors, 3 squareness errors
 //! and 5 spindle drifts of the machine as functions of axis position and thermal-node temperature.
 //!
 //! Each motion error of axis j at normalised position `u = (pos − min)/(max − min)` is

@@ -1,4 +1,4 @@
-//! Rerun recordings (DESIGN §10): a run or a whole campaign written headless to an `.rrd` file
+//! Rerun recordings: a run or a whole campaign written headless to an `.rrd` file
 //! that `rerun FILE.rrd` opens with a ready layout.
 //!
 //! The simulation core does not know Rerun: a [`Recorder`] is a [`crate::sim::Observer`]. It

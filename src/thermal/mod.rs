@@ -1,4 +1,4 @@
-//! Thermal model of the machine: a lumped-capacitance (RC) network (DESIGN §5).
+//! Thermal model of the machine: a lumped-capacitance (RC) network.
 //!
 //! Model, per node i (temperatures in °C, time in s):
 //!
