@@ -42,19 +42,19 @@
 //! Loading checks `format`, `version` and `kind` first (clear messages), then the schema, then
 //! that the parts fit the sensor count.
 
-use std::fmt;
 use std::path::Path;
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-use crate::linreg::LinearModel;
 use crate::synthesis::MachineGeometry;
 
 use super::hybrid::{HybridParts, HybridPredictor};
 use super::linear::{LinearParts, LinearPredictor};
 use super::volumetric::VolumetricPredictor;
 use super::{ErrorPredictor, PredictError};
+
+pub use super::kind::ModelKind;
 
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
@@ -64,41 +64,6 @@ pub const FORMAT_VERSION: u64 = 7;
 pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
 const TEMP_UNIT: &str = "degC";
-
-/// Which model class a file or summary holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ModelKind {
-    /// Elementary-error nets + kinematic synthesis.
-    Hybrid,
-    /// Direct volumetric MLP.
-    Volumetric,
-    /// Linear regression on position/temperature features.
-    Linear,
-}
-
-impl ModelKind {
-    /// The name used in the `kind` field.
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelKind::Hybrid => "hybrid",
-            ModelKind::Volumetric => "volumetric",
-            ModelKind::Linear => "linear",
-        }
-    }
-
-    fn from_name(s: &str) -> Option<Self> {
-        [ModelKind::Hybrid, ModelKind::Volumetric, ModelKind::Linear]
-            .into_iter()
-            .find(|k| k.name() == s)
-    }
-}
-
-impl fmt::Display for ModelKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 /// One sensor entry of a model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -242,37 +207,6 @@ fn write_file(path: &Path, text: &str) -> Result<(), PredictError> {
         path: path.display().to_string(),
         msg: e.to_string(),
     })
-}
-
-/// Checks a linear model's shape and values against the widths its predictor needs.
-pub(crate) fn check_linear_model(
-    name: &str,
-    m: &LinearModel,
-    n_in: usize,
-    n_out: usize,
-) -> Result<(), PredictError> {
-    let ok = m.n_in() == n_in
-        && m.n_out() == n_out
-        && m.intercept().len() == n_out
-        && m.slopes().len() == n_in * n_out
-        && m.intercept()
-            .iter()
-            .chain(m.slopes())
-            .all(|v| v.is_finite());
-    if ok {
-        Ok(())
-    } else {
-        Err(PredictError::Inconsistent {
-            reason: format!(
-                "linear model `{name}` must map {n_in} → {n_out} values with finite coefficients \
-                 (has {} → {}, {} intercepts, {} slopes)",
-                m.n_in(),
-                m.n_out(),
-                m.intercept().len(),
-                m.slopes().len()
-            ),
-        })
-    }
 }
 
 /// Implements the JSON methods of one predictor type.

@@ -23,7 +23,7 @@ use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
 use super::data::{
     fit_linear, records_of, required_values, CycleSplit, SensorSelection, Table, VALUE_COLUMNS,
 };
-use super::file::{check_linear_model, ModelKind};
+use super::kind::{check_linear_model, ModelKind};
 use super::part::{fit_linear_plus_net, LinearPlusNet, PartRuntime};
 use super::{assert_temps_len, ErrorPredictor, PredictError, Settings, TrainSummary};
 

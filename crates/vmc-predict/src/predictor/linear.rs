@@ -14,7 +14,7 @@ use crate::linreg::LinearModel;
 use crate::synthesis::MachineGeometry;
 
 use super::data::{fit_linear, records_of, required_values, CycleSplit, SensorSelection, Table};
-use super::file::{check_linear_model, ModelKind};
+use super::kind::{check_linear_model, ModelKind};
 use super::volumetric::E_OUTPUTS;
 use super::{assert_temps_len, ErrorPredictor, PredictError, Settings, TrainSummary};
 

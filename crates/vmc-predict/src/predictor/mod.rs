@@ -40,6 +40,7 @@ mod data;
 mod fastnet;
 pub mod file;
 mod hybrid;
+mod kind;
 mod linear;
 mod part;
 mod volumetric;
@@ -47,10 +48,9 @@ mod volumetric;
 #[cfg(test)]
 pub(crate) mod testdata;
 
-pub use file::{
-    AnyPredictor, ModelKind, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION,
-};
+pub use file::{AnyPredictor, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION};
 pub use hybrid::{train_hybrid, HybridPredictor};
+pub use kind::ModelKind;
 pub use linear::{train_linear, LinearPredictor};
 pub use volumetric::{train_volumetric, VolumetricPredictor};
 

@@ -7,7 +7,7 @@ use crate::synthesis::MachineGeometry;
 
 use super::data::{fit_mlp, records_of, required_values, CycleSplit, SensorSelection, Table};
 use super::fastnet::SplitNet;
-use super::file::ModelKind;
+use super::kind::ModelKind;
 use super::{assert_temps_len, ErrorPredictor, PredictError, Settings, TrainSummary};
 
 /// Output names of the volumetric models.
