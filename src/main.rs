@@ -369,12 +369,11 @@ fn run(args: RunArgs) -> Result<()> {
         (Some(path), true) => {
             use vmc_twin::predict::controller::Compensator;
             use vmc_twin::predict::predictor::AnyPredictor;
-            use vmc_twin::predict::predictor::PredictError;
-            // An I/O error names the file already; a content error does not.
-            let model = AnyPredictor::load_json(path).map_err(|e| match e {
-                PredictError::Io { .. } => anyhow::Error::new(e),
-                _ => anyhow::Error::new(e).context(path.display().to_string()),
-            })?;
+            // A read error and a content error alike are named by the file, once.
+            let model = std::fs::read_to_string(path)
+                .map_err(anyhow::Error::new)
+                .and_then(|text| AnyPredictor::from_json_str(&text).map_err(anyhow::Error::new))
+                .with_context(|| path.display().to_string())?;
             let trained_tool_mm = model.geometry().tool_offset_mm;
             let (model, retooled) = model
                 .for_machine_geometry(&machine.geometry())

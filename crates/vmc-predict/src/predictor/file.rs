@@ -41,8 +41,10 @@
 //! `float_roundtrip`, so a loaded model predicts bit-identically to the saved one.
 //! Loading checks `format`, `version` and `kind` first (clear messages), then the schema, then
 //! that the parts fit the sensor count.
-
-use std::path::Path;
+//!
+//! The model file is handled as text ([`AnyPredictor::from_json_str`], `to_json_string`): this
+//! crate does no file I/O, the application reads and writes the files and names them in its
+//! messages.
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -195,20 +197,6 @@ fn from_json<B: DeserializeOwned>(
     ))
 }
 
-fn read_file(path: &Path) -> Result<String, PredictError> {
-    std::fs::read_to_string(path).map_err(|e| PredictError::Io {
-        path: path.display().to_string(),
-        msg: e.to_string(),
-    })
-}
-
-fn write_file(path: &Path, text: &str) -> Result<(), PredictError> {
-    std::fs::write(path, text).map_err(|e| PredictError::Io {
-        path: path.display().to_string(),
-        msg: e.to_string(),
-    })
-}
-
 /// Implements the JSON methods of one predictor type.
 macro_rules! json_methods {
     ($ty:ty, $kind:expr, $body:ident, $from:expr) => {
@@ -229,22 +217,6 @@ macro_rules! json_methods {
             pub fn from_json_str(text: &str) -> Result<Self, PredictError> {
                 let (sensors, geometry, body) = from_json(text, $kind)?;
                 $from(sensors, geometry, body)
-            }
-
-            /// Writes the model file.
-            ///
-            /// # Errors
-            /// As [`Self::to_json_string`], or the file cannot be written.
-            pub fn save_json(&self, path: &Path) -> Result<(), PredictError> {
-                write_file(path, &self.to_json_string()?)
-            }
-
-            /// Reads a model file.
-            ///
-            /// # Errors
-            /// As [`Self::from_json_str`], or the file cannot be read.
-            pub fn load_json(path: &Path) -> Result<Self, PredictError> {
-                Self::from_json_str(&read_file(path)?)
             }
         }
     };
@@ -322,14 +294,6 @@ impl AnyPredictor {
         })
     }
 
-    /// Reads a model file of any kind.
-    ///
-    /// # Errors
-    /// As [`Self::from_json_str`], or the file cannot be read.
-    pub fn load_json(path: &Path) -> Result<Self, PredictError> {
-        Self::from_json_str(&read_file(path)?)
-    }
-
     /// The model file text.
     ///
     /// # Errors
@@ -340,14 +304,6 @@ impl AnyPredictor {
             AnyPredictor::Volumetric(p) => p.to_json_string(),
             AnyPredictor::Linear(p) => p.to_json_string(),
         }
-    }
-
-    /// Writes the model file.
-    ///
-    /// # Errors
-    /// Serialisation or file errors.
-    pub fn save_json(&self, path: &Path) -> Result<(), PredictError> {
-        write_file(path, &self.to_json_string()?)
     }
 
     /// Rejects a machine whose sensor names or order differ from the model's.
@@ -497,28 +453,6 @@ mod tests {
             // And the text itself is a fixed point.
             assert_eq!(back.to_json_string().unwrap(), text);
         }
-    }
-
-    #[test]
-    fn a_file_round_trip_through_the_file_system_works() {
-        let ds = td::dataset(&[4.0, 7.0], 2);
-        let (mut p, _) = train_linear(&ds, &td::geometry(), &quick()).unwrap();
-        let path =
-            std::env::temp_dir().join(format!("vmc-predict-model-{}.json", std::process::id()));
-        p.save_json(&path).unwrap();
-        let mut back = LinearPredictor::load_json(&path).unwrap();
-        let _ = std::fs::remove_file(&path);
-        let t = td::temps_degc(5.0, 3600.0);
-        assert_eq!(
-            p.predict_error_mm([1.0, 2.0, -3.0], &t),
-            back.predict_error_mm([1.0, 2.0, -3.0], &t)
-        );
-        let missing = Path::new("/nonexistent/dir/model.json");
-        let err = LinearPredictor::load_json(missing).unwrap_err();
-        assert!(
-            err.to_string().starts_with("/nonexistent/dir/model.json: "),
-            "{err}"
-        );
     }
 
     #[test]

@@ -34,7 +34,7 @@
 //! compensation's fixed-point iterations reuse them); a query then costs the position columns,
 //! the tanh of each hidden unit and the output layers. Nothing is allocated on the query path.
 //!
-//! Models are saved as versioned JSON ([`mod@file`]).
+//! Models are written to and read from versioned JSON text ([`mod@file`]).
 
 mod data;
 mod fastnet;
@@ -287,14 +287,6 @@ pub enum PredictError {
     Inconsistent {
         /// What does not fit.
         reason: String,
-    },
-    /// Reading or writing a model file failed.
-    #[error("{path}: {msg}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The OS message.
-        msg: String,
     },
 }
 
