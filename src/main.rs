@@ -401,7 +401,7 @@ fn run(args: RunArgs) -> Result<()> {
                     machine.machine.name
                 )
             })?;
-            Some(study::LoopController(ctrl))
+            Some(ctrl)
         }
         (Some(path), false) => anyhow::bail!(
             "{}: a model was given without --compensate; add --compensate to put it in the loop",

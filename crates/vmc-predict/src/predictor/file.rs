@@ -379,11 +379,11 @@ impl ErrorPredictor for AnyPredictor {
     }
 
     #[inline]
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
         match self {
-            AnyPredictor::Hybrid(p) => p.predict_error_mm(q_mm, temps_degc),
-            AnyPredictor::Volumetric(p) => p.predict_error_mm(q_mm, temps_degc),
-            AnyPredictor::Linear(p) => p.predict_error_mm(q_mm, temps_degc),
+            AnyPredictor::Hybrid(p) => p.predict_error_mm(q_mm),
+            AnyPredictor::Volumetric(p) => p.predict_error_mm(q_mm),
+            AnyPredictor::Linear(p) => p.predict_error_mm(q_mm),
         }
     }
 
@@ -396,8 +396,10 @@ impl ErrorPredictor for AnyPredictor {
     }
 
     fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
-        if let AnyPredictor::Hybrid(p) = self {
-            p.observe_readings(time_s, temps_degc);
+        match self {
+            AnyPredictor::Hybrid(p) => p.observe_readings(time_s, temps_degc),
+            AnyPredictor::Volumetric(p) => p.observe_readings(time_s, temps_degc),
+            AnyPredictor::Linear(p) => p.observe_readings(time_s, temps_degc),
         }
     }
 
@@ -446,12 +448,43 @@ mod tests {
             assert_eq!(back.sensor_names(), model.sensor_names());
             assert_eq!(back.geometry(), model.geometry());
             for (q, t, _) in td::held_out(5.0, 9).into_iter().take(50) {
-                let a = model.predict_error_mm(q, &t);
-                let b = back.predict_error_mm(q, &t);
+                let a = td::predict_at(&mut model, q, &t);
+                let b = td::predict_at(&mut back, q, &t);
                 assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{}", model.kind());
             }
             // And the text itself is a fixed point.
             assert_eq!(back.to_json_string().unwrap(), text);
+        }
+    }
+
+    #[test]
+    fn a_prediction_changes_only_when_new_readings_are_observed() {
+        let q = [300.0, 150.0, -200.0];
+        let cool = td::temps_degc(6.0, 600.0);
+        let warm = td::temps_degc(6.0, 7200.0);
+        for mut model in all_kinds() {
+            let kind = model.kind();
+            let mut told_warm = model.clone();
+            // No reading yet: nothing to predict for.
+            assert!(
+                model.predict_error_mm(q).iter().all(|e| e.is_nan()),
+                "{kind}"
+            );
+            model.observe_readings(600.0, &cool);
+            let at_cool = model.predict_error_mm(q);
+            assert!(at_cool.iter().all(|e| e.is_finite()), "{kind}");
+            // Queries alone do not move it, whatever was queried in between.
+            model.predict_error_mm([10.0, 20.0, -30.0]);
+            assert_eq!(model.predict_error_mm(q), at_cool, "{kind}");
+            // Warmer readings through the door do, to what a model told them alone predicts.
+            model.observe_readings(7200.0, &warm);
+            let at_warm = model.predict_error_mm(q);
+            assert!(
+                (0..3).any(|k| (at_warm[k] - at_cool[k]).abs() > 1e-4),
+                "{kind}: {at_cool:?} -> {at_warm:?}"
+            );
+            told_warm.observe_readings(7200.0, &warm);
+            assert_eq!(told_warm.predict_error_mm(q), at_warm, "{kind}");
         }
     }
 

@@ -74,13 +74,14 @@ pub(crate) struct HybridParts {
     pub spindle_speed_taus_s: Vec<f64>,
 }
 
-/// Query-time state: part evaluators with cached temperature-only results, scratch.
+/// Query-time state: the held readings, part evaluators with cached temperature-only results,
+/// scratch.
 #[derive(Debug, Clone)]
 struct Runtime {
     axes: [PartRuntime<6>; 3],
     spindle: PartRuntime<5>,
-    /// Spindle and squareness fields hold the values for `last_readings` and the history
-    /// observed so far.
+    /// Spindle and squareness fields hold the values for `readings` and the history observed so
+    /// far (once `stale` is cleared).
     errs: ElementaryErrors,
     /// Filters over the readings seen by [`ErrorPredictor::observe_readings`]: those every
     /// part sees, those only the spindle part sees.
@@ -94,10 +95,11 @@ struct Runtime {
     /// Temperature inputs of the networks (readings, shared history features, then the
     /// spindle-only ones) of the cached results.
     inputs: Vec<f64>,
-    /// Readings of the cached results.
-    last_readings: Vec<f64>,
-    /// Whether the cached results must be recomputed at the next query (never computed, or
-    /// readings observed since, which move the history features).
+    /// The readings last observed, °C (model sensor order; NaN before the first).
+    readings: Vec<f64>,
+    /// Whether the cached results must be recomputed at the next query: set when readings or a
+    /// used spindle speed are observed (they move the readings, the history features and the
+    /// speed features), cleared by the recomputation.
     stale: bool,
 }
 
@@ -182,7 +184,7 @@ impl HybridPredictor {
             speed,
             n_shared: k,
             inputs: vec![0.0; k_spindle],
-            last_readings: vec![0.0; sensors.len()],
+            readings: vec![f64::NAN; sensors.len()],
             stale: true,
         };
         Ok(Self {
@@ -204,7 +206,8 @@ impl HybridPredictor {
     /// point, mm). The parts predict elementary errors of the axes and the spindle, which do not
     /// depend on the tool; the tool enters only through the synthesis (angular errors and
     /// spindle tilts times the tool's arm), so a tool change needs no recalibration. The
-    /// baselines, fitted on the tool-tip error itself, cannot do this.
+    /// baselines, fitted on the tool-tip error itself, cannot do this. The new model starts
+    /// with no readings observed.
     ///
     /// # Errors
     /// A non-finite offset ([`PredictError::Inconsistent`]).
@@ -239,11 +242,13 @@ impl HybridPredictor {
         super::check_sensor_names(&self.sensors, machine_sensor_names)
     }
 
-    /// The 26 predicted elementary errors (mm, rad) at axis positions `q_mm` and readings
-    /// `temps_degc` (model sensor order). Allocation-free.
-    pub fn elementary_errors(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> ElementaryErrors {
-        assert_temps_len(temps_degc, self.sensors.len());
-        self.update_temps(temps_degc);
+    /// The 26 predicted elementary errors (mm, rad) at axis positions `q_mm` under the readings
+    /// last observed ([`ErrorPredictor::observe_readings`]; NaN before the first).
+    /// Allocation-free.
+    pub fn elementary_errors(&mut self, q_mm: [f64; 3]) -> ElementaryErrors {
+        if self.rt.stale {
+            self.update_temps();
+        }
         let mut v = [0.0; 6];
         for (k, net) in self.rt.axes.iter_mut().enumerate() {
             net.eval(&[q_mm[k]], &mut v);
@@ -254,26 +259,17 @@ impl HybridPredictor {
         self.rt.errs
     }
 
-    /// Recomputes the temperature-only parts when the readings changed (bitwise) or readings
-    /// were observed since the last time (the history features moved). A query between two
-    /// readings only compares the readings.
-    fn update_temps(&mut self, readings: &[f64]) {
+    /// Recomputes the temperature-dependent parts for the held readings and the filters' state
+    /// (history and speed features, the networks' temperature inputs, the spindle drifts and the
+    /// squareness). Runs at the first query after an observation: a query between two
+    /// observations reuses them.
+    fn update_temps(&mut self) {
         let rt = &mut self.rt;
-        if !rt.stale
-            && rt
-                .last_readings
-                .iter()
-                .zip(readings)
-                .all(|(a, b)| a.to_bits() == b.to_bits())
-        {
-            return;
-        }
-        rt.last_readings.copy_from_slice(readings);
         rt.stale = false;
         let (shared, own) = rt.inputs.split_at_mut(rt.n_shared);
-        rt.history.features_into(readings, shared);
+        rt.history.features_into(&rt.readings, shared);
         let (own, speed) = own.split_at_mut(rt.spindle_history.n_history());
-        rt.spindle_history.history_into(readings, own);
+        rt.spindle_history.history_into(&rt.readings, own);
         rt.speed.features_into(speed);
         let temps = &rt.inputs[..rt.n_shared];
         for net in &mut rt.axes {
@@ -300,8 +296,8 @@ impl ErrorPredictor for HybridPredictor {
     }
 
     #[inline]
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
-        let errs = self.elementary_errors(q_mm, temps_degc);
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+        let errs = self.elementary_errors(q_mm);
         let e = first_order_error_mm(&self.geometry, q_mm, &errs);
         [e.x, e.y, e.z]
     }
@@ -311,6 +307,8 @@ impl ErrorPredictor for HybridPredictor {
     }
 
     fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
+        assert_temps_len(temps_degc, self.sensors.len());
+        self.rt.readings.copy_from_slice(temps_degc);
         self.rt.history.observe(time_s, temps_degc);
         self.rt.spindle_history.observe(time_s, temps_degc);
         self.rt.stale = true;

@@ -20,7 +20,7 @@ fn trained() -> (HybridPredictor, TrainSummary) {
 fn held_out_rms(p: &mut HybridPredictor, tweak: impl Fn(&[f64]) -> Vec<f64>) -> (f64, f64) {
     let pairs: Vec<_> = td::held_out(6.0, 5)
         .into_iter()
-        .map(|(q, t, e)| (p.predict_error_mm(q, &tweak(&t)), e))
+        .map(|(q, t, e)| (td::predict_at(&mut *p, q, &tweak(&t)), e))
         .collect();
     td::rms_um(&pairs)
 }
@@ -51,8 +51,10 @@ fn a_version_5_file_reads_as_plain_parts_and_predicts_as_written() {
         .remove("bilinear");
     let mut old = HybridPredictor::from_json_str(&v.to_string()).unwrap();
     let hot = td::temps_degc(6.0, 7200.0);
+    old.observe_readings(0.0, &hot);
+    p.observe_readings(0.0, &hot);
     for q in [[100.0, 50.0, -80.0], [400.0, 300.0, -300.0]] {
-        assert_eq!(old.predict_error_mm(q, &hot), p.predict_error_mm(q, &hot));
+        assert_eq!(old.predict_error_mm(q), p.predict_error_mm(q));
     }
 }
 
@@ -77,10 +79,13 @@ fn another_tool_gives_the_model_calibrated_with_that_tool() {
     assert_eq!(moved.geometry(), &long);
     let mut p150 = p150;
     let hot = td::temps_degc(6.0, 7200.0);
+    for p in [&mut moved, &mut p250, &mut p150] {
+        p.observe_readings(0.0, &hot);
+    }
     for q in [[100.0, 50.0, -80.0], [400.0, 300.0, -300.0]] {
-        let m = moved.predict_error_mm(q, &hot);
-        assert_eq!(m, p250.predict_error_mm(q, &hot));
-        let short = p150.predict_error_mm(q, &hot);
+        let m = moved.predict_error_mm(q);
+        assert_eq!(m, p250.predict_error_mm(q));
+        let short = p150.predict_error_mm(q);
         assert!(
             (0..3).any(|k| (m[k] - short[k]).abs() > 1e-6),
             "{m:?} vs {short:?}"
@@ -153,17 +158,20 @@ fn history_features_follow_the_observed_readings_and_survive_the_model_file() {
     let mut back = HybridPredictor::from_json_str(&p.to_json_string().unwrap()).unwrap();
     let q = [100.0, 50.0, -80.0];
     let hot = td::temps_degc(6.0, 7200.0);
-    // Never observed: the filters sit at the present readings (steady state).
-    let steady = p.predict_error_mm(q, &hot);
-    // After a warm-up observed from cold, the history features are non-zero.
+    // The readings observed alone: the filters start at them (steady state).
+    let mut fresh = p.clone();
+    fresh.observe_readings(7200.0, &hot);
+    let steady = fresh.predict_error_mm(q);
+    // After a warm-up observed from cold up to the same readings, the history features are
+    // non-zero.
     for k in 0..=120 {
         let t = 60.0 * f64::from(k);
         let temps = td::temps_degc(6.0, t);
         p.observe_readings(t, &temps);
         back.observe_readings(t, &temps);
     }
-    let warmed = p.predict_error_mm(q, &hot);
-    assert_eq!(warmed, back.predict_error_mm(q, &hot));
+    let warmed = p.predict_error_mm(q);
+    assert_eq!(warmed, back.predict_error_mm(q));
     assert_ne!(warmed, steady);
     // A bad time constant in a file is refused.
     let mut v: serde_json::Value = serde_json::from_str(&p.to_json_string().unwrap()).unwrap();
@@ -203,15 +211,17 @@ fn spindle_only_history_reaches_the_spindle_part_alone_and_survives_the_model_fi
     let mut back = HybridPredictor::from_json_str(&p.to_json_string().unwrap()).unwrap();
     let q = [100.0, 50.0, -80.0];
     let hot = td::temps_degc(6.0, 7200.0);
-    let steady = p.elementary_errors(q, &hot);
+    let mut fresh = p.clone();
+    fresh.observe_readings(7200.0, &hot);
+    let steady = fresh.elementary_errors(q);
     for k in 0..=120 {
         let t = 60.0 * f64::from(k);
         let temps = td::temps_degc(6.0, t);
         p.observe_readings(t, &temps);
         back.observe_readings(t, &temps);
     }
-    let warmed = p.elementary_errors(q, &hot);
-    assert_eq!(warmed, back.elementary_errors(q, &hot));
+    let warmed = p.elementary_errors(q);
+    assert_eq!(warmed, back.elementary_errors(q));
     // The history moves the spindle drift and leaves the axis parts alone.
     assert_ne!(warmed.spindle, steady.spindle);
     assert_eq!(warmed.axes, steady.axes);
@@ -257,14 +267,17 @@ fn spindle_speed_features_reach_the_spindle_part_alone_and_survive_the_model_fil
     let mut back = HybridPredictor::from_json_str(&text).unwrap();
     let q = [100.0, 50.0, -80.0];
     let hot = td::temps_degc(6.0, 7200.0);
-    let rest = p.elementary_errors(q, &hot);
+    p.observe_readings(0.0, &hot);
+    back.observe_readings(0.0, &hot);
+    let rest = p.elementary_errors(q);
     for k in 0..=30 {
         let t = 60.0 * f64::from(k);
         p.observe_spindle_speed(t, 9000.0);
         back.observe_spindle_speed(t, 9000.0);
     }
-    let ran = p.elementary_errors(q, &hot);
-    assert_eq!(ran, back.elementary_errors(q, &hot));
+    // The same readings: the speed alone moves the prediction.
+    let ran = p.elementary_errors(q);
+    assert_eq!(ran, back.elementary_errors(q));
     // The speed moves the spindle drift and leaves the axis parts alone.
     assert_ne!(ran.spindle, rest.spindle);
     assert_eq!(ran.axes, rest.axes);
@@ -280,10 +293,11 @@ fn spindle_speed_features_reach_the_spindle_part_alone_and_survive_the_model_fil
         },
     )
     .unwrap();
-    let before = plain.elementary_errors(q, &hot);
+    plain.observe_readings(0.0, &hot);
+    let before = plain.elementary_errors(q);
     plain.observe_spindle_speed(0.0, 0.0);
     plain.observe_spindle_speed(600.0, 9000.0);
-    assert_eq!(plain.elementary_errors(q, &hot), before);
+    assert_eq!(plain.elementary_errors(q), before);
     assert!(!plain.to_json_string().unwrap().contains("spindle_speed"));
 }
 
@@ -328,7 +342,8 @@ fn zeroed_or_shuffled_temperatures_degrade_the_hybrid() {
 fn the_spindle_and_squareness_parts_follow_their_truth() {
     let (mut p, _) = trained();
     let temps = td::temps_degc(6.0, 7200.0);
-    let e = p.elementary_errors([100.0, 100.0, -100.0], &temps);
+    p.observe_readings(0.0, &temps);
+    let e = p.elementary_errors([100.0, 100.0, -100.0]);
     let sp = td::spindle(&temps);
     let sq = td::squareness(&temps);
     // δz_b is tens of µm here; 0.5 µm and 0.5 µrad tolerances (noise 0.2).
