@@ -24,7 +24,7 @@ use std::hint::black_box;
 
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::controller::Compensator;
+use vmc_twin::predict::controller::{Compensator, Controller};
 use vmc_twin::predict::predictor::{self, Settings};
 use vmc_twin::thermal::Activity;
 use vmc_twin::twin::Twin;
@@ -49,15 +49,13 @@ fn compensation_query(c: &mut Criterion) {
     let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
     let mut comp = Compensator::for_machine(model, &names).unwrap();
     let temps: Vec<f64> = (0..names.len()).map(|i| 22.0 + 0.25 * i as f64).collect();
+    comp.on_readings(0.0, &temps);
     let mut k = 0u64;
     c.bench_function("compensation_query", |b| {
         b.iter(|| {
             k = k.wrapping_add(1);
             let s = (k % 1000) as f64 * 0.5;
-            black_box(comp.axis_command_mm(
-                black_box([10.0 + s, 60.0 + 0.5 * s, -225.0]),
-                black_box(&temps),
-            ))
+            black_box(comp.axis_command_mm(black_box([10.0 + s, 60.0 + 0.5 * s, -225.0])))
         })
     });
 }

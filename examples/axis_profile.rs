@@ -8,7 +8,7 @@
 //! error (0.25–0.3 µm on the reference machine).
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
-use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::study::follow_to_state;
 use vmc_twin::study::ForMachine;
 use vmc_twin::twin::Twin;
@@ -42,7 +42,9 @@ fn main() {
         println!("state {}", state.name);
         h = follow_to_state(&mut twin, state, h).unwrap();
     }
-    let temps = twin.sensor_readings().values_degc;
+    // The present readings (already observed when the predictor followed the state).
+    let r = twin.sensor_readings();
+    h.observe_readings(r.time_s, &r.values_degc);
     let (lo, hi) = (spec.axes.travel_min_mm[axis], spec.axes.travel_max_mm[axis]);
     println!("pos_mm   true(dx dy dz µm, rx ry rz µrad) | predicted");
     for k in 0..=24 {
@@ -50,7 +52,7 @@ fn main() {
             [0, 1, 2].map(|i| 0.5 * (spec.axes.travel_min_mm[i] + spec.axes.travel_max_mm[i]));
         q[axis] = lo + (hi - lo) * (0.05 + 0.9 * k as f64 / 24.0);
         let t = twin.elementary_errors(q).axes[axis];
-        let p = h.elementary_errors(q, &temps).axes[axis];
+        let p = h.elementary_errors(q).axes[axis];
         let f = |l: [f64; 3], r: [f64; 3]| {
             format!(
                 "{:6.2} {:6.2} {:6.2} {:6.2} {:6.2} {:6.2}",

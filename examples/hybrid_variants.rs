@@ -156,11 +156,11 @@ impl predictor::ErrorPredictor for Ensemble {
     fn sensor_names(&self) -> &[String] {
         self.0[0].sensor_names()
     }
-    fn predict_error_mm(&mut self, q: [f64; 3], t: &[f64]) -> [f64; 3] {
+    fn predict_error_mm(&mut self, q: [f64; 3]) -> [f64; 3] {
         let n = self.0.len() as f64;
         let mut e = [0.0; 3];
         for p in &mut self.0 {
-            let v = p.predict_error_mm(q, t);
+            let v = p.predict_error_mm(q);
             for k in 0..3 {
                 e[k] += v[k] / n;
             }

@@ -108,10 +108,10 @@ fn main() {
                         hs.observe_spindle_speed(r.time_s, 0.0);
                     }
                 }
-                let temps = twin.sensor_readings().values_degc;
+                // The predictor holds the readings it last observed: the present ones.
                 for &q in &grid {
                     let t = twin.elementary_errors(q);
-                    let p = hs.elementary_errors(q, &temps);
+                    let p = hs.elementary_errors(q);
                     let base = first_order_error_mm(&geom, q, &t);
                     let mut parts = Vec::new();
                     for part in 0..5 {

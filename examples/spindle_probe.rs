@@ -17,7 +17,6 @@ use vmc_twin::calibration::{self, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::linreg::LinearModel;
 use vmc_twin::predict::nn::Samples;
-use vmc_twin::sensors::SensorReadings;
 use vmc_twin::twin::{sub_seed, Twin};
 
 const SPEED_TAUS_S: [f64; 3] = [120.0, 600.0, 1800.0];
@@ -31,17 +30,17 @@ struct NoseFilter {
 }
 
 impl vmc_twin::sim::Controller for NoseFilter {
-    fn axis_command_mm(&mut self, p_mm: [f64; 3], _: &SensorReadings) -> [f64; 3] {
+    fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
         p_mm
     }
 
-    fn on_readings(&mut self, r: &SensorReadings) {
-        let x = r.values_degc[self.idx];
+    fn on_readings(&mut self, time_s: f64, values_degc: &[f64]) {
+        let x = values_degc[self.idx];
         self.lp = Some(match self.lp {
             None => x,
-            Some(f) => f + (1.0 - (-(r.time_s - self.last_s) / NOSE_TAU_S).exp()) * (x - f),
+            Some(f) => f + (1.0 - (-(time_s - self.last_s) / NOSE_TAU_S).exp()) * (x - f),
         });
-        self.last_s = r.time_s;
+        self.last_s = time_s;
     }
 }
 

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use crate::calibration::{self, CampaignConfig, ThermalCycle};
 use crate::machine::MachineSpec;
-use crate::predict::controller::Compensator;
+use crate::predict::controller::{Compensator, Controller};
 use crate::predict::predictor::{self, Settings};
 use crate::program;
 use crate::sim::{self, SampleMode, SimConfig};
@@ -63,10 +63,12 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
     let temps: Vec<f64> = (0..names.len()).map(|i| 22.0 + 0.25 * i as f64).collect();
     const N: usize = 100_000;
     let batch = |comp: &mut Compensator<_>, offset: usize| {
+        // One set of readings held over the batch, as between two sensor samples.
+        comp.on_readings(0.0, &temps);
         let mut acc = 0.0;
         for k in 0..N {
             let s = ((k + offset) % 1000) as f64 * 0.5;
-            let q = comp.axis_command_mm([10.0 + s, 60.0 + 0.5 * s, -225.0], &temps);
+            let q = comp.axis_command_mm([10.0 + s, 60.0 + 0.5 * s, -225.0]);
             acc += q[0];
         }
         std::hint::black_box(acc)

@@ -247,7 +247,8 @@ pub fn drive_with(
     mut controller: Option<&mut dyn crate::sim::Controller>,
 ) -> Result<(), TwinError> {
     if let Some(c) = controller.as_mut() {
-        c.on_readings(&twin.sensor_readings());
+        let r = twin.sensor_readings();
+        c.on_readings(r.time_s, &r.values_degc);
         // A no-op when the controller already followed the machine up to now; else the
         // spindle is taken at rest before.
         c.on_spindle_speed(twin.time_s(), 0.0);
@@ -278,7 +279,8 @@ pub fn drive_with(
         };
         twin.advance(dt, &activity)?;
         if let Some(c) = controller.as_mut() {
-            c.on_readings(&twin.sensor_readings());
+            let r = twin.sensor_readings();
+            c.on_readings(r.time_s, &r.values_degc);
             c.on_spindle_speed(twin.time_s(), p.spindle_rpm);
         }
     }

@@ -9,8 +9,9 @@
 //! cycle during motion as well.
 //!
 //! Before and after compensation are computed in the same pass: at each point the uncompensated
-//! machine is commanded `q = p` and the compensated one `q = controller(p, readings)`, under the
-//! same thermal state and the same random approach error, so they compare point by point.
+//! machine is commanded `q = p` and the compensated one `q = controller(p)` (computed under the
+//! readings last given to the controller), in the same thermal state and with the same random
+//! approach error, so they compare point by point.
 
 use thiserror::Error;
 
@@ -53,29 +54,11 @@ impl Default for SimConfig {
     }
 }
 
-/// A controller that turns a commanded tool position into axis commands (the compensation).
-/// It gets nothing of the twin but the held sensor readings.
-pub trait Controller {
-    /// Axis command `q` (mm) for the commanded tool position `p_mm`.
-    fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3];
-
-    /// The commanded tool path ran one motion segment from `start_mm` to `end_mm` (mm), in
-    /// program order, after any points taken on it. Lets a controller follow the commanded
-    /// trajectory between the points it compensates (e.g. each axis's direction of motion, for
-    /// backlash compensation). Default: ignored.
-    fn on_commanded_motion(&mut self, _start_mm: [f64; 3], _end_mm: [f64; 3]) {}
-
-    /// New sensor readings, at every thermal step of the twin, also between compensated points
-    /// and while nothing is compensated (a warm-up, the thermal history before a test): what a
-    /// controller logging its sensors sees. Lets a model follow the readings' history.
-    /// Default: ignored.
-    fn on_readings(&mut self, _readings: &SensorReadings) {}
-
-    /// The spindle ran at the commanded speed `rpm` since the previous call, up to twin time
-    /// `time_s` (s): what the controller commanded (S, M3/M5), never the twin's state. Called
-    /// at every thermal step. Default: ignored.
-    fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
-}
+/// The controller in the loop (the compensation), from the knowledge side: it gets nothing of
+/// the twin but the held sensor readings' values and time ([`Controller::on_readings`] at every
+/// thermal step), the commanded spindle speed, the commanded motion and the commanded tool
+/// positions.
+pub use crate::predict::controller::Controller;
 
 /// One measurement point.
 #[derive(Debug, Clone, PartialEq)]
@@ -147,7 +130,7 @@ pub struct SimEvent {
 /// Receives what happens during a run (report, recorder, progress bar).
 ///
 /// Observers are on the truth side (reports, visualisation): they may see node temperatures.
-/// Controllers never do (they get only [`SensorReadings`], see [`Controller`]).
+/// Controllers never do (they get only the readings' values and time, see [`Controller`]).
 pub trait Observer {
     /// A program (or a phase) starts.
     fn on_run_start(&mut self, _start: &RunStart) {}
@@ -310,7 +293,7 @@ pub fn execute(
         next_motion_sample: 0,
     };
     if let Some(c) = compensator.as_mut() {
-        c.on_readings(&clock.readings);
+        c.on_readings(clock.readings.time_s, &clock.readings.values_degc);
         // A no-op when the controller already followed the machine up to now.
         c.on_spindle_speed(twin.time_s(), 0.0);
     }
@@ -447,7 +430,7 @@ impl Clock {
         self.plan_t_s += dt_s;
         self.readings = twin.sensor_readings();
         if let Some(c) = controller.as_mut() {
-            c.on_readings(&self.readings);
+            c.on_readings(self.readings.time_s, &self.readings.values_degc);
             c.on_spindle_speed(twin.time_s(), activity.spindle_rpm);
         }
         observer.on_thermal_step(twin.time_s(), &self.readings);
@@ -513,7 +496,8 @@ fn measure(
     });
     let (q, after) = match compensator {
         Some(c) => {
-            let q = c.axis_command_mm(p_mm, readings);
+            // The readings given to the controller last are `readings` (`Clock::readings`).
+            let q = c.axis_command_mm(p_mm);
             let correction_mm =
                 ((q[0] - p_mm[0]).powi(2) + (q[1] - p_mm[1]).powi(2) + (q[2] - p_mm[2]).powi(2))
                     .sqrt();
@@ -620,10 +604,10 @@ mod tests {
     }
 
     impl Controller for SpeedLog {
-        fn axis_command_mm(&mut self, p_mm: [f64; 3], _r: &SensorReadings) -> [f64; 3] {
+        fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
             p_mm
         }
-        fn on_readings(&mut self, _r: &SensorReadings) {
+        fn on_readings(&mut self, _time_s: f64, _values_degc: &[f64]) {
             self.readings += 1;
         }
         fn on_spindle_speed(&mut self, time_s: f64, rpm: f64) {
@@ -669,7 +653,7 @@ mod tests {
     struct Shift(f64);
 
     impl Controller for Shift {
-        fn axis_command_mm(&mut self, p_mm: [f64; 3], _r: &SensorReadings) -> [f64; 3] {
+        fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
             [p_mm[0] + self.0, p_mm[1], p_mm[2]]
         }
     }

@@ -3,9 +3,10 @@
 //! compensation → report.
 //!
 //! The predictors come from `vmc-predict` and see only the calibration dataset and, in the loop,
-//! the held sensor readings (through [`crate::sim::Controller`]). Evaluation states are atypical
-//! cycles that never enter the calibration data, and evaluation noise (sensors, repeatability,
-//! reversal) is drawn from other seeds than the calibration's: the same machine on another day.
+//! the held sensor readings (a [`Compensator`] is the loop's [`crate::sim::Controller`]).
+//! Evaluation states are atypical cycles that never enter the calibration data, and evaluation
+//! noise (sensors, repeatability, reversal) is drawn from other seeds than the calibration's: the
+//! same machine on another day.
 //!
 //! Prediction metrics compare, at each measurement point, the true uncompensated error E(p) with
 //! the error the controller compensated for, `p − q` (= E_pred(q) at the fixed point), over the
@@ -22,8 +23,7 @@ use crate::predict::predictor::{
     self, ErrorPredictor, ModelKind, PredictError, Settings, TrainSummary,
 };
 use crate::program::{self, ProgramError};
-use crate::sensors::SensorReadings;
-use crate::sim::{Controller, SimError};
+use crate::sim::SimError;
 use crate::twin::{sub_seed, Twin, TwinError};
 
 pub use crate::program::DIAGONALS;
@@ -51,31 +51,6 @@ pub enum EvalError {
     Program(#[from] ProgramError),
 }
 
-/// Adapts a knowledge-side compensator to the simulation loop: it passes on the sensor
-/// readings' values and the commanded trajectory (for the approach directions), nothing else.
-pub struct LoopController<P: ErrorPredictor>(pub Compensator<P>);
-
-impl<P: ErrorPredictor> Controller for LoopController<P> {
-    fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3] {
-        // The readings' history reached the predictor through `on_readings`, at every step.
-        self.0.axis_command_mm(p_mm, &readings.values_degc)
-    }
-
-    fn on_readings(&mut self, readings: &SensorReadings) {
-        self.0
-            .predictor_mut()
-            .observe_readings(readings.time_s, &readings.values_degc);
-    }
-
-    fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
-        self.0.note_motion_segment_mm(start_mm, end_mm);
-    }
-
-    fn on_spindle_speed(&mut self, time_s: f64, rpm: f64) {
-        self.0.predictor_mut().observe_spindle_speed(time_s, rpm);
-    }
-}
-
 /// Drives `twin` through `state`'s cycle up to the state (1 s thermal steps, cycle time 0 at
 /// the twin's start) with `predictor` following every reading, as the controller does before
 /// a test, and gives the predictor back (its history features at the state). For diagnosis
@@ -89,9 +64,9 @@ pub fn follow_to_state<P: ErrorPredictor>(
     predictor: P,
 ) -> Result<P, TwinError> {
     twin.set_ambient(state.cycle.ambient.clone())?;
-    let mut follow = LoopController(Compensator::new(predictor));
+    let mut follow = Compensator::new(predictor);
     calibration::drive_with(twin, &state.cycle, 0.0, state.at_s, 1.0, Some(&mut follow))?;
-    Ok(follow.0.into_inner())
+    Ok(follow.into_inner())
 }
 
 /// Seed of the evaluation noise (sensors, repeatability, reversal) of the run of diagonal
@@ -168,8 +143,7 @@ pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>
         .par_iter()
         .map(|&(si, di)| {
             let (state, (diag, plan)) = (&states[si], &plans[di]);
-            let ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
-            let mut ctrl = LoopController(ctrl);
+            let mut ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
             let noise = eval_noise_seed(seed, si, di);
             let points =
                 calibration::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;

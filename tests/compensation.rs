@@ -31,7 +31,7 @@ fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
         .0
 }
 
-/// The trained predictor with its temperatures replaced by a fixed cold reading.
+/// The trained predictor with every observed reading replaced by a fixed cold one.
 #[derive(Clone)]
 struct FrozenTemps {
     inner: HybridPredictor,
@@ -42,8 +42,11 @@ impl ErrorPredictor for FrozenTemps {
     fn sensor_names(&self) -> &[String] {
         self.inner.sensor_names()
     }
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], _temps_degc: &[f64]) -> [f64; 3] {
-        self.inner.predict_error_mm(q_mm, &self.cold_degc)
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+        self.inner.predict_error_mm(q_mm)
+    }
+    fn observe_readings(&mut self, time_s: f64, _temps_degc: &[f64]) {
+        self.inner.observe_readings(time_s, &self.cold_degc);
     }
 }
 

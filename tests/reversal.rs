@@ -12,9 +12,8 @@
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::ErrorPredictor;
-use vmc_twin::sensors::SensorReadings;
 use vmc_twin::sim::{self, CollectPoints, Controller, SimConfig};
-use vmc_twin::study::{self, LoopController};
+use vmc_twin::study;
 use vmc_twin::twin::Twin;
 
 /// Predicts no error: only the compensator's direction tracking matters here.
@@ -25,21 +24,22 @@ impl ErrorPredictor for Zero {
     fn sensor_names(&self) -> &[String] {
         &self.0
     }
-    fn predict_error_mm(&mut self, _: [f64; 3], _: &[f64]) -> [f64; 3] {
+    fn predict_error_mm(&mut self, _: [f64; 3]) -> [f64; 3] {
         [0.0; 3]
     }
+    fn observe_readings(&mut self, _: f64, _: &[f64]) {}
 }
 
 /// The loop controller, recording the direction it infers at each point.
 struct Recording {
-    inner: LoopController<Zero>,
+    inner: Compensator<Zero>,
     dirs: Vec<[f64; 3]>,
 }
 
 impl Controller for Recording {
-    fn axis_command_mm(&mut self, p_mm: [f64; 3], readings: &SensorReadings) -> [f64; 3] {
-        let q = self.inner.axis_command_mm(p_mm, readings);
-        self.dirs.push(self.inner.0.approach_directions());
+    fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
+        let q = self.inner.axis_command_mm(p_mm);
+        self.dirs.push(self.inner.approach_directions());
         q
     }
     fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
@@ -74,7 +74,7 @@ fn the_inferred_approach_direction_is_the_twins_at_every_diagonal_point() {
             log.points
         };
         let mut rec = Recording {
-            inner: LoopController(Compensator::new(Zero(names.clone()))),
+            inner: Compensator::new(Zero(names.clone())),
             dirs: Vec::new(),
         };
         let a = run(&with, Some(&mut rec));

@@ -11,13 +11,12 @@ use crate::files;
 use crate::machine::MachineSpec;
 use crate::motion::Plan;
 use crate::predict::controller::Compensator;
-use crate::predict::predictor::{AnyPredictor, PredictError};
+use crate::predict::predictor::AnyPredictor;
 use crate::program;
 use crate::progress::Progress;
 use crate::record;
 use crate::report::{self, RunLog, RunSummary};
 use crate::sim::{self, Observer, RunStart, SampleMode, SimConfig};
-use crate::study::LoopController;
 use crate::twin::Twin;
 
 /// What to run, validated.
@@ -47,7 +46,7 @@ pub struct RunConfig {
 }
 
 /// The compensating controller of a run.
-type RunController = LoopController<AnyPredictor>;
+type RunController = Compensator<AnyPredictor>;
 
 /// Runs the program and prints the report to `out`.
 ///
@@ -125,11 +124,11 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
 /// The model of `path` as a compensator for `machine` (retooled to the machine's tool offset
 /// when it is a hybrid model, which `out` is told).
 fn compensator(path: &Path, machine: &MachineSpec, out: &mut dyn Write) -> Result<RunController> {
-    // An I/O error names the file already; a content error does not.
-    let model = AnyPredictor::load_json(path).map_err(|e| match e {
-        PredictError::Io { .. } => anyhow::Error::new(e),
-        _ => anyhow::Error::new(e).context(path.display().to_string()),
-    })?;
+    // A read error and a content error alike are named by the file, once.
+    let model = files::read_text(path)
+        .map_err(anyhow::Error::new)
+        .and_then(|text| AnyPredictor::from_json_str(&text).map_err(anyhow::Error::new))
+        .with_context(|| path.display().to_string())?;
     let does_not_fit = || {
         format!(
             "{}: model does not fit machine {}",
@@ -153,7 +152,7 @@ fn compensator(path: &Path, machine: &MachineSpec, out: &mut dyn Write) -> Resul
     }
     let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
     let ctrl = Compensator::for_machine(model, &names).with_context(does_not_fit)?;
-    Ok(LoopController(ctrl))
+    Ok(ctrl)
 }
 
 /// Runs the warm-ups, then the program (measured), on a fresh twin; with a recording if asked.

@@ -20,8 +20,8 @@ use crate::predict::predictor::ModelKind;
 use crate::report::norm;
 use crate::sim::CollectPoints;
 use crate::study::{
-    diagonal_plans, eval_noise_seed, headline, CampaignReport, LoopController, RunReport,
-    TrainedModels, PREDICTORS,
+    diagonal_plans, eval_noise_seed, headline, CampaignReport, RunReport, TrainedModels,
+    PREDICTORS,
 };
 
 use super::{Diagonal, RecordError, RecordSettings, Recorder, RrdFile};
@@ -168,10 +168,8 @@ pub fn record_campaign(
         .find(|m| m.seed == pick.seed)
         .ok_or_else(|| RecordError::Replay(format!("no model for seed {}", pick.seed)))?;
     let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
-    let mut ctrl = LoopController(
-        Compensator::for_machine(model.hybrid.clone(), &names)
-            .map_err(|e| RecordError::Replay(e.to_string()))?,
-    );
+    let mut ctrl = Compensator::for_machine(model.hybrid.clone(), &names)
+        .map_err(|e| RecordError::Replay(e.to_string()))?;
     let mut recorder = Recorder::new(file, spec, settings, diagonals[di].1)?;
     let mut collect = CollectPoints::default();
     run_at_state_observed(

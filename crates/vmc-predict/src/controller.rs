@@ -1,5 +1,12 @@
 //! Compensation in the loop (DESIGN §8).
 //!
+//! What a controller is told, and when, is the [`Controller`] trait: sensor readings and the
+//! commanded spindle speed at every sensor sample, the commanded motion segment by segment, and
+//! the commanded tool position whenever an axis command is due. [`Compensator`] implements it
+//! with a predictor: readings reach the predictor by one door
+//! ([`ErrorPredictor::observe_readings`], from [`Controller::on_readings`]), and an axis command
+//! is computed under the readings last observed.
+//!
 //! At each interpolation cycle the controller knows the commanded tool position `p` (workpiece
 //! coordinates, mm) and the latest held sensor readings `T` (°C). The machine puts the tool at
 //! `q + E(q, T)` when its axes are commanded to `q`, so the axis command that lands the tool on
@@ -21,10 +28,11 @@
 //! it keeps the last commanded position per axis, and a change of the commanded position gives
 //! that axis's direction of motion (a change below [`DIRECTION_DEADBAND_MM`] or none keeps the
 //! last direction; before any motion every axis counts as positive). Every commanded position
-//! passed to [`Compensator::axis_command_mm`] counts, and so does the commanded trajectory between
-//! them when the loop reports it ([`Compensator::note_commanded_mm`]). An axis whose last motion
-//! was negative gets the predictor's [`ErrorPredictor::negative_approach_shift_mm`] added to its
-//! component of `E_pred` (a constant, so the fixed-point iteration is unchanged).
+//! passed to [`Controller::axis_command_mm`] counts, and so does the commanded trajectory between
+//! them when the loop reports it ([`Controller::on_commanded_motion`],
+//! [`Compensator::note_commanded_mm`]). An axis whose last motion was negative gets the
+//! predictor's [`ErrorPredictor::negative_approach_shift_mm`] added to its component of `E_pred`
+//! (a constant, so the fixed-point iteration is unchanged).
 //!
 //! The compensator is generic over the predictor (static dispatch) and allocation-free; its
 //! cost is `iterations × (one predictor query)`.
@@ -45,6 +53,34 @@ pub const DEFAULT_MAX_ITERATIONS: usize = 5;
 /// reversal must come from real motion, not from the last bit of a float.
 pub const DIRECTION_DEADBAND_MM: f64 = 1e-9;
 
+/// A controller in the loop: it turns commanded tool positions into axis commands, knowing
+/// only what a machine's controller knows (sensor readings, the commanded spindle speed, the
+/// commanded motion), never the machine's state.
+pub trait Controller {
+    /// New sensor readings `values_degc` (°C, in the machine's sensor order) taken at time
+    /// `time_s` (s): at every sensor sample, also between compensated points and while nothing is
+    /// compensated (a warm-up, the thermal history before a test), as a controller logging its
+    /// sensors sees them. They hold until the next call: every [`Self::axis_command_mm`] after
+    /// this call is computed under these readings. Default: ignored.
+    fn on_readings(&mut self, _time_s: f64, _values_degc: &[f64]) {}
+
+    /// The spindle ran at the commanded speed `rpm` since the previous call, up to time `time_s`
+    /// (s, the clock of [`Self::on_readings`]): what the controller commanded (S, M3/M5), never
+    /// the spindle's state. Called at every sensor sample, after [`Self::on_readings`]. Default:
+    /// ignored.
+    fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+
+    /// The commanded tool path ran one motion segment from `start_mm` to `end_mm` (mm), in
+    /// program order, after any points taken on it. Lets a controller follow the commanded
+    /// trajectory between the points it compensates (e.g. each axis's direction of motion, for
+    /// backlash compensation). Default: ignored.
+    fn on_commanded_motion(&mut self, _start_mm: [f64; 3], _end_mm: [f64; 3]) {}
+
+    /// Axis command `q` (mm) for the commanded tool position `p_mm` (mm, workpiece
+    /// coordinates), under the readings last given to [`Self::on_readings`].
+    fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3];
+}
+
 /// How the last solve went.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SolveInfo {
@@ -56,7 +92,9 @@ pub struct SolveInfo {
     pub converged: bool,
 }
 
-/// Turns commanded tool positions into compensated axis commands with a predictor.
+/// Turns commanded tool positions into compensated axis commands with a predictor; the loop's
+/// [`Controller`]. It holds nothing of the readings itself: they go to the predictor
+/// ([`ErrorPredictor::observe_readings`]), which holds them.
 #[derive(Debug, Clone)]
 pub struct Compensator<P: ErrorPredictor> {
     predictor: P,
@@ -150,37 +188,7 @@ impl<P: ErrorPredictor> Compensator<P> {
         self.negative.map(|n| if n { -1.0 } else { 1.0 })
     }
 
-    /// Axis command `q` (mm) that should put the tool at `p_mm` under readings `temps_degc`
-    /// (model sensor order); `p_mm` also counts as commanded motion for the approach
-    /// directions. Allocation-free; see the module doc for the iteration.
-    #[inline]
-    pub fn axis_command_mm(&mut self, p_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
-        self.note_commanded_mm(p_mm);
-        let shift = self.predictor.negative_approach_shift_mm();
-        let reversal_mm: [f64; 3] =
-            std::array::from_fn(|k| if self.negative[k] { shift[k] } else { 0.0 });
-        let mut q = p_mm;
-        let mut info = SolveInfo::default();
-        while info.iterations < self.max_iterations {
-            let mut e = self.predictor.predict_error_mm(q, temps_degc);
-            for k in 0..3 {
-                e[k] += reversal_mm[k];
-            }
-            let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
-            let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
-            info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            info.iterations += 1;
-            q = next;
-            if info.last_step_mm < self.tol_mm {
-                info.converged = true;
-                break;
-            }
-        }
-        self.last = info;
-        q
-    }
-
-    /// How the last [`Self::axis_command_mm`] went.
+    /// How the last [`Controller::axis_command_mm`] went.
     pub fn last_solve(&self) -> SolveInfo {
         self.last
     }
@@ -201,6 +209,52 @@ impl<P: ErrorPredictor> Compensator<P> {
     }
 }
 
+/// The loop's door to the predictor: readings and the spindle speed go to the predictor, the
+/// commanded motion to the approach directions.
+impl<P: ErrorPredictor> Controller for Compensator<P> {
+    fn on_readings(&mut self, time_s: f64, values_degc: &[f64]) {
+        self.predictor.observe_readings(time_s, values_degc);
+    }
+
+    fn on_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+        self.predictor.observe_spindle_speed(time_s, rpm);
+    }
+
+    fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
+        self.note_motion_segment_mm(start_mm, end_mm);
+    }
+
+    /// Axis command `q` (mm) that should put the tool at `p_mm` under the readings last
+    /// observed; `p_mm` also counts as commanded motion for the approach directions.
+    /// Allocation-free; see the module doc for the iteration.
+    #[inline]
+    fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
+        self.note_commanded_mm(p_mm);
+        let shift = self.predictor.negative_approach_shift_mm();
+        let reversal_mm: [f64; 3] =
+            std::array::from_fn(|k| if self.negative[k] { shift[k] } else { 0.0 });
+        let mut q = p_mm;
+        let mut info = SolveInfo::default();
+        while info.iterations < self.max_iterations {
+            let mut e = self.predictor.predict_error_mm(q);
+            for k in 0..3 {
+                e[k] += reversal_mm[k];
+            }
+            let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
+            let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
+            info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            info.iterations += 1;
+            q = next;
+            if info.last_step_mm < self.tol_mm {
+                info.converged = true;
+                break;
+            }
+        }
+        self.last = info;
+        q
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -212,6 +266,8 @@ mod tests {
     #[derive(Debug)]
     struct Analytic {
         sensors: Vec<String>,
+        /// The reading last observed, °C.
+        t_degc: f64,
     }
 
     fn analytic_e(q: [f64; 3], t: f64) -> [f64; 3] {
@@ -227,14 +283,18 @@ mod tests {
         fn sensor_names(&self) -> &[String] {
             &self.sensors
         }
-        fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
-            analytic_e(q_mm, temps_degc[0])
+        fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+            analytic_e(q_mm, self.t_degc)
+        }
+        fn observe_readings(&mut self, _: f64, temps_degc: &[f64]) {
+            self.t_degc = temps_degc[0];
         }
     }
 
     fn analytic() -> Analytic {
         Analytic {
             sensors: vec!["T".into()],
+            t_degc: f64::NAN,
         }
     }
 
@@ -247,7 +307,8 @@ mod tests {
             [560.0, 400.0, -450.0],
         ] {
             for t in [20.0, 26.0] {
-                let q = c.axis_command_mm(p, &[t]);
+                c.on_readings(0.0, &[t]);
+                let q = c.axis_command_mm(p);
                 let e = analytic_e(q, t);
                 let residual = ((q[0] + e[0] - p[0]).powi(2)
                     + (q[1] + e[1] - p[1]).powi(2)
@@ -270,17 +331,18 @@ mod tests {
             fn sensor_names(&self) -> &[String] {
                 &self.0
             }
-            fn predict_error_mm(&mut self, q: [f64; 3], _: &[f64]) -> [f64; 3] {
+            fn predict_error_mm(&mut self, q: [f64; 3]) -> [f64; 3] {
                 q.map(|v| 0.9 * v)
             }
+            fn observe_readings(&mut self, _: f64, _: &[f64]) {}
         }
         let mut c = Compensator::new(Steep(vec!["T".into()]));
-        c.axis_command_mm([100.0, 0.0, 0.0], &[20.0]);
+        c.axis_command_mm([100.0, 0.0, 0.0]);
         let info = c.last_solve();
         assert_eq!(info.iterations, 5);
         assert!(!info.converged && info.last_step_mm > 1.0, "{info:?}");
         let mut c = c.with_tolerance(1e-7, 2);
-        c.axis_command_mm([100.0, 0.0, 0.0], &[20.0]);
+        c.axis_command_mm([100.0, 0.0, 0.0]);
         assert_eq!(c.last_solve().iterations, 2);
     }
 
@@ -290,9 +352,10 @@ mod tests {
         fn sensor_names(&self) -> &[String] {
             &self.0
         }
-        fn predict_error_mm(&mut self, _: [f64; 3], _: &[f64]) -> [f64; 3] {
+        fn predict_error_mm(&mut self, _: [f64; 3]) -> [f64; 3] {
             [0.0; 3]
         }
+        fn observe_readings(&mut self, _: f64, _: &[f64]) {}
         fn negative_approach_shift_mm(&self) -> [f64; 3] {
             self.1
         }
@@ -304,23 +367,23 @@ mod tests {
         let mut c = Compensator::new(ReversalOnly(vec!["T".into()], shift));
         // Before any motion every axis counts as positive: no reversal applied.
         assert_eq!(
-            c.axis_command_mm([100.0, 50.0, -10.0], &[20.0]),
+            c.axis_command_mm([100.0, 50.0, -10.0]),
             [100.0, 50.0, -10.0]
         );
         assert_eq!(c.approach_directions(), [1.0, 1.0, 1.0]);
         // X back, Y forward, Z back: X and Z get their shift subtracted (q = p − E).
-        let q = c.axis_command_mm([90.0, 60.0, -20.0], &[20.0]);
+        let q = c.axis_command_mm([90.0, 60.0, -20.0]);
         assert_eq!(c.approach_directions(), [-1.0, 1.0, -1.0]);
         assert_eq!(q, [90.0 + 0.25e-3, 60.0, -20.0 - 0.25e-3]);
         // No change keeps the last direction (a dwell re-commands the same point).
-        assert_eq!(c.axis_command_mm([90.0, 60.0, -20.0], &[20.0]), q);
+        assert_eq!(c.axis_command_mm([90.0, 60.0, -20.0]), q);
         // A change below the dead band (1 pm) is not motion.
         c.note_commanded_mm([90.0 + 1e-12, 60.0, -20.0]);
         assert_eq!(c.approach_directions(), [-1.0, 1.0, -1.0]);
         // Motion between the points (reported by the loop) counts: X overshoots and comes back
         // up to the same point, so it now approaches positively.
         c.note_commanded_mm([80.0, 60.0, -20.0]);
-        let q = c.axis_command_mm([90.0, 60.0, -20.0], &[20.0]);
+        let q = c.axis_command_mm([90.0, 60.0, -20.0]);
         assert_eq!(c.approach_directions(), [1.0, 1.0, -1.0]);
         assert_eq!(q, [90.0, 60.0, -20.0 - 0.25e-3]);
     }
@@ -330,7 +393,7 @@ mod tests {
         let shift = [1e-3; 3];
         let c = Compensator::new(ReversalOnly(vec!["T".into()], shift));
         let mut c = c.with_start_mm([0.0, 0.0, 0.0]);
-        c.axis_command_mm([540.0, 20.0, -430.0], &[20.0]);
+        c.axis_command_mm([540.0, 20.0, -430.0]);
         assert_eq!(c.approach_directions(), [1.0, 1.0, -1.0]);
     }
 
@@ -341,12 +404,13 @@ mod tests {
             fn sensor_names(&self) -> &[String] {
                 &self.0
             }
-            fn predict_error_mm(&mut self, _: [f64; 3], _: &[f64]) -> [f64; 3] {
+            fn predict_error_mm(&mut self, _: [f64; 3]) -> [f64; 3] {
                 [0.0; 3]
             }
+            fn observe_readings(&mut self, _: f64, _: &[f64]) {}
         }
         let mut c = Compensator::new(Zero(vec!["T".into()]));
-        assert_eq!(c.axis_command_mm([1.0, 2.0, 3.0], &[20.0]), [1.0, 2.0, 3.0]);
+        assert_eq!(c.axis_command_mm([1.0, 2.0, 3.0]), [1.0, 2.0, 3.0]);
         assert_eq!(c.last_solve().iterations, 1);
     }
 
@@ -365,7 +429,8 @@ mod tests {
         let mut c = Compensator::new(AnyPredictor::Linear(p));
         let (mut before, mut after) = (0.0, 0.0);
         for (p_mm, t, _) in td::held_out(6.0, 5) {
-            let q = c.axis_command_mm(p_mm, &t);
+            c.on_readings(0.0, &t);
+            let q = c.axis_command_mm(p_mm);
             // The tool really lands at q + E_true(q).
             let e_at_q = td::true_error_mm(q, &t);
             let landed: [f64; 3] = std::array::from_fn(|k| q[k] + e_at_q[k] - p_mm[k]);
@@ -419,8 +484,11 @@ mod tests {
             let temps = [td::temps_degc(5.0, 1000.0), td::temps_degc(5.0, 2000.0)];
             let before = ALLOCATIONS.with(Cell::get);
             for i in 0..1000 {
+                if i % 500 == 0 {
+                    c.on_readings(i as f64, &temps[i / 500]);
+                }
                 let p = [i as f64 * 0.5, 200.0 - i as f64 * 0.1, -100.0];
-                std::hint::black_box(c.axis_command_mm(p, &temps[i / 500]));
+                std::hint::black_box(c.axis_command_mm(p));
             }
             let after = ALLOCATIONS.with(Cell::get);
             assert_eq!(after - before, 0, "{:?} allocated", c.predictor().kind());
@@ -461,7 +529,7 @@ mod tests {
         ] {
             let pairs: Vec<_> = td::held_out(6.0, 5)
                 .into_iter()
-                .map(|(q, t, e)| (m.predict_error_mm(q, &t), e))
+                .map(|(q, t, e)| (td::predict_at(&mut m, q, &t), e))
                 .collect();
             let (err, truth) = td::rms_um(&pairs);
             println!(
@@ -472,21 +540,23 @@ mod tests {
         let temps = td::temps_degc(5.0, 1000.0);
         let n = 1_000_000;
         let mut direct = h.clone();
+        direct.observe_readings(0.0, &temps);
         let t0 = std::time::Instant::now();
         for i in 0..n {
             let q = [(i % 560) as f64, (i % 400) as f64, -((i % 450) as f64)];
-            std::hint::black_box(direct.predict_error_mm(q, &temps));
+            std::hint::black_box(direct.predict_error_mm(q));
         }
         println!(
             "hybrid query: {:.0} ns",
             t0.elapsed().as_secs_f64() / n as f64 * 1e9
         );
         let mut c = Compensator::new(h);
+        c.on_readings(0.0, &temps);
         let t0 = std::time::Instant::now();
         let mut evals = 0;
         for i in 0..n {
             let p = [(i % 560) as f64, (i % 400) as f64, -((i % 450) as f64)];
-            std::hint::black_box(c.axis_command_mm(p, &temps));
+            std::hint::black_box(c.axis_command_mm(p));
             evals += c.last_solve().iterations;
         }
         let dt = t0.elapsed().as_secs_f64();

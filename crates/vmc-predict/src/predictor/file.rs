@@ -41,20 +41,22 @@
 //! `float_roundtrip`, so a loaded model predicts bit-identically to the saved one.
 //! Loading checks `format`, `version` and `kind` first (clear messages), then the schema, then
 //! that the parts fit the sensor count.
-
-use std::fmt;
-use std::path::Path;
+//!
+//! The model file is handled as text ([`AnyPredictor::from_json_str`], `to_json_string`): this
+//! crate does no file I/O, the application reads and writes the files and names them in its
+//! messages.
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-use crate::linreg::LinearModel;
 use crate::synthesis::MachineGeometry;
 
 use super::hybrid::{HybridParts, HybridPredictor};
 use super::linear::{LinearParts, LinearPredictor};
 use super::volumetric::VolumetricPredictor;
 use super::{ErrorPredictor, PredictError};
+
+pub use super::kind::ModelKind;
 
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
@@ -64,41 +66,6 @@ pub const FORMAT_VERSION: u64 = 7;
 pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
 const TEMP_UNIT: &str = "degC";
-
-/// Which model class a file or summary holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ModelKind {
-    /// Elementary-error nets + kinematic synthesis.
-    Hybrid,
-    /// Direct volumetric MLP.
-    Volumetric,
-    /// Linear regression on position/temperature features.
-    Linear,
-}
-
-impl ModelKind {
-    /// The name used in the `kind` field.
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelKind::Hybrid => "hybrid",
-            ModelKind::Volumetric => "volumetric",
-            ModelKind::Linear => "linear",
-        }
-    }
-
-    fn from_name(s: &str) -> Option<Self> {
-        [ModelKind::Hybrid, ModelKind::Volumetric, ModelKind::Linear]
-            .into_iter()
-            .find(|k| k.name() == s)
-    }
-}
-
-impl fmt::Display for ModelKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 /// One sensor entry of a model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -230,51 +197,6 @@ fn from_json<B: DeserializeOwned>(
     ))
 }
 
-fn read_file(path: &Path) -> Result<String, PredictError> {
-    std::fs::read_to_string(path).map_err(|e| PredictError::Io {
-        path: path.display().to_string(),
-        msg: e.to_string(),
-    })
-}
-
-fn write_file(path: &Path, text: &str) -> Result<(), PredictError> {
-    std::fs::write(path, text).map_err(|e| PredictError::Io {
-        path: path.display().to_string(),
-        msg: e.to_string(),
-    })
-}
-
-/// Checks a linear model's shape and values against the widths its predictor needs.
-pub(crate) fn check_linear_model(
-    name: &str,
-    m: &LinearModel,
-    n_in: usize,
-    n_out: usize,
-) -> Result<(), PredictError> {
-    let ok = m.n_in() == n_in
-        && m.n_out() == n_out
-        && m.intercept().len() == n_out
-        && m.slopes().len() == n_in * n_out
-        && m.intercept()
-            .iter()
-            .chain(m.slopes())
-            .all(|v| v.is_finite());
-    if ok {
-        Ok(())
-    } else {
-        Err(PredictError::Inconsistent {
-            reason: format!(
-                "linear model `{name}` must map {n_in} → {n_out} values with finite coefficients \
-                 (has {} → {}, {} intercepts, {} slopes)",
-                m.n_in(),
-                m.n_out(),
-                m.intercept().len(),
-                m.slopes().len()
-            ),
-        })
-    }
-}
-
 /// Implements the JSON methods of one predictor type.
 macro_rules! json_methods {
     ($ty:ty, $kind:expr, $body:ident, $from:expr) => {
@@ -295,22 +217,6 @@ macro_rules! json_methods {
             pub fn from_json_str(text: &str) -> Result<Self, PredictError> {
                 let (sensors, geometry, body) = from_json(text, $kind)?;
                 $from(sensors, geometry, body)
-            }
-
-            /// Writes the model file.
-            ///
-            /// # Errors
-            /// As [`Self::to_json_string`], or the file cannot be written.
-            pub fn save_json(&self, path: &Path) -> Result<(), PredictError> {
-                write_file(path, &self.to_json_string()?)
-            }
-
-            /// Reads a model file.
-            ///
-            /// # Errors
-            /// As [`Self::from_json_str`], or the file cannot be read.
-            pub fn load_json(path: &Path) -> Result<Self, PredictError> {
-                Self::from_json_str(&read_file(path)?)
             }
         }
     };
@@ -388,14 +294,6 @@ impl AnyPredictor {
         })
     }
 
-    /// Reads a model file of any kind.
-    ///
-    /// # Errors
-    /// As [`Self::from_json_str`], or the file cannot be read.
-    pub fn load_json(path: &Path) -> Result<Self, PredictError> {
-        Self::from_json_str(&read_file(path)?)
-    }
-
     /// The model file text.
     ///
     /// # Errors
@@ -406,14 +304,6 @@ impl AnyPredictor {
             AnyPredictor::Volumetric(p) => p.to_json_string(),
             AnyPredictor::Linear(p) => p.to_json_string(),
         }
-    }
-
-    /// Writes the model file.
-    ///
-    /// # Errors
-    /// Serialisation or file errors.
-    pub fn save_json(&self, path: &Path) -> Result<(), PredictError> {
-        write_file(path, &self.to_json_string()?)
     }
 
     /// Rejects a machine whose sensor names or order differ from the model's.
@@ -489,11 +379,11 @@ impl ErrorPredictor for AnyPredictor {
     }
 
     #[inline]
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
         match self {
-            AnyPredictor::Hybrid(p) => p.predict_error_mm(q_mm, temps_degc),
-            AnyPredictor::Volumetric(p) => p.predict_error_mm(q_mm, temps_degc),
-            AnyPredictor::Linear(p) => p.predict_error_mm(q_mm, temps_degc),
+            AnyPredictor::Hybrid(p) => p.predict_error_mm(q_mm),
+            AnyPredictor::Volumetric(p) => p.predict_error_mm(q_mm),
+            AnyPredictor::Linear(p) => p.predict_error_mm(q_mm),
         }
     }
 
@@ -506,8 +396,10 @@ impl ErrorPredictor for AnyPredictor {
     }
 
     fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
-        if let AnyPredictor::Hybrid(p) = self {
-            p.observe_readings(time_s, temps_degc);
+        match self {
+            AnyPredictor::Hybrid(p) => p.observe_readings(time_s, temps_degc),
+            AnyPredictor::Volumetric(p) => p.observe_readings(time_s, temps_degc),
+            AnyPredictor::Linear(p) => p.observe_readings(time_s, temps_degc),
         }
     }
 
@@ -556,8 +448,8 @@ mod tests {
             assert_eq!(back.sensor_names(), model.sensor_names());
             assert_eq!(back.geometry(), model.geometry());
             for (q, t, _) in td::held_out(5.0, 9).into_iter().take(50) {
-                let a = model.predict_error_mm(q, &t);
-                let b = back.predict_error_mm(q, &t);
+                let a = td::predict_at(&mut model, q, &t);
+                let b = td::predict_at(&mut back, q, &t);
                 assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{}", model.kind());
             }
             // And the text itself is a fixed point.
@@ -566,25 +458,34 @@ mod tests {
     }
 
     #[test]
-    fn a_file_round_trip_through_the_file_system_works() {
-        let ds = td::dataset(&[4.0, 7.0], 2);
-        let (mut p, _) = train_linear(&ds, &td::geometry(), &quick()).unwrap();
-        let path =
-            std::env::temp_dir().join(format!("vmc-predict-model-{}.json", std::process::id()));
-        p.save_json(&path).unwrap();
-        let mut back = LinearPredictor::load_json(&path).unwrap();
-        let _ = std::fs::remove_file(&path);
-        let t = td::temps_degc(5.0, 3600.0);
-        assert_eq!(
-            p.predict_error_mm([1.0, 2.0, -3.0], &t),
-            back.predict_error_mm([1.0, 2.0, -3.0], &t)
-        );
-        let missing = Path::new("/nonexistent/dir/model.json");
-        let err = LinearPredictor::load_json(missing).unwrap_err();
-        assert!(
-            err.to_string().starts_with("/nonexistent/dir/model.json: "),
-            "{err}"
-        );
+    fn a_prediction_changes_only_when_new_readings_are_observed() {
+        let q = [300.0, 150.0, -200.0];
+        let cool = td::temps_degc(6.0, 600.0);
+        let warm = td::temps_degc(6.0, 7200.0);
+        for mut model in all_kinds() {
+            let kind = model.kind();
+            let mut told_warm = model.clone();
+            // No reading yet: nothing to predict for.
+            assert!(
+                model.predict_error_mm(q).iter().all(|e| e.is_nan()),
+                "{kind}"
+            );
+            model.observe_readings(600.0, &cool);
+            let at_cool = model.predict_error_mm(q);
+            assert!(at_cool.iter().all(|e| e.is_finite()), "{kind}");
+            // Queries alone do not move it, whatever was queried in between.
+            model.predict_error_mm([10.0, 20.0, -30.0]);
+            assert_eq!(model.predict_error_mm(q), at_cool, "{kind}");
+            // Warmer readings through the door do, to what a model told them alone predicts.
+            model.observe_readings(7200.0, &warm);
+            let at_warm = model.predict_error_mm(q);
+            assert!(
+                (0..3).any(|k| (at_warm[k] - at_cool[k]).abs() > 1e-4),
+                "{kind}: {at_cool:?} -> {at_warm:?}"
+            );
+            told_warm.observe_readings(7200.0, &warm);
+            assert_eq!(told_warm.predict_error_mm(q), at_warm, "{kind}");
+        }
     }
 
     #[test]

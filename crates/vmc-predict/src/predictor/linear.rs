@@ -14,7 +14,7 @@ use crate::linreg::LinearModel;
 use crate::synthesis::MachineGeometry;
 
 use super::data::{fit_linear, records_of, required_values, CycleSplit, SensorSelection, Table};
-use super::file::{check_linear_model, ModelKind};
+use super::kind::{check_linear_model, ModelKind};
 use super::volumetric::E_OUTPUTS;
 use super::{assert_temps_len, ErrorPredictor, PredictError, Settings, TrainSummary};
 
@@ -47,6 +47,9 @@ pub struct LinearPredictor {
     sensors: Vec<String>,
     geometry: MachineGeometry,
     parts: LinearParts,
+    /// The readings last observed, °C (model sensor order; NaN before the first).
+    readings: Vec<f64>,
+    /// Feature scratch of a query.
     features: Vec<f64>,
 }
 
@@ -110,6 +113,7 @@ impl LinearPredictor {
             sensors,
             geometry,
             parts,
+            readings: vec![f64::NAN; k],
             features: vec![0.0; n_features(k)],
         })
     }
@@ -139,13 +143,22 @@ impl ErrorPredictor for LinearPredictor {
     }
 
     #[inline]
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
-        assert_temps_len(temps_degc, self.sensors.len());
-        features_into(&self.parts.scaling, q_mm, temps_degc, &mut self.features);
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+        features_into(
+            &self.parts.scaling,
+            q_mm,
+            &self.readings,
+            &mut self.features,
+        );
         let mut e = [0.0; 3];
         // Widths were checked in `from_parts`, so this cannot fail.
         let _ = self.parts.regression.predict_into(&self.features, &mut e);
         [e[0] * 1e-3, e[1] * 1e-3, e[2] * 1e-3]
+    }
+
+    fn observe_readings(&mut self, _time_s: f64, temps_degc: &[f64]) {
+        assert_temps_len(temps_degc, self.sensors.len());
+        self.readings.copy_from_slice(temps_degc);
     }
 }
 
@@ -240,7 +253,7 @@ mod tests {
         let (mut p, summary) = train_linear(&ds, &td::geometry(), &Settings::default()).unwrap();
         let pairs: Vec<_> = td::held_out(6.0, 5)
             .into_iter()
-            .map(|(q, t, e)| (p.predict_error_mm(q, &t), e))
+            .map(|(q, t, e)| (td::predict_at(&mut p, q, &t), e))
             .collect();
         let (err, truth) = td::rms_um(&pairs);
         // The truth has sin/cos profiles and products of temperatures the features cannot

@@ -28,18 +28,22 @@
 //! sit in the training set. Only when a dataset holds a single cycle are contiguous time blocks
 //! used instead ([`SplitKind`]). Every seed is derived from [`Settings::seed`].
 //!
+//! Readings enter a predictor by one door, [`ErrorPredictor::observe_readings`]; the predictor
+//! holds them, and queries ([`ErrorPredictor::predict_error_mm`]) take positions only.
+//!
 //! Query cost: the temperature part of each first layer (`b₁ + W₁,T · z_T`), the spindle drifts
-//! and the squareness are computed once per new set of readings and cached (readings are held
-//! for a whole sensor period while the controller queries at the interpolation rate, and the
+//! and the squareness are computed once per observed set of readings and cached (readings are
+//! held for a whole sensor period while the controller queries at the interpolation rate, and the
 //! compensation's fixed-point iterations reuse them); a query then costs the position columns,
 //! the tanh of each hidden unit and the output layers. Nothing is allocated on the query path.
 //!
-//! Models are saved as versioned JSON ([`mod@file`]).
+//! Models are written to and read from versioned JSON text ([`mod@file`]).
 
 mod data;
 mod fastnet;
 pub mod file;
 mod hybrid;
+mod kind;
 mod linear;
 mod part;
 mod volumetric;
@@ -47,10 +51,9 @@ mod volumetric;
 #[cfg(test)]
 pub(crate) mod testdata;
 
-pub use file::{
-    AnyPredictor, ModelKind, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION,
-};
+pub use file::{AnyPredictor, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION};
 pub use hybrid::{train_hybrid, HybridPredictor};
+pub use kind::ModelKind;
 pub use linear::{train_linear, LinearPredictor};
 pub use volumetric::{train_volumetric, VolumetricPredictor};
 
@@ -63,17 +66,22 @@ use crate::nn::{NnError, StopReason};
 use crate::{dataset::Dataset, synthesis::first_order_error_mm};
 
 /// A volumetric error model usable in the control loop.
+///
+/// Sensor readings enter by one door, [`Self::observe_readings`]: the model holds the readings
+/// last observed and predicts for them. Everything that depends on the readings only (history
+/// features, the temperature part of the networks' first layers, drifts that do not depend on
+/// the position) is recomputed because readings (or a spindle speed) were observed, at the
+/// observation or at the first query after it, never by comparing readings at query time.
 pub trait ErrorPredictor {
-    /// Sensor names the model expects, in the order of `temps_degc`.
+    /// Sensor names the model expects, in the order of the observed readings.
     fn sensor_names(&self) -> &[String];
 
     /// Predicted volumetric error E (actual − nominal tool tip, workpiece frame, mm) at axis
-    /// positions `q_mm` (mm) with sensor readings `temps_degc` (°C, [`Self::sensor_names`] order).
+    /// positions `q_mm` (mm) under the readings last given to [`Self::observe_readings`].
     ///
-    /// Allocation-free. `temps_degc.len()` must equal `sensor_names().len()` (checked with an
-    /// assertion: the sensor set is validated once when the model is attached to a machine,
-    /// see [`check_sensor_names`]).
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3];
+    /// Allocation-free. Before any reading the model has none to predict for: the prediction is
+    /// NaN.
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3];
 
     /// Change of the volumetric error (mm), component `k`, when axis `k` reached its position
     /// moving in the negative direction instead of the positive one that
@@ -84,11 +92,16 @@ pub trait ErrorPredictor {
         [0.0; 3]
     }
 
-    /// Takes the sensor readings `temps_degc` ([`Self::sensor_names`] order) at time `time_s`
-    /// (s, any origin, increasing): a model with history features (see [`crate::history`])
-    /// filters them; the default ignores them. A controller passes every new reading, also
-    /// while it is not compensating (warm-up), so the model knows the thermal past.
-    fn observe_readings(&mut self, _time_s: f64, _temps_degc: &[f64]) {}
+    /// Takes the sensor readings `temps_degc` (°C, [`Self::sensor_names`] order) at time
+    /// `time_s` (s, any origin, increasing): the model holds them for the following predictions,
+    /// and a model with history features (see [`crate::history`]) filters them. A controller
+    /// passes every new reading, also while it is not compensating (warm-up), so the model
+    /// knows the thermal past; offline, observe the readings of a state before predicting at it.
+    ///
+    /// Allocation-free. `temps_degc.len()` must equal `sensor_names().len()` (checked with an
+    /// assertion: the sensor set is validated once when the model is attached to a machine,
+    /// see [`check_sensor_names`]).
+    fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]);
 
     /// The spindle ran at the commanded speed `rpm` since the previous call, up to `time_s`
     /// (the same clock as [`Self::observe_readings`]). A model with spindle-speed features
@@ -103,8 +116,8 @@ impl<P: ErrorPredictor + ?Sized> ErrorPredictor for &mut P {
     }
 
     #[inline]
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
-        (**self).predict_error_mm(q_mm, temps_degc)
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+        (**self).predict_error_mm(q_mm)
     }
 
     fn negative_approach_shift_mm(&self) -> [f64; 3] {
@@ -287,14 +300,6 @@ pub enum PredictError {
     Inconsistent {
         /// What does not fit.
         reason: String,
-    },
-    /// Reading or writing a model file failed.
-    #[error("{path}: {msg}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The OS message.
-        msg: String,
     },
 }
 
@@ -489,13 +494,14 @@ pub fn check_sensor_names(model: &[String], machine: &[String]) -> Result<(), Pr
     }
 }
 
-/// Asserts the reading count on the query path (a programming error, see [`ErrorPredictor`]).
+/// Asserts the reading count at the door (a programming error, see
+/// [`ErrorPredictor::observe_readings`]).
 #[inline]
 fn assert_temps_len(temps_degc: &[f64], n_sensors: usize) {
     assert_eq!(
         temps_degc.len(),
         n_sensors,
-        "predictor called with {} temperatures, the model has {} sensors",
+        "predictor observed {} readings, the model has {} sensors",
         temps_degc.len(),
         n_sensors
     );

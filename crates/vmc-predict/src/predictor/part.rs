@@ -32,7 +32,7 @@ use crate::nn::Regressor;
 
 use super::data::{fit_linear, fit_mlp, CycleSplit, Table};
 use super::fastnet::SplitNet;
-use super::file::check_linear_model;
+use super::kind::check_linear_model;
 use super::{NetSummary, PredictError, Settings};
 
 /// A linear model plus an optional residual net, in the dataset's units.

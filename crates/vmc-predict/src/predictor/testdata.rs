@@ -12,6 +12,7 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
 use crate::dataset::{Dataset, Instrument, Record};
+use crate::predictor::ErrorPredictor;
 use crate::synthesis::{
     first_order_error_mm, AxisErrors, Chain, ElementaryErrors, MachineGeometry, SpindleDrift,
     Squareness,
@@ -209,6 +210,14 @@ pub fn held_out(amp_degc: f64, seed: u64) -> Vec<([f64; 3], Vec<f64>, [f64; 3])>
             (q, temps, e)
         })
         .collect()
+}
+
+/// The prediction of `p` at `q` (mm) for the readings `temps` (°C): observes them, then
+/// queries. The readings are observed at time 0, which only a model without history features
+/// may ignore: for one with them, observe the readings' history explicitly.
+pub fn predict_at<P: ErrorPredictor>(p: &mut P, q: [f64; 3], temps: &[f64]) -> [f64; 3] {
+    p.observe_readings(0.0, temps);
+    p.predict_error_mm(q)
 }
 
 /// RMS over all components of `pred − truth` and of `truth`, in µm.

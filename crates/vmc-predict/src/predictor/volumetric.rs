@@ -7,7 +7,7 @@ use crate::synthesis::MachineGeometry;
 
 use super::data::{fit_mlp, records_of, required_values, CycleSplit, SensorSelection, Table};
 use super::fastnet::SplitNet;
-use super::file::ModelKind;
+use super::kind::ModelKind;
 use super::{assert_temps_len, ErrorPredictor, PredictError, Settings, TrainSummary};
 
 /// Output names of the volumetric models.
@@ -19,9 +19,12 @@ pub struct VolumetricPredictor {
     sensors: Vec<String>,
     geometry: MachineGeometry,
     net: Regressor,
+    /// The net with its temperature part cached for `readings`.
     fast: SplitNet,
-    last_temps: Vec<f64>,
-    cache_valid: bool,
+    /// The readings last observed, °C (model sensor order; NaN before the first).
+    readings: Vec<f64>,
+    /// Whether `fast` must take `readings` at the next query (readings observed since).
+    stale: bool,
 }
 
 impl VolumetricPredictor {
@@ -48,8 +51,8 @@ impl VolumetricPredictor {
             geometry,
             net,
             fast,
-            last_temps: vec![0.0; k],
-            cache_valid: false,
+            readings: vec![f64::NAN; k],
+            stale: true,
         })
     }
 
@@ -78,22 +81,20 @@ impl ErrorPredictor for VolumetricPredictor {
     }
 
     #[inline]
-    fn predict_error_mm(&mut self, q_mm: [f64; 3], temps_degc: &[f64]) -> [f64; 3] {
-        assert_temps_len(temps_degc, self.sensors.len());
-        let same = self.cache_valid
-            && self
-                .last_temps
-                .iter()
-                .zip(temps_degc)
-                .all(|(a, b)| a.to_bits() == b.to_bits());
-        if !same {
-            self.fast.set_temps(temps_degc);
-            self.last_temps.copy_from_slice(temps_degc);
-            self.cache_valid = true;
+    fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+        if self.stale {
+            self.fast.set_temps(&self.readings);
+            self.stale = false;
         }
         let mut e = [0.0; 3];
         self.fast.eval(&q_mm, &mut e);
         [e[0] * 1e-3, e[1] * 1e-3, e[2] * 1e-3]
+    }
+
+    fn observe_readings(&mut self, _time_s: f64, temps_degc: &[f64]) {
+        assert_temps_len(temps_degc, self.sensors.len());
+        self.readings.copy_from_slice(temps_degc);
+        self.stale = true;
     }
 }
 
@@ -150,7 +151,7 @@ mod tests {
             train_volumetric(&ds, &td::geometry(), &Settings::default()).unwrap();
         let pairs: Vec<_> = td::held_out(6.0, 5)
             .into_iter()
-            .map(|(q, t, e)| (p.predict_error_mm(q, &t), e))
+            .map(|(q, t, e)| (td::predict_at(&mut p, q, &t), e))
             .collect();
         let (err, truth) = td::rms_um(&pairs);
         // On this smooth synthetic truth with dense volumetric records the direct map does
