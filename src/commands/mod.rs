@@ -1,5 +1,5 @@
 //! The use cases behind the command line, as library functions: each takes a validated config
-//! (built by [`crate::cli`] or by a program of its own) and a writer for what it prints, and
+//! (built by the command line, `cli`, or by a program of its own) and a writer for what it prints, and
 //! writes its files through [`crate::files`]. Progress bars go to stderr.
 
 pub mod bench;
