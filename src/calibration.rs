@@ -17,7 +17,7 @@
 use crate::instruments::Instruments;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::{Dataset, Record};
-use crate::sim::{Observer, RunStart};
+use crate::sim::{self, Observer, RunStart};
 use crate::thermal::{Activity, AmbientProfile};
 use crate::twin::{sub_seed, Twin, TwinError};
 
@@ -224,20 +224,8 @@ pub fn drive(
     drive_with(twin, cycle, t0_s, to_s, step_s, None)
 }
 
-/// A shorter borrow of an optional controller (for a call that does not keep it).
-/// `Option::as_deref_mut` does not do: it keeps the trait object's lifetime, which `&mut` makes
-/// invariant, so the second call in a loop would conflict with the first.
-fn reborrow<'s>(
-    c: &'s mut Option<&mut dyn crate::sim::Controller>,
-) -> Option<&'s mut dyn crate::sim::Controller> {
-    match c {
-        Some(c) => Some(&mut **c),
-        None => None,
-    }
-}
-
-/// [`drive`], passing the readings after every step to `controller` (if any)
-/// ([`crate::sim::Controller::on_readings`]), as a controller logging its sensors sees them.
+/// [`drive`], passing the readings after every step to `controller` (if any) through
+/// [`sim::step`], as a controller logging its sensors sees them.
 pub fn drive_with(
     twin: &mut Twin,
     cycle: &ThermalCycle,
@@ -246,12 +234,8 @@ pub fn drive_with(
     step_s: f64,
     mut controller: Option<&mut dyn crate::sim::Controller>,
 ) -> Result<(), TwinError> {
-    if let Some(c) = controller.as_mut() {
-        let r = twin.sensor_readings();
-        c.on_readings(r.time_s, &r.values_degc);
-        // A no-op when the controller already followed the machine up to now; else the
-        // spindle is taken at rest before.
-        c.on_spindle_speed(twin.time_s(), 0.0);
+    if controller.is_some() {
+        sim::hand_over(twin, sim::reborrow(&mut controller));
     }
     let min = twin.spec().axes.travel_min_mm;
     let max = twin.spec().axes.travel_max_mm;
@@ -277,12 +261,7 @@ pub fn drive_with(
             axis_speed_mm_per_min: p.axis_speed_mm_per_min,
             coolant: false,
         };
-        twin.advance(dt, &activity)?;
-        if let Some(c) = controller.as_mut() {
-            let r = twin.sensor_readings();
-            c.on_readings(r.time_s, &r.values_degc);
-            c.on_spindle_speed(twin.time_s(), p.spindle_rpm);
-        }
+        sim::step(twin, dt, &activity, sim::reborrow(&mut controller))?;
     }
     Ok(())
 }
@@ -514,7 +493,7 @@ pub fn run_at_state_observed(
             0.0,
             state.at_s,
             1.0,
-            reborrow(&mut compensator),
+            sim::reborrow(&mut compensator),
         )?,
         Some(every_s) => {
             observer.on_run_start(&RunStart {
@@ -536,7 +515,7 @@ pub fn run_at_state_observed(
                     0.0,
                     to_s,
                     1.0,
-                    reborrow(&mut compensator),
+                    sim::reborrow(&mut compensator),
                 )?;
                 observer.on_thermal_step(twin.time_s(), &twin.sensor_readings());
                 observer.on_node_temps(twin.time_s(), twin.node_temps_degc());

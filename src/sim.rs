@@ -287,16 +287,11 @@ pub fn execute(
         plan_t_s: 0.0,
         twin_t0_s: twin.time_s(),
         step_s: cfg.thermal_step_s,
-        readings: twin.sensor_readings(),
+        readings: hand_over(twin, reborrow(&mut compensator)),
         last_motion_segment: None,
         motion_every_s,
         next_motion_sample: 0,
     };
-    if let Some(c) = compensator.as_mut() {
-        c.on_readings(clock.readings.time_s, &clock.readings.values_degc);
-        // A no-op when the controller already followed the machine up to now.
-        c.on_spindle_speed(twin.time_s(), 0.0);
-    }
     let mut index = 0;
     for (si, seg) in plan.segments().iter().enumerate() {
         let moving = matches!(
@@ -358,6 +353,50 @@ pub fn execute(
     // The twin ends exactly at the plan's end, ready for what follows.
     clock.finish_at(twin, plan, plan.duration_s(), observer)?;
     Ok(())
+}
+
+/// A shorter borrow of an optional controller (for a call that does not keep it).
+/// `Option::as_deref_mut` does not do: it keeps the trait object's lifetime, which `&mut` makes
+/// invariant, so the second call in a loop would conflict with the first.
+pub fn reborrow<'s>(c: &'s mut Option<&mut dyn Controller>) -> Option<&'s mut dyn Controller> {
+    match c {
+        Some(c) => Some(&mut **c),
+        None => None,
+    }
+}
+
+/// The twin's present readings, given to `controller` (if any) as it takes over: the readings,
+/// and the spindle at rest up to now (a no-op for a controller that already followed the
+/// machine up to now). With [`step`], the only path by which readings leave the twin for the
+/// controller.
+pub fn hand_over(twin: &Twin, controller: Option<&mut dyn Controller>) -> SensorReadings {
+    let readings = twin.sensor_readings();
+    if let Some(c) = controller {
+        c.on_readings(readings.time_s, &readings.values_degc);
+        c.on_spindle_speed(twin.time_s(), 0.0);
+    }
+    readings
+}
+
+/// Advances the twin by `dt_s` under `activity` and gives the new readings and the commanded
+/// spindle speed of the step to `controller` (if any), as a controller logging its sensors sees
+/// them; returns the readings.
+///
+/// # Errors
+/// The twin's (a bad step or activity).
+pub fn step(
+    twin: &mut Twin,
+    dt_s: f64,
+    activity: &Activity,
+    controller: Option<&mut dyn Controller>,
+) -> Result<SensorReadings, TwinError> {
+    twin.advance(dt_s, activity)?;
+    let readings = twin.sensor_readings();
+    if let Some(c) = controller {
+        c.on_readings(readings.time_s, &readings.values_degc);
+        c.on_spindle_speed(twin.time_s(), activity.spindle_rpm);
+    }
+    Ok(readings)
 }
 
 /// Keeps the thermal clock in step with plan time.
@@ -426,13 +465,8 @@ impl Clock {
         controller: &mut Option<&mut dyn Controller>,
     ) -> Result<(), SimError> {
         let activity = activity_over(plan, self.plan_t_s, self.plan_t_s + dt_s);
-        twin.advance(dt_s, &activity)?;
+        self.readings = step(twin, dt_s, &activity, reborrow(controller))?;
         self.plan_t_s += dt_s;
-        self.readings = twin.sensor_readings();
-        if let Some(c) = controller.as_mut() {
-            c.on_readings(self.readings.time_s, &self.readings.values_degc);
-            c.on_spindle_speed(twin.time_s(), activity.spindle_rpm);
-        }
         observer.on_thermal_step(twin.time_s(), &self.readings);
         observer.on_node_temps(twin.time_s(), twin.node_temps_degc());
         self.emit_motion_samples(plan, self.plan_t_s, observer);

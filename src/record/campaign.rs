@@ -20,8 +20,7 @@ use crate::predict::predictor::ModelKind;
 use crate::report::norm;
 use crate::sim::CollectPoints;
 use crate::study::{
-    diagonal_plans, eval_noise_seed, headline, CampaignReport, RunReport, TrainedModels,
-    PREDICTORS,
+    diagonal_plans, eval_noise_seed, headline, CampaignReport, RunReport, TrainedModels, PREDICTORS,
 };
 
 use super::{Diagonal, RecordError, RecordSettings, Recorder, RrdFile};
