@@ -5,6 +5,7 @@
 //! - `compensation_query`: one compensation of the hybrid predictor (fixed-point solve of
 //!   q = p − E_pred(q, T): all networks + first-order synthesis), from held sensor readings and a
 //!   commanded position that moves as along a diagonal.
+//! - `compensation_query_per_kind`: the same query with the hybrid, volumetric and linear models.
 //! - `thermal_8h`: 8 h of machine time of the thermal network alone (1 s steps) under a duty.
 //! - `machine_8h_with_diagonals`: 8 h of machine time with an XY diagonal test every 30 min,
 //!   motion sampled at the 1 ms interpolation cycle (error evaluated at every sample).
@@ -25,7 +26,7 @@ use std::hint::black_box;
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::{Compensator, Controller};
-use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::predict::predictor::{self, AnyPredictor, Settings};
 use vmc_twin::thermal::Activity;
 use vmc_twin::twin::Twin;
 
@@ -106,9 +107,49 @@ fn campaign_one_seed(c: &mut Criterion) {
     g.finish();
 }
 
+/// One compensation query with each model class (the hybrid, the volumetric MLP, the linear
+/// regression) through the same compensator, readings held.
+fn compensation_query_per_kind(c: &mut Criterion) {
+    let spec = MachineSpec::reference();
+    let data = calibration::calibrate(
+        &spec,
+        &ThermalCycle::calibration_set(),
+        &CampaignConfig::new(1),
+    )
+    .unwrap();
+    let settings = Settings {
+        seed: 1,
+        ..Settings::default()
+    };
+    let g = spec.geometry();
+    let models = [
+        AnyPredictor::Hybrid(predictor::train_hybrid(&data, &g, &settings).unwrap().0),
+        AnyPredictor::Volumetric(predictor::train_volumetric(&data, &g, &settings).unwrap().0),
+        AnyPredictor::Linear(predictor::train_linear(&data, &g, &settings).unwrap().0),
+    ];
+    let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
+    let temps: Vec<f64> = (0..names.len()).map(|i| 22.0 + 0.25 * i as f64).collect();
+    let mut group = c.benchmark_group("compensation_query_per_kind");
+    for model in models {
+        let kind = model.kind().name();
+        let mut comp = Compensator::for_machine(model, &names).unwrap();
+        comp.on_readings(0.0, &temps);
+        let mut k = 0u64;
+        group.bench_function(kind, |b| {
+            b.iter(|| {
+                k = k.wrapping_add(1);
+                let s = (k % 1000) as f64 * 0.5;
+                black_box(comp.axis_command_mm(black_box([10.0 + s, 60.0 + 0.5 * s, -225.0])))
+            })
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     compensation_query,
+    compensation_query_per_kind,
     thermal_8h,
     machine_8h_with_diagonals,
     campaign_one_seed

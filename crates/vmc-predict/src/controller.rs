@@ -1,4 +1,4 @@
-//! Compensation in the loop (DESIGN §8).
+//! Compensation in the loop.
 //!
 //! What a controller is told, and when, is the [`Controller`] trait: sensor readings and the
 //! commanded spindle speed at every sensor sample, the commanded motion segment by segment, and
@@ -493,78 +493,5 @@ mod tests {
             let after = ALLOCATIONS.with(Cell::get);
             assert_eq!(after - before, 0, "{:?} allocated", c.predictor().kind());
         }
-    }
-
-    /// Release-mode timing (run with `cargo test --release -p vmc-predict -- --ignored
-    /// --nocapture query_timing`); not a pass/fail test.
-    #[test]
-    #[ignore]
-    fn query_timing() {
-        use crate::predictor::testdata as td;
-        let ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
-        let t0 = std::time::Instant::now();
-        let (h, summary) = train_hybrid(&ds, &td::geometry(), &Settings::default()).unwrap();
-        println!("hybrid training: {:.2} s", t0.elapsed().as_secs_f64());
-        for n in &summary.nets {
-            println!(
-                "  {} h={:?} epochs={:?} {:?} train {:.3?} val {:.3?}",
-                n.name, n.hidden_units, n.epochs, n.stop_reason, n.train_rmse, n.val_rmse
-            );
-        }
-        let t0 = std::time::Instant::now();
-        let (v, vs) =
-            crate::predictor::train_volumetric(&ds, &td::geometry(), &Settings::default()).unwrap();
-        println!(
-            "volumetric training: {:.2} s {:?}",
-            t0.elapsed().as_secs_f64(),
-            vs.nets[0].val_rmse
-        );
-        let t0 = std::time::Instant::now();
-        let (l, _) = train_linear(&ds, &td::geometry(), &Settings::default()).unwrap();
-        println!("linear training: {:.3} s", t0.elapsed().as_secs_f64());
-        for mut m in [
-            AnyPredictor::Hybrid(h.clone()),
-            AnyPredictor::Volumetric(v),
-            AnyPredictor::Linear(l),
-        ] {
-            let pairs: Vec<_> = td::held_out(6.0, 5)
-                .into_iter()
-                .map(|(q, t, e)| (td::predict_at(&mut m, q, &t), e))
-                .collect();
-            let (err, truth) = td::rms_um(&pairs);
-            println!(
-                "{}: held-out RMS error {err:.3} µm of {truth:.3} µm",
-                m.kind()
-            );
-        }
-        let temps = td::temps_degc(5.0, 1000.0);
-        let n = 1_000_000;
-        let mut direct = h.clone();
-        direct.observe_readings(0.0, &temps);
-        let t0 = std::time::Instant::now();
-        for i in 0..n {
-            let q = [(i % 560) as f64, (i % 400) as f64, -((i % 450) as f64)];
-            std::hint::black_box(direct.predict_error_mm(q));
-        }
-        println!(
-            "hybrid query: {:.0} ns",
-            t0.elapsed().as_secs_f64() / n as f64 * 1e9
-        );
-        let mut c = Compensator::new(h);
-        c.on_readings(0.0, &temps);
-        let t0 = std::time::Instant::now();
-        let mut evals = 0;
-        for i in 0..n {
-            let p = [(i % 560) as f64, (i % 400) as f64, -((i % 450) as f64)];
-            std::hint::black_box(c.axis_command_mm(p));
-            evals += c.last_solve().iterations;
-        }
-        let dt = t0.elapsed().as_secs_f64();
-        println!(
-            "compensation: {:.0} ns per solve, {:.2} evaluations per solve, {:.0} ns per query",
-            dt / n as f64 * 1e9,
-            evals as f64 / n as f64,
-            dt / evals as f64 * 1e9
-        );
     }
 }

@@ -1,4 +1,4 @@
-//! Calibration datasets (DESIGN §6): what virtual — or real — instruments measured, with the
+//! Calibration datasets: what virtual — or real — instruments measured, with the
 //! temperature sensor readings logged at the same instants. CSV with units in the column names,
 //! the same format a user would produce from a real machine.
 //!

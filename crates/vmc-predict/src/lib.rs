@@ -1,4 +1,4 @@
-//! The knowledge side of vmc-twin (DESIGN §3, §7–§9).
+//! The knowledge side of vmc-twin.
 //!
 //! This crate is the information boundary made structural: it does not depend on the twin crate,
 //! so nothing in it can name the twin's error functions, thermal nodes, parameters or seeds. It

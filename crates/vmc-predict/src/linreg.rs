@@ -1,4 +1,4 @@
-//! Multiple linear regression, the "linear thermal model" baseline of DESIGN §7.
+//! Multiple linear regression, the "linear thermal model" baseline of the compensation study.
 //!
 //! Model, per output k: `y_k = c_k + Σ_j a_kj · x_j` (physical units).
 //!

@@ -1,4 +1,4 @@
-//! Accuracy metrics (DESIGN §9).
+//! Accuracy metrics.
 //!
 //! For a measured series `y` and a prediction `ŷ` of equal length `n`, the residual is
 //! `e = y − ŷ`. All metrics carry the unit of the series they are computed on (the twin reports
@@ -8,13 +8,13 @@
 //! - MAPE = (Σ |eᵢ|) / (Σ |yᵢ|) = mean|e| / mean|y|, as a **fraction** (0.05 = 5 %).
 //!   The textbook MAPE `(1/n) Σ |eᵢ/yᵢ|` explodes wherever the measured error crosses zero,
 //!   which geometric errors do all the time; normalising by the mean magnitude is the robust
-//!   definition DESIGN §9 asks for. When `Σ |yᵢ| = 0` it is undefined and reported as `None`.
+//!   definition the reports use. When `Σ |yᵢ| = 0` it is undefined and reported as `None`.
 //! - RMSE = √((1/n) Σ eᵢ²)
 //! - R²   = 1 − SS_res / SS_tot with SS_res = Σ eᵢ², SS_tot = Σ (yᵢ − ȳ)². When the measured
 //!   series is constant (SS_tot = 0) R² is undefined and reported as `None` (no invented number).
 //! - max |e| = maxᵢ |eᵢ|
 //! - RMS(s) = √((1/n) Σ sᵢ²) of any series.
-//! - reduction = 1 − RMS(after) / RMS(before), and likewise for max |·| (DESIGN §8–§9):
+//! - reduction = 1 − RMS(after) / RMS(before), and likewise for max |·|:
 //!   1 means everything was removed, 0 nothing, negative values mean compensation made it worse.
 //! - |E| = √(Ex² + Ey² + Ez²) per sample for the volumetric error vector.
 //!

@@ -1,5 +1,5 @@
 //! First-order kinematic synthesis of the volumetric error from elementary errors
-//! (DESIGN §7, Appendix A).
+//!.
 //!
 //! The machine's nominal geometry (its [`Chain`] and the tool offset) is public knowledge, so it
 //! lives here on the knowledge side; the twin's exact HTM product (`vmc_twin::kinematics`) uses the

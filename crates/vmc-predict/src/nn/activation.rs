@@ -2,7 +2,7 @@
 //!
 //! Measured here (release, loaded 2-core machine): std `f64::tanh` ≈ 13 ns, [`fast_tanh`]
 //! ≈ 1.6 ns per call. A 13-20-6 net evaluates 20 of them, so for the < 1 µs compensation query
-//! (4 nets + synthesis, DESIGN §13) the activation is most of the budget.
+//! (4 nets + synthesis) the activation is most of the budget.
 
 use serde::{Deserialize, Serialize};
 

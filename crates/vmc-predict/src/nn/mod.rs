@@ -1,4 +1,4 @@
-//! Multilayer perceptrons and their training (DESIGN §7).
+//! Multilayer perceptrons and their training.
 //!
 //! - [`Mlp`]: `n_in → tanh hidden layers → linear n_out`, f64 weights in one flat vector, an
 //!   allocation-free forward pass ([`Mlp::forward_into`]) and an analytic Jacobian by

@@ -508,16 +508,20 @@ mod tests {
     fn bad_version_format_and_kind_give_the_documented_messages() {
         let model = all_kinds().remove(2);
         let text = model.to_json_string().unwrap();
-        let v1 = text.replacen("\"version\": 7", "\"version\": 1", 1);
-        assert_eq!(
-            AnyPredictor::from_json_str(&v1).unwrap_err().to_string(),
-            "model file version 1 is not supported (this build reads versions 2 to 7)"
-        );
-        let v8 = text.replacen("\"version\": 7", "\"version\": 8", 1);
-        assert_eq!(
-            AnyPredictor::from_json_str(&v8).unwrap_err().to_string(),
-            "model file version 8 is not supported (this build reads versions 2 to 7)"
-        );
+        // A version below the oldest read and one above this build's are refused, naming the
+        // range this build reads; the file this build writes carries its own version.
+        let written = format!("\"version\": {FORMAT_VERSION}");
+        assert!(text.contains(&written), "{text}");
+        let range = format!("this build reads versions {OLDEST_READ_VERSION} to {FORMAT_VERSION}");
+        for v in [OLDEST_READ_VERSION - 1, FORMAT_VERSION + 1] {
+            let changed = text.replacen(&written, &format!("\"version\": {v}"), 1);
+            assert_eq!(
+                AnyPredictor::from_json_str(&changed)
+                    .unwrap_err()
+                    .to_string(),
+                format!("model file version {v} is not supported ({range})")
+            );
+        }
         let other = text.replacen("vmc-twin-model", "something-else", 1);
         assert_eq!(
             AnyPredictor::from_json_str(&other).unwrap_err().to_string(),

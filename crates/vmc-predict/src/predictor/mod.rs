@@ -1,4 +1,4 @@
-//! Volumetric error predictors trained on a calibration [`Dataset`] (DESIGN §7).
+//! Volumetric error predictors trained on a calibration [`Dataset`].
 //!
 //! Every predictor answers one question at run time: given the axis positions `q` (mm) and the
 //! current temperature sensor readings `T` (°C, in the model's sensor order), what is the
@@ -340,7 +340,7 @@ pub struct Settings {
     /// Time constants (s) of the hybrid's history features, see [`crate::history`]: each
     /// network also sees, per sensor, the reading minus its first-order low-pass filter with
     /// each of these time constants (default: empty = present readings only). The baselines
-    /// always use the present readings only. Measured (README, "history features"): with 30 min
+    /// always use the present readings only. Measured (docs/decisions, history features of every sensor): with 30 min
     /// and 2 h the held-out max residual got worse (2.31 → 3.30 µm), so it is off by default.
     pub history_taus_s: Vec<f64>,
     /// Sensors that get history features (default: empty = all the model's sensors).
@@ -357,10 +357,9 @@ pub struct Settings {
     /// fixed end, so the thermal positioning error is bilinear in position and temperatures.
     pub axis_bilinear: bool,
     /// Heat-input exponents of the commanded spindle speed for the hybrid's spindle part
-    /// (default: empty = the speed is not used). **Opt-in, outside DESIGN §3's boundary as
-    /// written** (which lists temperature readings and commanded axis positions): the
-    /// controller knows the speed it commands, but whether the predictor may use it is the
-    /// team's decision. With exponents, the spindle part also sees per exponent `e` the heat
+    /// (default: empty = the speed is not used). **Opt-in**: the controller knows
+    /// the speed it commands, so it is information the knowledge side may use; the default
+    /// model uses temperature readings only. With exponents, the spindle part also sees per exponent `e` the heat
     /// input `(n / 1000 rpm)^e` and its low-pass filters with [`Self::spindle_speed_taus_s`]
     /// ([`crate::history::SpeedHistory`]); the dataset needs the `spindle_rpm` column.
     pub spindle_speed_exponents: Vec<f64>,

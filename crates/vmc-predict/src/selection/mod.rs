@@ -1,4 +1,4 @@
-//! Temperature sensor placement from a calibration-style dataset (DESIGN §1, §5–§7): which K of
+//! Temperature sensor placement from a calibration-style dataset: which K of
 //! many candidate locations carry the information a thermal-error model needs.
 //!
 //! The procedure, stated so a user can reproduce it on a real machine's data:
@@ -39,7 +39,7 @@
 //! Channels: only those that all candidates together predict with a cross-validated R² ≥
 //! [`SelectionConfig::min_channel_r2`] count as thermal errors; the rest is instrument noise.
 //!
-//! The module sees datasets only (the information boundary, DESIGN §3): candidate names are
+//! The module sees datasets only (the information boundary): candidate names are
 //! column names, nothing more.
 
 use nalgebra::{DMatrix, DVector};

@@ -1,4 +1,4 @@
-//! Thermal-drift models fitted on a user's measurements (issue 5, part B).
+//! Thermal-drift models fitted on a user's measurements.
 //!
 //! A user brings a CSV file with a time column, temperature columns (and optionally the spindle
 //! speed) and measured drift columns, e.g. a spindle thermal test (5 probes, 16 thermometers,
