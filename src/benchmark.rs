@@ -14,7 +14,7 @@ use crate::machine::MachineSpec;
 use crate::predict::controller::{Compensator, Controller};
 use crate::predict::predictor::{self, Settings};
 use crate::program;
-use crate::sim::{self, SampleMode, SimConfig};
+use crate::sim::{self, SampleMode, SimConfig, SimError};
 use crate::study::ForMachine;
 use crate::study::{self, EvalError};
 use crate::twin::Twin;
@@ -120,11 +120,9 @@ pub fn workload_8h(
         spec.axes.home_mm,
     )?;
     let cycle = ThermalCycle::calibration_set()[2].clone();
-    let cfg = SimConfig {
-        sample_mode: SampleMode::EveryCycle,
-        interp_cycle_s: interp_ms * 1e-3,
-        ..SimConfig::default()
-    };
+    let cfg = SimConfig::new(1.0, interp_ms * 1e-3)
+        .map_err(SimError::from)?
+        .sampling(SampleMode::EveryCycle);
     Ok((plan, cycle, cfg))
 }
 

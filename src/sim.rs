@@ -29,18 +29,75 @@ pub enum SampleMode {
     EveryCycle,
 }
 
-/// Settings of one simulated execution.
+/// Settings of one simulated execution. The step and the cycle are checked once, when the
+/// config is made ([`SimConfig::new`]); a config always holds usable values.
 #[derive(Debug, Clone, Copy)]
 pub struct SimConfig {
     /// Thermal integration and sensor sampling step, s (default 1 s).
-    pub thermal_step_s: f64,
+    thermal_step_s: f64,
     /// Interpolation cycle for [`SampleMode::EveryCycle`], s (default 0.001 s).
-    pub interp_cycle_s: f64,
-    /// Where to measure.
+    interp_cycle_s: f64,
+    /// Where to measure (default: at dwells).
     pub sample_mode: SampleMode,
     /// Also compute each point's thermal part (error minus the cold-geometry error), for
     /// reports; costs a second error evaluation per point (default false).
     pub report_thermal_part: bool,
+}
+
+/// A step or cycle that cannot be simulated.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+pub enum SimConfigError {
+    /// The thermal step is not a positive number.
+    #[error("thermal step must be > 0 s, got {0}")]
+    ThermalStep(f64),
+    /// The interpolation cycle is not a positive number.
+    #[error("interpolation cycle must be > 0 s, got {0}")]
+    InterpCycle(f64),
+}
+
+impl SimConfig {
+    /// A config with thermal step `thermal_step_s` and interpolation cycle `interp_cycle_s`
+    /// (both s, finite and > 0), measuring at dwells, without thermal parts.
+    ///
+    /// # Errors
+    /// A step or cycle that is not a positive number.
+    pub fn new(thermal_step_s: f64, interp_cycle_s: f64) -> Result<Self, SimConfigError> {
+        if !(thermal_step_s > 0.0 && thermal_step_s.is_finite()) {
+            return Err(SimConfigError::ThermalStep(thermal_step_s));
+        }
+        if !(interp_cycle_s > 0.0 && interp_cycle_s.is_finite()) {
+            return Err(SimConfigError::InterpCycle(interp_cycle_s));
+        }
+        Ok(Self {
+            thermal_step_s,
+            interp_cycle_s,
+            ..Self::default()
+        })
+    }
+
+    /// Thermal integration and sensor sampling step, s.
+    pub fn thermal_step_s(&self) -> f64 {
+        self.thermal_step_s
+    }
+
+    /// Interpolation cycle, s.
+    pub fn interp_cycle_s(&self) -> f64 {
+        self.interp_cycle_s
+    }
+
+    /// The same config measuring as `mode` says.
+    #[must_use]
+    pub fn sampling(mut self, mode: SampleMode) -> Self {
+        self.sample_mode = mode;
+        self
+    }
+
+    /// The same config, computing each point's thermal part if `on`.
+    #[must_use]
+    pub fn with_thermal_part(mut self, on: bool) -> Self {
+        self.report_thermal_part = on;
+        self
+    }
 }
 
 impl Default for SimConfig {
@@ -234,7 +291,7 @@ pub enum SimError {
     Twin(#[from] TwinError),
     /// Bad settings.
     #[error("simulation settings: {0}")]
-    Config(String),
+    Config(#[from] SimConfigError),
     /// The compensation commanded the axes implausibly far from the programmed point.
     #[error(
         "line {line} (t = {time_s:.1} s): the compensation moves the axes {correction_mm:.4} mm \
@@ -268,18 +325,6 @@ pub fn execute(
     mut compensator: Option<&mut dyn Controller>,
     observer: &mut dyn Observer,
 ) -> Result<(), SimError> {
-    if !(cfg.thermal_step_s > 0.0 && cfg.thermal_step_s.is_finite()) {
-        return Err(SimError::Config(format!(
-            "thermal step must be > 0 s, got {}",
-            cfg.thermal_step_s
-        )));
-    }
-    if !(cfg.interp_cycle_s > 0.0 && cfg.interp_cycle_s.is_finite()) {
-        return Err(SimError::Config(format!(
-            "interpolation cycle must be > 0 s, got {}",
-            cfg.interp_cycle_s
-        )));
-    }
     let motion_every_s = observer
         .motion_sample_interval_s()
         .filter(|dt| *dt > 0.0 && dt.is_finite());

@@ -302,12 +302,7 @@ fn machine_file(text: &str) -> Result<(), TestCaseError> {
             if let Ok(mut twin) = vmc_twin::twin::Twin::new(&spec, 1) {
                 let prog = "G0 X10 Y10 Z-10\nG4 P2\nM30";
                 if let Ok(plan) = program::plan_source(prog, "p.ngc", &spec, spec.axes.home_mm) {
-                    let cfg = vmc_twin::sim::SimConfig {
-                        thermal_step_s: 1.0,
-                        interp_cycle_s: 1e-3,
-                        sample_mode: vmc_twin::sim::SampleMode::Dwells,
-                        report_thermal_part: true,
-                    };
+                    let cfg = vmc_twin::sim::SimConfig::default().with_thermal_part(true);
                     let _ = vmc_twin::sim::execute(
                         &mut twin,
                         &plan,

@@ -14,6 +14,7 @@ use clap::{Parser, Subcommand};
 use crate::commands::{self, RrdOutput};
 use crate::predict::predictor::ModelKind;
 use crate::record;
+use crate::sim::{SimConfig, SimConfigError};
 
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
@@ -200,15 +201,19 @@ impl RunArgs {
     /// without `--compensate`, a bad recording path or magnification.
     pub fn config(self) -> Result<commands::run::RunConfig> {
         let machine = self.machine.load(Some(&self.sensors))?;
-        if !(self.interp_cycle_ms > 0.0 && self.interp_cycle_ms.is_finite()) {
-            anyhow::bail!(
-                "--interp-cycle-ms must be > 0, got {}",
-                self.interp_cycle_ms
-            );
-        }
-        if !(self.thermal_step_s > 0.0 && self.thermal_step_s.is_finite()) {
-            anyhow::bail!("--thermal-step-s must be > 0, got {}", self.thermal_step_s);
-        }
+        let sim = SimConfig::new(self.thermal_step_s, self.interp_cycle_ms * 1e-3).map_err(
+            |e| match e {
+                SimConfigError::ThermalStep(_) => {
+                    anyhow::anyhow!("--thermal-step-s must be > 0, got {}", self.thermal_step_s)
+                }
+                SimConfigError::InterpCycle(_) => {
+                    anyhow::anyhow!(
+                        "--interp-cycle-ms must be > 0, got {}",
+                        self.interp_cycle_ms
+                    )
+                }
+            },
+        )?;
         if let (Some(path), false) = (&self.model, self.compensate) {
             anyhow::bail!(
                 "{}: a model was given without --compensate; add --compensate to put it in the loop",
@@ -225,8 +230,7 @@ impl RunArgs {
             out_dir: self.out,
             force,
             every_cycle: self.every_cycle,
-            interp_cycle_s: self.interp_cycle_ms * 1e-3,
-            thermal_step_s: self.thermal_step_s,
+            sim,
             model: self.model,
             rrd,
         })

@@ -35,10 +35,8 @@ pub struct RunConfig {
     pub force: bool,
     /// Measure at every interpolation cycle during motion, not only at dwells.
     pub every_cycle: bool,
-    /// Interpolation cycle, s (> 0).
-    pub interp_cycle_s: f64,
-    /// Thermal integration and sensor sampling step, s (> 0).
-    pub thermal_step_s: f64,
+    /// Thermal step and interpolation cycle of the measured program (checked).
+    pub sim: SimConfig,
     /// A trained model to put in the control loop.
     pub model: Option<PathBuf>,
     /// A Rerun recording to write.
@@ -114,9 +112,9 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
     program::check_run_size(
         &cfg.program.display().to_string(),
         total_s,
-        cfg.thermal_step_s,
+        cfg.sim.thermal_step_s(),
         plan.duration_s(),
-        cfg.every_cycle.then_some(cfg.interp_cycle_s),
+        cfg.every_cycle.then_some(cfg.sim.interp_cycle_s()),
     )?;
     Ok((warmups, plan))
 }
@@ -164,21 +162,16 @@ fn simulate(
 ) -> Result<(RunLog, Option<(record::Recorder, record::RrdFile)>)> {
     let machine = &cfg.machine;
     let mut twin = Twin::new(machine, cfg.seed)?;
-    let sim_cfg = SimConfig {
-        thermal_step_s: cfg.thermal_step_s,
-        interp_cycle_s: cfg.interp_cycle_s,
-        sample_mode: if cfg.every_cycle {
+    let sim_cfg = cfg
+        .sim
+        .sampling(if cfg.every_cycle {
             SampleMode::EveryCycle
         } else {
             SampleMode::Dwells
-        },
+        })
         // The run report splits each error into cold geometry and thermal part.
-        report_thermal_part: true,
-    };
-    let warm_cfg = SimConfig {
-        sample_mode: SampleMode::Dwells,
-        ..sim_cfg
-    };
+        .with_thermal_part(true);
+    let warm_cfg = sim_cfg.sampling(SampleMode::Dwells);
     let total_s: f64 = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
     let mut progress = Progress::new(total_s.ceil() as u64, "s");
     let mut recording = match &cfg.rrd {

@@ -110,11 +110,10 @@ pub fn record_check(
     // The motion itself, sampled along the path (at most ~20,000 samples) so the commanded
     // and actual paths are drawn; a program that leaves the travel still shows its problems
     // even if the twin cannot follow it.
-    let cfg = SimConfig {
-        sample_mode: SampleMode::EveryCycle,
-        interp_cycle_s: (plan.duration_s() / 20_000.0).max(0.01),
-        ..SimConfig::default()
-    };
+    // The cycle is at least 10 ms (and finite: a plan's duration is).
+    let cfg = SimConfig::new(1.0, (plan.duration_s() / 20_000.0).max(0.01))
+        .unwrap_or_default()
+        .sampling(SampleMode::EveryCycle);
     let motion = sim::execute(&mut twin, plan, &cfg, None, &mut rec);
     let mut md = format!("# vmc-twin check: {file}\n\n");
     if problems.is_empty() {
