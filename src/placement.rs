@@ -327,10 +327,10 @@ pub fn study(spec: &MachineSpec, cfg: &PlacementConfig) -> Result<PlacementRepor
     study_among(spec, cfg, None)
 }
 
-/// [`study`] restricted to the candidate nodes `only` (ambient always stays a candidate).
+/// [`study()`] restricted to the candidate nodes `only` (ambient always stays a candidate).
 ///
 /// # Errors
-/// As [`study`].
+/// As [`study()`].
 pub fn study_among(
     spec: &MachineSpec,
     cfg: &PlacementConfig,

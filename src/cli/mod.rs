@@ -455,7 +455,7 @@ impl SelectArgs {
 pub struct CheckArgs {
     /// G-code program to check.
     pub program: PathBuf,
-    /// Machine description (TOML) with a [collision] section; default: the reference machine.
+    /// Machine description (TOML) with a `[collision]` section; default: the reference machine.
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Fixture file (TOML): vise, clamps and stock on the table.
