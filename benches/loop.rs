@@ -26,11 +26,13 @@ use std::hint::black_box;
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::controller::{Compensator, Controller};
+use vmc_twin::predict::dataset::Dataset;
 use vmc_twin::predict::predictor::{self, AnyPredictor, Settings};
 use vmc_twin::thermal::Activity;
 use vmc_twin::twin::Twin;
 
-fn compensation_query(c: &mut Criterion) {
+/// The reference machine and its calibration dataset (machine seed 1).
+fn reference_calibration() -> (MachineSpec, Dataset) {
     let spec = MachineSpec::reference();
     let data = calibration::calibrate(
         &spec,
@@ -38,6 +40,11 @@ fn compensation_query(c: &mut Criterion) {
         &CampaignConfig::new(1),
     )
     .unwrap();
+    (spec, data)
+}
+
+fn compensation_query(c: &mut Criterion) {
+    let (spec, data) = reference_calibration();
     let (model, _) = predictor::train_hybrid(
         &data,
         &spec.geometry(),
@@ -110,13 +117,7 @@ fn campaign_one_seed(c: &mut Criterion) {
 /// One compensation query with each model class (the hybrid, the volumetric MLP, the linear
 /// regression) through the same compensator, readings held.
 fn compensation_query_per_kind(c: &mut Criterion) {
-    let spec = MachineSpec::reference();
-    let data = calibration::calibrate(
-        &spec,
-        &ThermalCycle::calibration_set(),
-        &CampaignConfig::new(1),
-    )
-    .unwrap();
+    let (spec, data) = reference_calibration();
     let settings = Settings {
         seed: 1,
         ..Settings::default()
