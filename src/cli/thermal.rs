@@ -70,6 +70,10 @@ pub struct FitThermalArgs {
     /// Seed of the network initialisation.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Keep the evaluated model (fitted before the held-out part) instead of fitting the chosen
+    /// form again on every row.
+    #[arg(long)]
+    pub no_refit: bool,
 }
 
 /// Arguments of `predict-thermal`.
@@ -115,6 +119,7 @@ impl FitThermalArgs {
             val_fraction: self.val_fraction,
             seed: self.seed,
             ensemble: self.ensemble,
+            refit_all: !self.no_refit,
             ..FitSettings::default()
         };
         Ok(FitThermalConfig {

@@ -54,6 +54,10 @@ pub struct FitSettings {
     pub max_epochs: usize,
     /// Epochs without validation improvement before stopping (default: 8).
     pub patience: usize,
+    /// Once the form is chosen and evaluated, fit the kept model again on every row, the
+    /// held-out part included (default: true): a user's model should learn from all the cycles
+    /// measured. The evaluation stays that of the model before the refit.
+    pub refit_all: bool,
 }
 
 impl Default for FitSettings {
@@ -69,6 +73,7 @@ impl Default for FitSettings {
             ensemble: 5,
             max_epochs: 100,
             patience: 8,
+            refit_all: true,
         }
     }
 }
@@ -331,6 +336,24 @@ fn choose_forms(arch: Architecture, val: &[(OutputModel, Option<Vec<f64>>)]) -> 
         .collect()
 }
 
+/// Plain least squares on the raw inputs (intercept and one slope per input column as read: no
+/// filters, no ridge) fitted on `rows`: the baseline a user would try first. Predictions of every
+/// row, output-major.
+fn plain_least_squares(
+    x_cols: &[&[f64]],
+    y: &[Vec<f64>],
+    rows: &[usize],
+) -> Result<Vec<Vec<f64>>, ThermalFitError> {
+    let width = x_cols.len();
+    let n = y.first().map_or(0, Vec::len);
+    let mut raw = Vec::with_capacity(n * width);
+    for r in 0..n {
+        raw.extend(x_cols.iter().map(|c| c[r]));
+    }
+    let m = LinearModel::fit(&samples(&raw, width, y, rows)?, 0.0)?;
+    Ok(predict_linear(&m, &raw, width, y.len()))
+}
+
 /// Fits a model of `outputs` from `inputs` (columns of `table`) and evaluates it and the linear
 /// baseline on the `split`'s held-out rows (see the module doc).
 pub fn fit(
@@ -452,27 +475,41 @@ pub fn fit(
         })
         .collect();
 
-    // 2. Final fit on training + validation rows.
+    // 2. Final fit on training + validation rows: the model the held-out part evaluates.
     let fit_rows: Vec<usize> = train_rows.iter().chain(&val_rows).copied().collect();
-    let linear = LinearModel::fit(&samples(&feats, width, &y, &fit_rows)?, ridge)?;
-    let lin_fin = predict_linear(&linear, &feats, width, n_out);
-    let refit = |target: &[Vec<f64>], chosen: &Option<Net>, form, salt| match chosen {
-        Some(n) if forms.contains(&form) => fit_net(
-            &feats,
-            width,
-            target,
-            t,
-            &fit_rows,
-            None,
-            Some((n.hidden, &n.epochs)),
-            settings,
-            salt,
-        )
-        .map(Some),
-        _ => Ok(None),
+    let parts = |rows: &[usize]| -> Result<FinalParts, ThermalFitError> {
+        let linear = LinearModel::fit(&samples(&feats, width, &y, rows)?, ridge)?;
+        let lin_fin = predict_linear(&linear, &feats, width, n_out);
+        let refit = |target: &[Vec<f64>], chosen: &Option<Net>, form, salt| match chosen {
+            Some(n) if forms.contains(&form) => fit_net(
+                &feats,
+                width,
+                target,
+                t,
+                rows,
+                None,
+                Some((n.hidden, &n.epochs)),
+                settings,
+                salt,
+            )
+            .map(Some),
+            _ => Ok(None),
+        };
+        let residual = refit(&minus(&y, &lin_fin), &res_sel, OutputModel::LinearMlp, 1)?;
+        let direct = refit(&y, &dir_sel, OutputModel::Mlp, 2)?;
+        Ok(FinalParts {
+            linear,
+            lin_pred: lin_fin,
+            residual,
+            direct,
+        })
     };
-    let residual_fin = refit(&minus(&y, &lin_fin), &res_sel, OutputModel::LinearMlp, 1)?;
-    let direct_fin = refit(&y, &dir_sel, OutputModel::Mlp, 2)?;
+    let FinalParts {
+        linear,
+        lin_pred: lin_fin,
+        residual: residual_fin,
+        direct: direct_fin,
+    } = parts(&fit_rows)?;
     let mut model = ThermalModel {
         format: FORMAT_NAME.into(),
         version: FORMAT_VERSION,
@@ -498,6 +535,9 @@ pub fn fit(
     let pred = model.predict_features(&feats)?;
     let hold_model = rmse(&y, &pred, &hold_rows);
     let hold_lin = rmse(&y, &lin_fin, &hold_rows);
+    let hold_plain = plain_least_squares(&x_cols, &y, &fit_rows)
+        .map(|pred| rmse(&y, &pred, &hold_rows))
+        .ok();
     let n = table.len();
     let raw = rmse(&y, &vec![vec![0.0; n]; n_out], &hold_rows);
     let means: Vec<Vec<f64>> = y
@@ -516,6 +556,7 @@ pub fn fit(
             constant_rmse: constant[k],
             linear_rmse: hold_lin[k],
             model_rmse: hold_model[k],
+            plain_ls_rmse: hold_plain.as_ref().map(|p| p[k]),
             linear_ratio: (raw[k] > 0.0).then(|| hold_lin[k] / raw[k]),
             model_ratio: (raw[k] > 0.0).then(|| hold_model[k] / raw[k]),
             val_linear_rmse: val_lin[k],
@@ -532,8 +573,28 @@ pub fn fit(
         residual_net: residual_fin.map(|n| (n.hidden, n.epochs)),
         direct_net: direct_fin.map(|n| (n.hidden, n.epochs)),
         channels,
+        refit_rows: None,
     });
+    // 3. With the form chosen and evaluated, the model a user keeps learns from every row.
+    if settings.refit_all {
+        let all: Vec<usize> = (0..table.len()).collect();
+        let refitted = parts(&all)?;
+        model.linear = refitted.linear;
+        model.residual_mlp = refitted.residual.map(|n| n.members).unwrap_or_default();
+        model.direct_mlp = refitted.direct.map(|n| n.members).unwrap_or_default();
+        if let Some(e) = model.evaluation.as_mut() {
+            e.refit_rows = Some(all.len());
+        }
+    }
     Ok(model)
+}
+
+/// The final parts of a model fitted on some rows, with the linear part's predictions.
+struct FinalParts {
+    linear: LinearModel,
+    lin_pred: Vec<Vec<f64>>,
+    residual: Option<Net>,
+    direct: Option<Net>,
 }
 
 #[cfg(test)]
@@ -544,6 +605,11 @@ mod tests {
     /// A machine whose drift follows its temperature through a 1 h first-order lag, with the
     /// temperature stepping between cycles: a static model cannot fit it, the filter bank can.
     fn lagged_table() -> Table {
+        lagged_table_with(0.0)
+    }
+
+    /// [`lagged_table`] with `offset_um` added to the drift of the last cycle only.
+    fn lagged_table_with(offset_um: f64) -> Table {
         let mut text = String::from("time_s,spindle_rpm,t1_degc,ch1_um\n");
         let tau_s: f64 = 3600.0;
         // The machine starts in a steady state at its first reading (the features' assumption).
@@ -557,7 +623,11 @@ mod tests {
                 lag += (1.0 - (-60.0 / tau_s).exp()) * (temp - lag);
             }
             let rpm = if heating { 1000.0 * cycle } else { 0.0 };
-            text.push_str(&format!("{t_s},{rpm},{temp},{}\n", 3.0 * (lag - 20.0)));
+            let planted = if i / 480 == 2 { offset_um } else { 0.0 };
+            text.push_str(&format!(
+                "{t_s},{rpm},{temp},{}\n",
+                3.0 * (lag - 20.0) + planted
+            ));
         }
         let req = TableRequest {
             time: None,
@@ -642,5 +712,71 @@ mod tests {
         assert_ne!(inconsistent, json);
         assert!(err(&inconsistent).contains("inconsistent model"));
         assert!(err("[1, 2").contains("not JSON"));
+    }
+
+    #[test]
+    fn the_kept_model_learns_every_row_and_the_evaluation_is_of_the_model_before() {
+        // A last cycle whose drift carries an offset the earlier cycles never show: only a model
+        // fitted on every row can know it.
+        let table = lagged_table_with(4.0);
+        let split = Split::resolve(
+            &table.time_s,
+            None,
+            Some(("spindle_rpm", table.column("spindle_rpm").unwrap())),
+            0.25,
+        )
+        .unwrap();
+        let fit_with = |refit_all| {
+            let settings = FitSettings {
+                architecture: Architecture::Linear,
+                features: FeatureSpec {
+                    time_constants_s: vec![3600.0],
+                    speed_exponents: Vec::new(),
+                    relative_to_mean: false,
+                },
+                ridge_candidates: vec![1e-9],
+                refit_all,
+                ..FitSettings::default()
+            };
+            let inputs = ["t1_degc".to_string()];
+            fit(&table, &inputs, &["ch1_um".into()], &split, &settings).unwrap()
+        };
+        let (kept, refitted) = (fit_with(false), fit_with(true));
+        let (e0, e1) = (
+            kept.evaluation.clone().unwrap(),
+            refitted.evaluation.clone().unwrap(),
+        );
+        assert_eq!(e0.refit_rows, None);
+        assert_eq!(e1.refit_rows, Some(table.len()));
+        assert_eq!(
+            e0.channels, e1.channels,
+            "the printed evaluation is the same model's"
+        );
+        let held_out_rmse = |m: &ThermalModel| {
+            let t1 = table.column("t1_degc").unwrap();
+            let pred = m.predict(&table.time_s, &[t1]).unwrap();
+            let y = table.column("ch1_um").unwrap();
+            let rows: Vec<usize> = (0..table.len())
+                .filter(|&r| table.time_s[r] >= split.holdout_from_s)
+                .collect();
+            (rows
+                .iter()
+                .map(|&r| (pred[0][r] - y[r]).powi(2))
+                .sum::<f64>()
+                / rows.len() as f64)
+                .sqrt()
+        };
+        let (before, after) = (held_out_rmse(&kept), held_out_rmse(&refitted));
+        // The evaluated model misses the planted offset by most of its 4 µm; the refitted one
+        // has seen it (it spreads it over all the rows of its least-squares fit).
+        assert!(before > 2.0, "evaluated model, held-out RMSE {before} µm");
+        assert!(
+            after < 0.75 * before,
+            "refitted {after} µm vs evaluated {before} µm"
+        );
+        // Plain least squares on the raw input is the printed baseline.
+        assert!(e1.channels[0]
+            .plain_ls_rmse
+            .is_some_and(|p| p.is_finite() && p > 0.0));
     }
 }

@@ -132,6 +132,11 @@ pub struct ChannelScore {
     pub linear_rmse: f64,
     /// RMSE of the fitted model on the held-out part.
     pub model_rmse: f64,
+    /// RMSE on the held-out part of plain least squares on the raw inputs (intercept and one
+    /// slope per input, fitted on training + validation rows; None if that regression is
+    /// singular or the file predates it).
+    #[serde(default)]
+    pub plain_ls_rmse: Option<f64>,
     /// `linear_rmse / raw_rms` (None when the held-out values are all zero).
     pub linear_ratio: Option<f64>,
     /// `model_rmse / raw_rms` (None when the held-out values are all zero).
@@ -163,6 +168,10 @@ pub struct Evaluation {
     pub direct_net: Option<(usize, Vec<usize>)>,
     /// Per output.
     pub channels: Vec<ChannelScore>,
+    /// When the kept model was fitted again on every row after this evaluation: how many rows
+    /// (None: the kept model is the evaluated one).
+    #[serde(default)]
+    pub refit_rows: Option<usize>,
 }
 
 /// A fitted thermal-drift model, as saved in JSON.
