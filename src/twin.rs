@@ -428,6 +428,30 @@ mod tests {
         );
     }
 
+    /// The cold reference machine errs on the seven diagonals by what the study reports for its
+    /// machine (components up to 18 / 44 / 50 µm in X / Y / Z): every diagonal by more than
+    /// 10 µm somewhere, none by more than those components together (√(18² + 44² + 50²) ≈ 69 µm).
+    /// A unit slip (µm read as mm) or a lost error term would leave this range.
+    #[test]
+    fn the_reference_machines_cold_diagonal_errors_have_the_size_the_study_reports() {
+        let spec = MachineSpec::reference();
+        for seed in [1, 2, 3] {
+            let twin = reference_twin(seed);
+            for (name, text) in crate::program::DIAGONALS {
+                let plan =
+                    crate::program::plan_source(text, name, &spec, spec.axes.home_mm).unwrap();
+                let max_um = plan
+                    .dwells()
+                    .map(|d| (twin.tool_error_mm(d.pos_mm, d.pos_mm, [0.0; 3]) * 1e3).norm())
+                    .fold(0.0, f64::max);
+                assert!(
+                    (10.0..=69.0).contains(&max_um),
+                    "seed {seed}, {name}: max |E| {max_um:.2} µm"
+                );
+            }
+        }
+    }
+
     #[test]
     fn set_node_temps_rejects_a_wrong_length_or_a_non_finite_value() {
         let mut twin = reference_twin(1);

@@ -269,11 +269,13 @@ fn out_writes_samples_and_summary_and_never_overwrites_without_force() {
     }
     let t = csv.col("time_s");
     assert!(t.windows(2).all(|w| w[1] > w[0]), "time increases: {t:?}");
-    assert_eq!(
-        csv.sensor_columns().len(),
-        12,
-        "11 sensors + ambient, in °C"
-    );
+    // One column per sensor of the machine, in its order, in °C.
+    let sensors: Vec<String> = vmc_twin::machine::MachineSpec::reference()
+        .sensors
+        .iter()
+        .map(|s| format!("{}_degc", s.name))
+        .collect();
+    assert_eq!(csv.sensor_columns(), sensors);
 
     let js = read_json(&json_path);
     assert_eq!(js["points"].as_u64(), Some(10));
