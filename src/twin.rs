@@ -322,7 +322,7 @@ mod tests {
                 cold_max > 10e-3 && warm_max > 10e-3,
                 "errors {cold_max} / {warm_max} mm"
             );
-            // 1e-5 mm = 0.01 µm: the bound on second-order terms.
+            // 1e-5 mm = 0.01 µm: the bound on the neglected second-order terms.
             assert!(cold_gap < 1e-5, "seed {seed} cold: {cold_gap} mm");
             assert!(warm_gap < 1e-5, "seed {seed} warm: {warm_gap} mm");
         }
@@ -377,9 +377,6 @@ mod tests {
                 );
             }
         }
-        assert_ne!(sub_seed(1, 0), sub_seed(1, 1));
-        assert_ne!(sub_seed(1, 0), sub_seed(2, 0));
-        assert_eq!(sub_seed(1, 2), sub_seed(1, 2));
         // Adjacent seeds must not give nearby streams: about half the bits differ.
         let flipped = (sub_seed(1, 0) ^ sub_seed(2, 0)).count_ones();
         assert!((16..=48).contains(&flipped), "{flipped} bits differ");
@@ -401,7 +398,6 @@ mod tests {
             })
             .collect();
         twin.set_node_temps_degc(&vec![26.0; n]).unwrap();
-        assert_eq!(twin.node_temps_degc(), vec![26.0; n].as_slice());
         let mut max_norm_um: f64 = 0.0;
         for ((name, s, d), cold) in FACE_DIAGONALS.iter().zip(&cold) {
             let mut max_um = [0.0f64; 4];
