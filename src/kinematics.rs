@@ -420,7 +420,7 @@ mod tests {
 
     /// 4″ in rad: the upper end of the reference machine's angular errors.
     const FOUR_ARCSEC_RAD: f64 = 19.39e-6;
-    /// 10″ in rad: the envelope the brief asks the check to cover.
+    /// 10″ in rad: two and a half times the largest angle the reference machine has (4″).
     const TEN_ARCSEC_RAD: f64 = 48.48e-6;
 
     fn travel_pose() -> impl Strategy<Value = [f64; 3]> {

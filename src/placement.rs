@@ -644,10 +644,31 @@ mod tests {
 
     #[test]
     fn the_default_locations_are_the_reference_machines_nodes() {
+        // Ambient first, then every node a sensor of the machine reads, each once.
+        let check = |spec: &MachineSpec| {
+            let d = default_locations(spec);
+            assert_eq!(d[0], AMBIENT_NODE, "{d:?}");
+            let mut once = d.clone();
+            once.sort();
+            once.dedup();
+            assert_eq!(once.len(), d.len(), "a location twice: {d:?}");
+            for s in &spec.sensors {
+                assert!(d.contains(&s.node), "{} missing from {d:?}", s.node);
+            }
+            assert!(d[1..]
+                .iter()
+                .all(|n| spec.sensors.iter().any(|s| &s.node == n)));
+            d
+        };
         let spec = MachineSpec::reference();
-        let d = default_locations(&spec);
-        assert_eq!(d[0], AMBIENT_NODE);
-        assert_eq!(d.len(), 12, "{d:?}");
+        let d = check(&spec);
+        // A second sensor on a node and no sensor in the air change neither rule.
+        let mut other = spec.clone();
+        other.sensors.retain(|s| s.node != AMBIENT_NODE);
+        let mut twin_sensor = other.sensors[0].clone();
+        twin_sensor.name.push_str("_2");
+        other.sensors.push(twin_sensor);
+        assert_eq!(check(&other), d);
     }
 
     #[test]

@@ -322,7 +322,7 @@ mod tests {
                 cold_max > 10e-3 && warm_max > 10e-3,
                 "errors {cold_max} / {warm_max} mm"
             );
-            // 1e-5 mm = 0.01 µm: the bound on second-order terms.
+            // 1e-5 mm = 0.01 µm: the bound on the neglected second-order terms.
             assert!(cold_gap < 1e-5, "seed {seed} cold: {cold_gap} mm");
             assert!(warm_gap < 1e-5, "seed {seed} warm: {warm_gap} mm");
         }
@@ -377,9 +377,6 @@ mod tests {
                 );
             }
         }
-        assert_ne!(sub_seed(1, 0), sub_seed(1, 1));
-        assert_ne!(sub_seed(1, 0), sub_seed(2, 0));
-        assert_eq!(sub_seed(1, 2), sub_seed(1, 2));
         // Adjacent seeds must not give nearby streams: about half the bits differ.
         let flipped = (sub_seed(1, 0) ^ sub_seed(2, 0)).count_ones();
         assert!((16..=48).contains(&flipped), "{flipped} bits differ");
@@ -401,7 +398,6 @@ mod tests {
             })
             .collect();
         twin.set_node_temps_degc(&vec![26.0; n]).unwrap();
-        assert_eq!(twin.node_temps_degc(), vec![26.0; n].as_slice());
         let mut max_norm_um: f64 = 0.0;
         for ((name, s, d), cold) in FACE_DIAGONALS.iter().zip(&cold) {
             let mut max_um = [0.0f64; 4];
@@ -426,6 +422,30 @@ mod tests {
             (3.0..=25.0).contains(&max_norm_um),
             "soak moved the diagonals by {max_norm_um} µm"
         );
+    }
+
+    /// The cold reference machine errs on the seven diagonals by what the study reports for its
+    /// machine (components up to 18 / 44 / 50 µm in X / Y / Z): every diagonal by more than
+    /// 10 µm somewhere, none by more than those components together (√(18² + 44² + 50²) ≈ 69 µm).
+    /// A unit slip (µm read as mm) or a lost error term would leave this range.
+    #[test]
+    fn the_reference_machines_cold_diagonal_errors_have_the_size_the_study_reports() {
+        let spec = MachineSpec::reference();
+        for seed in [1, 2, 3] {
+            let twin = reference_twin(seed);
+            for (name, text) in crate::program::DIAGONALS {
+                let plan =
+                    crate::program::plan_source(text, name, &spec, spec.axes.home_mm).unwrap();
+                let max_um = plan
+                    .dwells()
+                    .map(|d| (twin.tool_error_mm(d.pos_mm, d.pos_mm, [0.0; 3]) * 1e3).norm())
+                    .fold(0.0, f64::max);
+                assert!(
+                    (10.0..=69.0).contains(&max_um),
+                    "seed {seed}, {name}: max |E| {max_um:.2} µm"
+                );
+            }
+        }
     }
 
     #[test]

@@ -168,6 +168,11 @@ const MACHINES: &[(&str, &str, &str)] = &[
         "travel_max_mm = [nan",
         "field `axes.travel_max_mm[0]`: X: must be a finite number",
     ),
+    (
+        "travel_max_mm = [560.0",
+        "travel_max_mm = [-10.0",
+        "field `axes.travel_max_mm[0]`: X travel must be positive: max -10 mm ≤ min 0 mm (travel -10 mm)",
+    ),
     ("diameter_mm = 12.0", "diameter_mm = inf", "field `tool.diameter_mm`: must be > 0"),
     (
         "step_s = 1.0",
@@ -194,6 +199,21 @@ const MACHINES: &[(&str, &str, &str)] = &[
         "max_feed_mm_per_min = 10000.0.0",
         "TOML parse error at line 37, column 30    | 37 | max_feed_mm_per_min = 10000.0.0    |                              ^^ invalid float, expected nothing",
     ),
+    (
+        "laser_point_s",
+        "laser_pont_s",
+        "TOML parse error at line 49, column 1    | 49 | laser_pont_s = 6.0    | ^^^^^^^^^^^^ unknown field `laser_pont_s`, expected one of `laser_noise_um`, `laser_noise_um_per_m`, `angular_noise_urad`, `straightness_noise_um`, `probe_noise_um`, `laser_step_mm`, `laser_point_s`",
+    ),
+    (
+        "unit = \"urad\"\npoly = [-6.0, 14.0]",
+        "unit = \"um\"\npoly = [-6.0, 14.0]",
+        "field `errors.motion.EBX.unit`: must be \"urad\" for this error",
+    ),
+    (
+        "poly = [-6.0, 14.0]",
+        "poly = [-6.0, nan]",
+        "field `errors.motion.EBX.poly[1]`: must be a finite number, got NaN",
+    ),
 ];
 
 #[test]
@@ -202,7 +222,8 @@ fn every_bad_machine_value_names_its_field_or_line() {
     let reference = std::fs::read_to_string(repo("machines/vmc-reference.toml")).unwrap();
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     for (from, to, want) in MACHINES {
-        assert!(reference.contains(from), "{from}");
+        // Each edit lands in one place of the file, the one the message names.
+        assert_eq!(reference.matches(from).count(), 1, "{from}");
         std::fs::write(t.0.join("m.toml"), reference.replacen(from, to, 1)).unwrap();
         for cmd in ["run", "check"] {
             assert_eq!(

@@ -310,7 +310,7 @@ fn linuxcnc_good_programs_are_never_rejected_as_invalid() {
 }
 
 #[test]
-fn linuxcnc_example_programs_never_panic() {
+fn linuxcnc_example_programs_never_panic_and_are_never_rejected_as_invalid() {
     let mut programs = Vec::new();
     files_with_ext(&corpus_dir().join("nc_files"), "ngc", true, &mut programs);
     assert!(
@@ -318,6 +318,7 @@ fn linuxcnc_example_programs_never_panic() {
         "found only {} example programs",
         programs.len()
     );
+    // They run on LinuxCNC: what is refused must be an unsupported feature, named where it is.
     let (mut ok, mut unsupported, mut invalid) = (0, 0, Vec::new());
     for p in &programs {
         match run(p) {
@@ -325,17 +326,20 @@ fn linuxcnc_example_programs_never_panic() {
                 ok += 1;
                 assert!(moves.iter().all(|m| m.line >= 1));
             }
-            Err(e) if e.is_unsupported() => unsupported += 1,
+            Err(e) if e.is_unsupported() => {
+                unsupported += 1;
+                assert!(e.line >= 1 && e.col >= 1, "{}: {e}", p.display());
+            }
             Err(e) => invalid.push(format!("{}: {e}", p.display())),
         }
     }
-    println!(
-        "nc_files: accepted {ok}, unsupported {unsupported}, invalid {}",
-        invalid.len()
+    println!("nc_files: accepted {ok}, unsupported {unsupported}");
+    assert!(ok > 0, "no example program is accepted");
+    assert!(
+        invalid.is_empty(),
+        "rejected as invalid:\n{}",
+        invalid.join("\n")
     );
-    for line in &invalid {
-        println!("  invalid: {line}");
-    }
 }
 
 /// Derives a program without O-words from a LinuxCNC program of the simple form

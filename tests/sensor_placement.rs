@@ -35,7 +35,16 @@ fn select_sensors_ranks_candidates_and_writes_a_set_that_run_accepts() {
     );
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
-    assert!(out.contains("40 candidate locations"), "{out}");
+    // Every thermal node of the machine and the ambient air.
+    let candidates = vmc_twin::machine::MachineSpec::reference()
+        .thermal
+        .nodes
+        .len()
+        + 1;
+    assert!(
+        out.contains(&format!("{candidates} candidate locations")),
+        "{out}"
+    );
     // Five proposals, validated on selection-only states; exactly one is chosen.
     let head = out.find("proposals (").expect("proposals table");
     let proposals: Vec<&str> = out[head..]
@@ -130,7 +139,12 @@ fn the_comparison_reports_each_sensor_set_on_held_out_runs() {
         assert!(red > 0.0 && red < 1.0, "{c}");
     }
     assert_eq!(cmp[0]["sensors"].as_array().unwrap().len(), 4);
-    assert_eq!(cmp[3]["sensors"].as_array().unwrap().len(), 40);
+    let candidates = vmc_twin::machine::MachineSpec::reference()
+        .thermal
+        .nodes
+        .len()
+        + 1;
+    assert_eq!(cmp[3]["sensors"].as_array().unwrap().len(), candidates);
 }
 
 #[test]

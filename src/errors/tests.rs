@@ -51,13 +51,71 @@ fn field(spec: &ErrorFieldSpec, seed: u64) -> ErrorField {
     ErrorField::new(spec, MIN, MAX, &node_index, seed).expect("valid field")
 }
 
+/// 1″ in µrad.
+const ARCSEC_URAD: f64 = 4.848;
+
+/// The study's machine, whose size the reference machine follows: positioning errors over the
+/// travel of about 20 / 27 / 35 µm in X / Y / Z, straightness errors of 1–3 µm, angular motion
+/// errors of 1–4″ and squareness errors of tens of µrad. Evaluated through the field (profiles,
+/// seeded parts, µm → mm and µrad → rad) at 20 °C for three seeds.
 #[test]
-fn reference_error_field_validates_with_all_26_errors() {
+fn the_reference_error_field_has_the_sizes_the_study_reports() {
     let spec = reference_spec();
-    assert_eq!(spec.motion.len(), 18);
-    assert_eq!(spec.squareness.len(), 3);
-    assert_eq!(spec.spindle.len(), 5);
     spec.validate(&|n| node_index(n).is_some()).unwrap();
+    let temps = vec![20.0; NODES.len()];
+    let study_positioning_um = [20.0, 27.0, 35.0];
+    for seed in [1, 2, 3] {
+        let f = field(&spec, seed);
+        for axis in 0..3 {
+            // Peak-to-peak (µm) of each translation and largest |angle| (µrad) over 1 mm steps.
+            let (mut lo, mut hi, mut angle) = ([f64::MAX; 3], [f64::MIN; 3], [0.0f64; 3]);
+            let steps = (MAX[axis] - MIN[axis]).round() as usize;
+            for i in 0..=steps {
+                let pos = MIN[axis] + (MAX[axis] - MIN[axis]) * i as f64 / steps as f64;
+                let e = f.axis_errors(axis, pos, &temps);
+                for c in 0..3 {
+                    lo[c] = lo[c].min(e.lin_mm[c] * 1e3);
+                    hi[c] = hi[c].max(e.lin_mm[c] * 1e3);
+                    angle[c] = angle[c].max(e.ang_rad[c].abs() * 1e6);
+                }
+            }
+            let what = format!("seed {seed}, axis {axis}");
+            for c in 0..3 {
+                let span_um = hi[c] - lo[c];
+                if c == axis {
+                    // Positioning: within ±50 % of the study's figure.
+                    let study = study_positioning_um[axis];
+                    assert!(
+                        (0.5 * study..=1.5 * study).contains(&span_um),
+                        "{what}: positioning spans {span_um:.2} µm"
+                    );
+                } else {
+                    // Straightness: 1–3 µm, with room for the seeded part (σ 0.4 µm).
+                    assert!(
+                        (0.5..=5.0).contains(&span_um),
+                        "{what}: straightness {c} spans {span_um:.2} µm"
+                    );
+                }
+                assert!(
+                    angle[c] <= 4.0 * ARCSEC_URAD,
+                    "{what}: angle {c} reaches {:.2} µrad",
+                    angle[c]
+                );
+            }
+            let largest = angle.iter().copied().fold(0.0, f64::max);
+            assert!(
+                largest >= ARCSEC_URAD,
+                "{what}: no angle reaches 1″: {angle:?}"
+            );
+        }
+        let sq = f.elementary([280.0, 200.0, -225.0], &temps).squareness;
+        let sq_urad = [sq.xy_rad, sq.xz_rad, sq.yz_rad].map(|a| a.abs() * 1e6);
+        let largest = sq_urad.iter().copied().fold(0.0, f64::max);
+        assert!(
+            (10.0..100.0).contains(&largest),
+            "seed {seed}: squareness {sq_urad:?} µrad"
+        );
+    }
 }
 
 #[test]

@@ -158,8 +158,18 @@ mod tests {
 
     #[test]
     fn radius_a_hair_short_of_a_semicircle_snaps_to_the_midpoint() {
+        // LinuxCNC RADIUS_TOLERANCE_INCH = 0.00005 in = 0.00127 mm: R 0.001 mm short of half
+        // the 20 mm chord is a semicircle, 0.0015 mm short is not.
         let c = arc_center([0.0, 0.0], [20.0, 0.0], ArcForm::Radius(9.999), true, false).unwrap();
         assert!(close(c, [10.0, 0.0]), "{c:?}");
+        let e = arc_center(
+            [0.0, 0.0],
+            [20.0, 0.0],
+            ArcForm::Radius(9.9985),
+            true,
+            false,
+        );
+        assert!(matches!(e, Err(ArcError::RadiusTooSmall { .. })), "{e:?}");
     }
 
     #[test]

@@ -649,14 +649,19 @@ mod limit_tests {
     use super::*;
 
     #[test]
-    fn limits_parse_from_toml_with_default_tool_change() {
+    fn limits_parse_from_toml_with_their_defaults_and_round_trip() {
         let text = "rapid_mm_per_min = [30000.0, 30000.0, 24000.0]\n\
                     max_feed_mm_per_min = 10000.0\n\
                     max_accel_mm_per_s2 = [2000.0, 2000.0, 1500.0]\n";
         let limits: MotionLimits = toml::from_str(text).expect("valid limits");
-        assert_eq!(limits.tool_change_s, 5.0);
-        assert_eq!(limits.rapid_mm_per_min[2], 24000.0);
+        // The optional fields left out take the built-in defaults.
+        let built_in = MotionLimits::default();
+        assert_eq!(limits.tool_change_s, built_in.tool_change_s);
+        assert_eq!(limits.max_spindle_rpm, built_in.max_spindle_rpm);
         assert!(limits.validate().is_ok());
+        // What is written reads back as the same limits.
+        let text = toml::to_string(&limits).unwrap();
+        assert_eq!(toml::from_str::<MotionLimits>(&text).unwrap(), limits);
     }
 
     #[test]

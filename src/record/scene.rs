@@ -372,7 +372,14 @@ mod tests {
         let s = Scene::new(&spec);
         let names: Vec<String> = spec.thermal.nodes.iter().map(|n| n.name.clone()).collect();
         let screws = screw_counts(&names);
-        assert_eq!(screws, [5, 4, 4]);
+        // The counts by name agree with the segments each ballscrew nut heats.
+        let mut heated = [0; 3];
+        for s in &spec.thermal.sources {
+            if let crate::thermal::HeatSourceSpec::BallscrewNut { axis, segments, .. } = s {
+                heated[axis.index()] += segments.len();
+            }
+        }
+        assert_eq!(screws, heated);
         let mut places = Vec::new();
         for n in &names {
             let p = s.node_place(n, screws);
