@@ -253,7 +253,7 @@ mod tests {
     /// Observed order of convergence of ρ in m on the delayed Mathieu equation: ≈ 2.
     #[test]
     fn convergence_is_second_order() {
-        let reference = mathieu_radius(3.0, 2.0, -0.15, 0.1, 1280);
+        let reference = mathieu_radius(3.0, 2.0, -0.15, 0.1, 640);
         let errs: Vec<f64> = [20, 40, 80]
             .iter()
             .map(|&m| (mathieu_radius(3.0, 2.0, -0.15, 0.1, m) - reference).abs())
