@@ -70,8 +70,12 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// Ratio of the largest amplitude in the last quarter to that in the second quarter.
+    /// Ratio of the largest amplitude in the last quarter to that in the second quarter
+    /// (infinite when the vibration overflowed).
     pub fn growth_ratio(&self) -> f64 {
+        if self.amplitude_m.iter().any(|a| !a.is_finite()) {
+            return f64::INFINITY;
+        }
         let n = self.amplitude_m.len();
         let q = n / 4;
         let max = |s: &[f64]| s.iter().cloned().fold(0.0, f64::max);
@@ -247,7 +251,10 @@ impl TimeDomain {
                 0.5 * (d0[0] + d1[0]) + dt * (w0[0] - w1[0]) / 8.0,
                 0.5 * (d0[1] + d1[1]) + dt * (w0[1] - w1[1]) / 8.0,
             ];
-            let phi = omega * dt * i as f64;
+            // Teeth are identical, so the angle is taken within one tooth pitch: the same
+            // angles recur bit for bit every tooth period (a tooth entering exactly on a step
+            // boundary is then treated the same way at every pass).
+            let phi = omega * dt * (i % m) as f64;
             let half = 0.5 * omega * dt;
             self.deriv(phi, &s, d0, a_m, feed_m, pd, model, &mut k1);
             axpy(&s, &k1, 0.5 * dt, &mut tmp);
