@@ -80,6 +80,17 @@ pub struct MillingSdm {
     evaluations: AtomicUsize,
 }
 
+/// Depth-independent force terms of one step (per metre of depth).
+#[derive(Debug, Clone)]
+struct StepTerms {
+    /// B_in·H_i·C (current-state feedback).
+    bhc: DMatrix<f64>,
+    /// B_in·H_i (delayed-output input).
+    bh: DMatrix<f64>,
+    /// B_in·D_i·C_v (process-damping shape).
+    bdc: DMatrix<f64>,
+}
+
 /// Per-speed precomputation: step-mean force matrices and the free-flight exponential.
 #[derive(Debug)]
 pub struct SpeedSdm<'a> {
@@ -87,8 +98,8 @@ pub struct SpeedSdm<'a> {
     spindle_rpm: f64,
     period_s: f64,
     dt_s: f64,
-    /// Per step: B_in·H_i·C, B_in·H_i (per unit depth, N/m²) and B_in·D_i·C_v; `None` out of cut.
-    terms: Vec<Option<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)>>,
+    /// Per step; `None` while no tooth cuts.
+    terms: Vec<Option<StepTerms>>,
     free: DMatrix<f64>,
 }
 
@@ -146,7 +157,7 @@ impl MillingSdm {
                 let bh = &self.b_in * self.model.restrict(&h);
                 let bhc = &bh * &self.c;
                 let bdc = &self.b_in * self.model.restrict(&dm) * &self.c_v;
-                Some((bhc, bh, bdc))
+                Some(StepTerms { bhc, bh, bdc })
             })
             .collect();
         Ok(SpeedSdm {
@@ -235,9 +246,9 @@ impl SpeedSdm<'_> {
                     p: self.free.clone(),
                     r: None,
                 },
-                Some((bhc, bh, bdc)) => {
-                    let a = &sdm.a0 + bhc * a_m - bdc * pd;
-                    let b = bh * (-a_m);
+                Some(t) => {
+                    let a = &sdm.a0 + &t.bhc * a_m - &t.bdc * pd;
+                    let b = &t.bh * (-a_m);
                     Step::new(&a, &b, self.dt_s)
                 }
             })

@@ -57,9 +57,6 @@ pub enum DynamicsError {
         /// The value given.
         value: usize,
     },
-    /// A search found no stability boundary in the bracket.
-    #[error("no stability boundary below {0} mm")]
-    NoBoundary(f64),
 }
 
 pub(crate) fn finite(name: &'static str, v: f64) -> Result<(), DynamicsError> {

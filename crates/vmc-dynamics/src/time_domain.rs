@@ -83,6 +83,16 @@ impl Simulation {
     }
 }
 
+/// Cut-dependent constants of the force.
+#[derive(Debug, Clone, Copy)]
+struct Loads {
+    depth_m: f64,
+    feed_m: f64,
+    /// C·a_p/v_c.
+    process_damping_n_s_per_m: f64,
+    model: ForceModel,
+}
+
 #[derive(Debug, Clone, Copy)]
 struct ModeState {
     axis: usize,
@@ -149,8 +159,8 @@ impl TimeDomain {
     }
 
     /// Cutting force on the tool [F_x, F_y] in N.
-    #[allow(clippy::too_many_arguments)]
-    fn force(&self, phi: f64, p: [f64; 2], v: [f64; 2], delayed: [f64; 2], a_m: f64, feed_m: f64, pd: f64, model: ForceModel) -> [f64; 2] {
+    fn force(&self, phi: f64, p: [f64; 2], v: [f64; 2], delayed: [f64; 2], k: &Loads) -> [f64; 2] {
+        let (a_m, feed_m, pd) = (k.depth_m, k.feed_m, k.process_damping_n_s_per_m);
         let t = &self.tool;
         let mut f = [0.0; 2];
         for j in 0..t.teeth {
@@ -160,7 +170,7 @@ impl TimeDomain {
             }
             let (s, c) = pj.sin_cos();
             let dh = (p[0] - delayed[0]) * s + (p[1] - delayed[1]) * c;
-            let (ft, fn_) = match model {
+            let (ft, fn_) = match k.model {
                 ForceModel::Linear => (t.kt_n_per_m2 * a_m * dh, t.kn_n_per_m2 * a_m * dh),
                 ForceModel::Process => {
                     let h = feed_m * s + dh;
@@ -180,11 +190,10 @@ impl TimeDomain {
         f
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn deriv(&self, phi: f64, s: &[f64], delayed: [f64; 2], a_m: f64, feed_m: f64, pd: f64, model: ForceModel, out: &mut [f64]) {
+    fn deriv(&self, phi: f64, s: &[f64], delayed: [f64; 2], k: &Loads, out: &mut [f64]) {
         let n = self.modes.len();
         let (p, v) = self.tip(s);
-        let f = self.force(phi, p, v, delayed, a_m, feed_m, pd, model);
+        let f = self.force(phi, p, v, delayed, k);
         for (k, m) in self.modes.iter().enumerate() {
             out[k] = s[n + k];
             out[n + k] = -m.omega * m.omega * s[k] - 2.0 * m.zeta * m.omega * s[n + k] + f[m.axis] / m.mass_kg;
@@ -219,7 +228,13 @@ impl TimeDomain {
         let omega = 2.0 * PI * spindle_rpm / 60.0;
         let a_m = depth_mm * 1e-3;
         let feed_m = feed_per_tooth_mm * 1e-3;
-        let pd = self.tool.process_damping_n_per_m * a_m / cutting_speed_m_per_s(&self.tool, spindle_rpm);
+        let loads = Loads {
+            depth_m: a_m,
+            feed_m,
+            process_damping_n_s_per_m: self.tool.process_damping_n_per_m * a_m
+                / cutting_speed_m_per_s(&self.tool, spindle_rpm),
+            model,
+        };
         let n = self.modes.len();
         let mut s = vec![0.0; 2 * n];
         if model == ForceModel::Linear {
@@ -256,13 +271,13 @@ impl TimeDomain {
             // boundary is then treated the same way at every pass).
             let phi = omega * dt * (i % m) as f64;
             let half = 0.5 * omega * dt;
-            self.deriv(phi, &s, d0, a_m, feed_m, pd, model, &mut k1);
+            self.deriv(phi, &s, d0, &loads, &mut k1);
             axpy(&s, &k1, 0.5 * dt, &mut tmp);
-            self.deriv(phi + half, &tmp, mid, a_m, feed_m, pd, model, &mut k2);
+            self.deriv(phi + half, &tmp, mid, &loads, &mut k2);
             axpy(&s, &k2, 0.5 * dt, &mut tmp);
-            self.deriv(phi + half, &tmp, mid, a_m, feed_m, pd, model, &mut k3);
+            self.deriv(phi + half, &tmp, mid, &loads, &mut k3);
             axpy(&s, &k3, dt, &mut tmp);
-            self.deriv(phi + 2.0 * half, &tmp, d1, a_m, feed_m, pd, model, &mut k4);
+            self.deriv(phi + 2.0 * half, &tmp, d1, &loads, &mut k4);
             for r in 0..2 * n {
                 s[r] += dt / 6.0 * (k1[r] + 2.0 * k2[r] + 2.0 * k3[r] + k4[r]);
             }
