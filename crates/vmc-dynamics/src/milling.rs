@@ -26,7 +26,7 @@ use crate::forces::{cutting_matrix_mean, cutting_speed_m_per_s, damping_matrix_m
 use crate::lobes::LobePoint;
 use crate::modal::ModalModel;
 use crate::params::{positive, validate_speed, DynamicsError, Milling, TipModes, Tool};
-use crate::sdm::{chatter_frequency_hz, classify, critical_multiplier, monodromy, BoundaryKind, Step};
+use crate::sdm::{chatter_frequency_hz, classify, critical_multiplier, monodromy_from, BoundaryKind, Step, StepRef};
 
 /// Fractions of the previous speed's critical depth probed for unstable islands.
 const ISLAND_PROBES: [f64; 2] = [0.55, 0.8];
@@ -78,6 +78,7 @@ pub struct MillingSdm {
     c: DMatrix<f64>,
     c_v: DMatrix<f64>,
     evaluations: AtomicUsize,
+    frequencies_hz: Vec<f64>,
 }
 
 /// Depth-independent force terms of one step (per metre of depth).
@@ -128,10 +129,11 @@ impl MillingSdm {
             b_in: model.input_matrix(),
             c: model.output_matrix(),
             c_v: model.velocity_output_matrix(),
-            model,
             window,
             steps: options.steps_per_period,
             evaluations: AtomicUsize::new(0),
+            frequencies_hz: model.frequencies_hz(),
+            model,
         })
     }
 
@@ -238,22 +240,26 @@ impl SpeedSdm<'_> {
         let sdm = self.sdm;
         let a_m = depth_mm * 1e-3;
         let pd = sdm.tool.process_damping_n_per_m * a_m / cutting_speed_m_per_s(&sdm.tool, self.spindle_rpm);
-        let steps: Vec<Step> = self
+        let cut_steps: Vec<Option<Step>> = self
             .terms
             .iter()
-            .map(|t| match t {
-                None => Step {
-                    p: self.free.clone(),
-                    r: None,
-                },
-                Some(t) => {
+            .map(|t| {
+                t.as_ref().map(|t| {
                     let a = &sdm.a0 + &t.bhc * a_m - &t.bdc * pd;
                     let b = &t.bh * (-a_m);
                     Step::new(&a, &b, self.dt_s)
-                }
+                })
             })
             .collect();
-        monodromy(&steps, &sdm.c)
+        // Free-flight steps share the per-speed exponential.
+        let refs: Vec<StepRef<'_>> = cut_steps
+            .iter()
+            .map(|s| match s {
+                Some(s) => s.as_ref(),
+                None => StepRef { p: &self.free, r: None },
+            })
+            .collect();
+        monodromy_from(&refs, &sdm.c)
     }
 
     /// Stability at an axial depth in mm (counts one evaluation).
@@ -265,7 +271,7 @@ impl SpeedSdm<'_> {
             spectral_radius: mu.norm(),
             multiplier: mu,
             kind: classify(mu),
-            chatter_frequency_hz: chatter_frequency_hz(mu, self.period_s, &self.sdm.model.frequencies_hz()),
+            chatter_frequency_hz: chatter_frequency_hz(mu, self.period_s, &self.sdm.frequencies_hz),
         })
     }
 

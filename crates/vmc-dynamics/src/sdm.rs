@@ -4,6 +4,7 @@
 //! (in milling the delay is the tooth period). The period is split into m steps of
 //! Δt = τ/m; on step i the coefficients are replaced by their means A_i, B_i and the
 //! delayed output by the linear interpolation between y_{i−m} and y_{i−m+1} (first order).
+//! The stored delayed samples are ordered oldest first: z_i = [x_i; y_{i−m}; …; y_{i−1}].
 //! The exact solution of the resulting ODE over the step gives
 //!
 //! ```text
@@ -16,7 +17,8 @@
 //! (Van Loan). The discrete state z_i = [x_i; y_{i−1}; …; y_{i−m}] has dimension n + m·d and the
 //! monodromy matrix Φ maps z_0 to z_m. Each step only writes the n rows of x and shifts the
 //! delayed block, so Φ is built by propagating the n × (n + m d) row block X_j = ∂x_j/∂z_0
-//! (cost m·n²·(n + m d)) instead of multiplying m dense step matrices. The system is
+//! (cost ≈ m·n²·(n + m d)/2, see [`monodromy_from`]) instead of multiplying m dense step
+//! matrices. The system is
 //! asymptotically stable when the spectral radius of Φ is below 1. Columns of Φ that are
 //! identically zero (delayed samples that no step reads, e.g. while no tooth cuts) only add
 //! zero multipliers and are removed before the eigenvalue computation.
@@ -62,7 +64,7 @@ impl Step {
             // Unscaled: M = [[A, B, 0], [0, 0, I/Δt], [0, 0, 0]], so M·Δt carries I here.
             big[(n + k, n + d + k)] = 1.0;
         }
-        let e = big.exp();
+        let e = expm_balanced(big);
         let p = e.view((0, 0), (n, n)).into_owned();
         let phi0 = e.view((0, n), (n, d)).into_owned();
         // The (1,3) block is ∫₀^Δt e^{A(Δt−s)} B (s/Δt) ds (Van Loan).
@@ -76,42 +78,108 @@ impl Step {
     /// Step without delayed input (B = 0): only P = e^{AΔt}.
     pub fn free(a: &DMatrix<f64>, dt_s: f64) -> Self {
         Self {
-            p: (a * dt_s).exp(),
+            p: expm_balanced(a * dt_s),
             r: None,
+        }
+    }
+}
+
+/// Matrix exponential after diagonal balancing (Parlett–Reinsch, powers of 2, so exact):
+/// e^M = D e^{D⁻¹ M D} D⁻¹. Modal matrices mix ω² and 1 entries; balancing brings their
+/// norm from ω²Δt down to ≈ ωΔt, which saves the exponential most of its squarings.
+pub fn expm_balanced(mut m: DMatrix<f64>) -> DMatrix<f64> {
+    let k = m.nrows();
+    let mut scale = vec![1.0_f64; k];
+    for _ in 0..8 {
+        let mut changed = false;
+        for i in 0..k {
+            let c: f64 = (0..k).filter(|&j| j != i).map(|j| m[(j, i)].abs()).sum();
+            let r: f64 = (0..k).filter(|&j| j != i).map(|j| m[(i, j)].abs()).sum();
+            if c == 0.0 || r == 0.0 {
+                continue;
+            }
+            let f = 2f64.powi(((r / c).log2() / 2.0).round() as i32);
+            if f != 1.0 && (c * f + r / f) < 0.95 * (c + r) {
+                // Column i times f, row i divided by f: M ← F⁻¹ M F with F = diag(…, f, …).
+                for j in 0..k {
+                    m[(j, i)] *= f;
+                    m[(i, j)] /= f;
+                }
+                scale[i] *= f;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    let mut e = m.exp();
+    for i in 0..k {
+        for j in 0..k {
+            e[(i, j)] *= scale[i] / scale[j];
+        }
+    }
+    e
+}
+
+/// Borrowed view of a [`Step`], so that identical steps can share one matrix.
+#[derive(Debug, Clone, Copy)]
+pub struct StepRef<'a> {
+    /// State transition P (n × n).
+    pub p: &'a DMatrix<f64>,
+    /// Delayed-input matrices (R0, R1), each n × d.
+    pub r: Option<(&'a DMatrix<f64>, &'a DMatrix<f64>)>,
+}
+
+impl Step {
+    /// Borrowed view.
+    pub fn as_ref(&self) -> StepRef<'_> {
+        StepRef {
+            p: &self.p,
+            r: self.r.as_ref().map(|(a, b)| (a, b)),
         }
     }
 }
 
 /// Monodromy matrix over one period from the m steps and the output matrix C (d × n).
 pub fn monodromy(steps: &[Step], c: &DMatrix<f64>) -> DMatrix<f64> {
+    let refs: Vec<StepRef<'_>> = steps.iter().map(Step::as_ref).collect();
+    monodromy_from(&refs, c)
+}
+
+/// Monodromy matrix from borrowed steps. The discrete state is ordered
+/// z_i = [x_i; y_{i−m}; y_{i−m+1}; …; y_{i−1}], so step j reads delayed blocks j and j + 1 and
+/// the row block X_j = ∂x_j/∂z_0 is zero beyond its first n + (j + 1)·d columns: each step
+/// multiplies only that prefix (no dense products of the (n + m d)-square step matrices).
+pub fn monodromy_from(steps: &[StepRef<'_>], c: &DMatrix<f64>) -> DMatrix<f64> {
     let m = steps.len();
     let d = c.nrows();
     let n = c.ncols();
     let big_n = n + m * d;
     let mut x = DMatrix::zeros(n, big_n);
     x.view_mut((0, 0), (n, n)).fill_with_identity();
-    let cx0 = c * &x;
+    let mut next = DMatrix::zeros(n, big_n);
     let mut phi = DMatrix::zeros(big_n, big_n);
     for (j, step) in steps.iter().enumerate() {
-        // Rows of y_j = C x_j go to delayed block m−1−j of z_m.
-        let cxj = c * &x;
-        phi.view_mut((n + (m - 1 - j) * d, 0), (d, big_n)).copy_from(&cxj);
-        let mut next = &step.p * &x;
-        if let Some((r0, r1)) = &step.r {
-            // y_{j−m} is z_0's delayed block m−1−j.
-            let b0 = n + (m - 1 - j) * d;
-            let mut cols = next.view_mut((0, b0), (n, d));
-            cols += r0;
+        let width = (n + (j + 1) * d).min(big_n);
+        // y_j = C x_j is block j of z_m.
+        phi.view_mut((n + j * d, 0), (d, width))
+            .gemm(1.0, c, &x.columns(0, width), 0.0);
+        next.columns_mut(0, width).gemm(1.0, step.p, &x.columns(0, width), 0.0);
+        if let Some((r0, r1)) = step.r {
+            // y_{j−m} is block j of z_0.
+            let mut b0 = next.view_mut((0, n + j * d), (n, d));
+            b0 += r0;
             if j + 1 < m {
-                // y_{j−m+1} is delayed block m−2−j.
-                let b1 = n + (m - 2 - j) * d;
-                let mut cols = next.view_mut((0, b1), (n, d));
-                cols += r1;
+                // y_{j−m+1} is block j + 1 of z_0 (these columns are still zero in `next`).
+                let mut b1 = next.view_mut((0, n + (j + 1) * d), (n, d));
+                b1 += r1;
             } else {
-                next += r1 * &cx0;
+                // y_0 = C x_0 with x_0 the first n entries of z_0.
+                next.view_mut((0, 0), (n, n)).gemm(1.0, r1, c, 1.0);
             }
         }
-        x = next;
+        std::mem::swap(&mut x, &mut next);
     }
     phi.view_mut((0, 0), (n, big_n)).copy_from(&x);
     phi
@@ -262,6 +330,20 @@ mod tests {
             let order = (w[0] / w[1]).log2();
             assert!((1.8..2.3).contains(&order), "order {order}, errors {errs:?}");
         }
+    }
+
+    #[test]
+    fn balanced_exponential_matches_plain() {
+        let w = 2.0 * PI * 922.0;
+        let a = DMatrix::from_row_slice(4, 4, &[
+            0.0, 1.0, 0.0, 0.0, //
+            -w * w, -0.02 * w, 3e3, 0.0, //
+            0.0, 0.0, 0.0, 1.0, //
+            0.0, 0.0, 0.0, 0.0,
+        ]) * 8e-5;
+        let plain = a.clone().exp();
+        let bal = expm_balanced(a);
+        assert!((&plain - &bal).norm() <= 1e-10 * plain.norm(), "{plain} {bal}");
     }
 
     #[test]
