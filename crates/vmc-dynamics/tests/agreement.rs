@@ -178,3 +178,19 @@ fn process_simulation_settles_when_stable() {
     assert!((last[0] - prev[0]).abs() < 1e-3 * last[0].abs(), "{limit:?} {last:?} {prev:?}");
     assert_eq!(sim.steps, 400 * 64);
 }
+
+/// Convergence in m on the milling benchmark (a_e/D = 0.5 up milling, 6000 rpm, 0.2 mm):
+/// |ρ_m − ρ_320| falls by ≈ 4× per doubling of m (second order, observed order printed).
+#[test]
+fn milling_sdm_converges_second_order() {
+    let (tool, modes) = (benchmark_tool(), benchmark_modes());
+    let rho = |m: usize| {
+        let sdm = MillingSdm::new(&tool, &modes, 0.5, Milling::Up, SdmOptions { steps_per_period: m }).unwrap();
+        sdm.stability(6000.0, 0.2).unwrap().spectral_radius
+    };
+    let reference = rho(320);
+    let errs: Vec<f64> = [20, 40, 80].iter().map(|&m| (rho(m) - reference).abs()).collect();
+    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    println!("milling |ρ_m − ρ_320| for m = 20, 40, 80: {errs:?}, orders {orders:?}");
+    assert!(orders.iter().all(|o| (1.7..2.4).contains(o)), "{errs:?} {orders:?}");
+}
