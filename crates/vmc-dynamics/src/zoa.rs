@@ -131,6 +131,22 @@ impl Zoa {
         (1e3 / (2.0 * re(w)), w / (2.0 * PI))
     }
 
+    /// Points (speed, depth, chatter frequency) of lobe k for one eigenvalue branch over the
+    /// scanned chatter frequencies, in order of frequency (for plotting lobe diagrams).
+    pub fn lobe_curve(&self, lobe: usize, branch: usize) -> Vec<LobePoint> {
+        self.omegas
+            .iter()
+            .filter_map(|&w| {
+                self.root(w, branch.min(1)).map(|r| LobePoint {
+                    spindle_rpm: self.speed_rpm(w, r.phase_rad, lobe),
+                    critical_depth_mm: r.depth_mm,
+                    chatter_frequency_hz: w / (2.0 * PI),
+                    kind: BoundaryKind::Hopf,
+                })
+            })
+            .collect()
+    }
+
     /// Critical depth at a spindle speed: the smallest depth over lobes and eigenvalues whose
     /// speed n(ω) equals the given one (found by a frequency scan and bisection). `None` when no
     /// lobe reaches that speed in the scanned band (0.5 × lowest to 2 × highest mode).
@@ -213,5 +229,14 @@ mod tests {
             .map(|p| p.critical_depth_mm)
             .fold(f64::INFINITY, f64::min);
         assert!(lowest >= closed_mm * (1.0 - 1e-9) && lowest < closed_mm * 1.001, "{lowest}");
+        // Every lobe curve has the same minimum depth; lobe k + 1 lies at lower speeds.
+        let l0 = zoa.lobe_curve(0, 0);
+        let l1 = zoa.lobe_curve(1, 0);
+        let min0 = l0.iter().map(|p| p.critical_depth_mm).fold(f64::INFINITY, f64::min);
+        assert!(min0 >= closed_mm * (1.0 - 1e-9) && min0 < closed_mm * 1.001);
+        let at_min = |l: &[LobePoint]| {
+            l.iter().min_by(|a, b| a.critical_depth_mm.total_cmp(&b.critical_depth_mm)).unwrap().spindle_rpm
+        };
+        assert!(at_min(&l1) < at_min(&l0));
     }
 }

@@ -180,7 +180,7 @@ fn process_simulation_settles_when_stable() {
 }
 
 /// Convergence in m on the milling benchmark (a_e/D = 0.5 up milling, 6000 rpm, 0.2 mm):
-/// |ρ_m − ρ_320| falls by ≈ 4× per doubling of m (second order, observed order printed).
+/// |ρ_m − ρ_320| = 3.9e-2, 1.0e-2, 2.4e-3 for m = 20, 40, 80: orders 1.94 and 2.05.
 #[test]
 fn milling_sdm_converges_second_order() {
     let (tool, modes) = (benchmark_tool(), benchmark_modes());
