@@ -194,3 +194,45 @@ fn milling_sdm_converges_second_order() {
     println!("milling |ρ_m − ρ_320| for m = 20, 40, 80: {errs:?}, orders {orders:?}");
     assert!(orders.iter().all(|o| (1.7..2.4).contains(o)), "{errs:?} {orders:?}");
 }
+
+/// Several modes per direction (the first two modes of a steel cantilever, L = 100 mm,
+/// D = 12 mm, ζ = 2 %, in x and y), N = 3, a_e/D = 0.3 up milling: 5 % under the SDM boundary
+/// the time-domain vibration decays, 5 % over it grows.
+#[test]
+fn multi_mode_cantilever_sdm_and_time_domain_agree() {
+    let beam = vmc_dynamics::beam::Cantilever {
+        youngs_modulus_pa: 210e9,
+        density_kg_per_m3: 7850.0,
+        length_mm: 100.0,
+        outer_diameter_mm: 12.0,
+        inner_diameter_mm: 0.0,
+    };
+    let m = beam.modes(2, 0.02).unwrap();
+    let modes = TipModes { x: m.clone(), y: m };
+    let tool = Tool::new(3, 12.0, 6e8, 2e8);
+    let sdm = MillingSdm::new(&tool, &modes, 0.3, Milling::Up, SdmOptions { steps_per_period: 60 }).unwrap();
+    let opts = TimeOptions { steps_per_tooth: 128, ..TimeOptions::default() };
+    let td = TimeDomain::new(&tool, &modes, 0.3, Milling::Up, opts).unwrap();
+    for n in [9000.0, 14000.0] {
+        let p = sdm.at_speed(n).unwrap().critical_depth(None, 50.0, 1e-4).unwrap().unwrap();
+        let under = td.growth_ratio(n, 0.95 * p.critical_depth_mm).unwrap();
+        let over = td.growth_ratio(n, 1.05 * p.critical_depth_mm).unwrap();
+        assert!(under < 1.0 && over > 1.0, "{n} rpm, {p:?}: {under} / {over}");
+    }
+}
+
+/// Repeated computations are bit-identical: SDM monodromy and radii, time-domain samples.
+#[test]
+fn determinism() {
+    let (tool, modes) = (benchmark_tool(), benchmark_modes());
+    let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
+    let s = sdm.at_speed(9000.0).unwrap();
+    assert_eq!(s.monodromy(2.0), s.monodromy(2.0));
+    let speeds = [6000.0, 9000.0];
+    let depths = [1.0, 2.0, 4.0];
+    assert_eq!(sdm.grid(&speeds, &depths).unwrap(), sdm.grid(&speeds, &depths).unwrap());
+    let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, TimeOptions::default()).unwrap();
+    let a = td.simulate(9000.0, 2.0, 0.1, ForceModel::Process).unwrap();
+    let b = td.simulate(9000.0, 2.0, 0.1, ForceModel::Process).unwrap();
+    assert_eq!(a, b);
+}
