@@ -5,7 +5,7 @@
 //! Depth search range: (0, 20 × the ZOA minimum depth]; tolerance 1e-3 × the ZOA minimum.
 //! SDM uses the boundary tracer of [`crate::milling`] (speeds in the given order, default
 //! 40 steps per period); ZOA the frequency scan of [`crate::zoa`] (always `Hopf`); the time
-//! domain bisects the linear simulation of [`crate::time_domain`] (frequency not resolved: 0).
+//! domain bisects the linear simulation of [`crate::time_domain`] (frequency from the spectrum).
 
 use serde::{Deserialize, Serialize};
 
@@ -33,7 +33,7 @@ pub struct LobePoint {
     pub spindle_rpm: f64,
     /// Critical axial depth in mm.
     pub critical_depth_mm: f64,
-    /// Chatter frequency in Hz (0 when the method does not resolve it).
+    /// Chatter frequency in Hz.
     pub chatter_frequency_hz: f64,
     /// How stability is lost.
     pub kind: BoundaryKind,

@@ -17,7 +17,8 @@
 //! displacement and its amplitude A_k = √Σ(q² + (q̇/ω)²) is sampled once per tooth period
 //! (Poincaré section, which removes the in-period variation); the cut is unstable when the
 //! largest sample of the last quarter of the horizon exceeds the largest sample of the second
-//! quarter (growth over half the horizon; default horizon 400 tooth periods).
+//! quarter (growth over half the horizon; default horizon 400 tooth periods). The chatter
+//! frequency is the spectral peak of the last quarter's tip displacement.
 
 use std::f64::consts::PI;
 
@@ -67,9 +68,55 @@ pub struct Simulation {
     pub amplitude_m: Vec<f64>,
     /// Integration steps taken.
     pub steps: usize,
+    /// Integration step Δt in s.
+    pub step_s: f64,
+    /// Tip displacement [x, y] in m at every step of the last quarter of the horizon.
+    pub tail_m: Vec<[f64; 2]>,
 }
 
 impl Simulation {
+    /// Frequency in Hz of the largest peak of the tail's spectrum |X(f)|² + |Y(f)|² between
+    /// `lo_hz` and `hi_hz`, by direct DFT on a grid as fine as 1/(4 × tail length), refined by
+    /// a parabola through the peak and its neighbours.
+    pub fn dominant_frequency_hz(&self, lo_hz: f64, hi_hz: f64) -> f64 {
+        let len = self.tail_m.len();
+        if len < 4 || hi_hz <= lo_hz {
+            return 0.0;
+        }
+        let df = 0.25 / (len as f64 * self.step_s);
+        let count = ((hi_hz - lo_hz) / df).ceil() as usize + 1;
+        let power = |f: f64| {
+            // Rotating phasor e^{−i2πfΔt k} by recurrence.
+            let (s, c) = (-2.0 * PI * f * self.step_s).sin_cos();
+            let (mut pr, mut pi) = (1.0, 0.0);
+            let (mut xr, mut xi, mut yr, mut yi) = (0.0, 0.0, 0.0, 0.0);
+            for v in &self.tail_m {
+                xr += v[0] * pr;
+                xi += v[0] * pi;
+                yr += v[1] * pr;
+                yi += v[1] * pi;
+                let t = pr * c - pi * s;
+                pi = pr * s + pi * c;
+                pr = t;
+            }
+            xr * xr + xi * xi + yr * yr + yi * yi
+        };
+        let spectrum: Vec<f64> = (0..count).map(|k| power(lo_hz + df * k as f64)).collect();
+        let (k, _) = spectrum
+            .iter()
+            .enumerate()
+            .fold((0, f64::NEG_INFINITY), |b, (k, v)| if *v > b.1 { (k, *v) } else { b });
+        let mut f = lo_hz + df * k as f64;
+        if k > 0 && k + 1 < count {
+            let (a, b, c) = (spectrum[k - 1], spectrum[k], spectrum[k + 1]);
+            let den = a - 2.0 * b + c;
+            if den < 0.0 {
+                f += 0.5 * df * (a - c) / den;
+            }
+        }
+        f
+    }
+
     /// Ratio of the largest amplitude in the last quarter to that in the second quarter
     /// (infinite when the vibration overflowed).
     pub fn growth_ratio(&self) -> f64 {
@@ -250,7 +297,10 @@ impl TimeDomain {
             displacement_m: Vec::with_capacity(self.options.tooth_periods + 1),
             amplitude_m: Vec::with_capacity(self.options.tooth_periods + 1),
             steps: 0,
+            step_s: dt,
+            tail_m: Vec::with_capacity(self.options.tooth_periods * m / 4 + 1),
         };
+        let tail_start = self.options.tooth_periods * m - self.options.tooth_periods * m / 4;
         let (p0, v0) = self.tip(&s);
         hist_p[m] = p0;
         hist_v[m] = v0;
@@ -286,6 +336,9 @@ impl TimeDomain {
             hist_p[old] = p;
             hist_v[old] = v;
             out.steps += 1;
+            if i >= tail_start {
+                out.tail_m.push(p);
+            }
             if (i + 1) % m == 0 {
                 out.displacement_m.push(p);
                 out.amplitude_m.push(self.amplitude(&s));
@@ -304,8 +357,9 @@ impl TimeDomain {
         Ok(self.growth_ratio(spindle_rpm, depth_mm)? <= 1.0)
     }
 
-    /// Critical depth by bisection on (0, `max_depth_mm`] to `tol_mm`; `None` if stable at the maximum.
-    /// The time domain does not resolve the chatter frequency or kind: they are 0 and Hopf.
+    /// Critical depth by bisection on (0, `max_depth_mm`] to `tol_mm`; `None` if stable at the
+    /// maximum. Chatter frequency: spectral peak of the simulation just over the limit; kind:
+    /// flip when that peak sits at an odd multiple of half the tooth-passing frequency.
     pub fn critical_depth(&self, spindle_rpm: f64, max_depth_mm: f64, tol_mm: f64) -> Result<Option<LobePoint>, DynamicsError> {
         positive("max_depth_mm", max_depth_mm)?;
         positive("tol_mm", tol_mm)?;
@@ -321,11 +375,23 @@ impl TimeDomain {
                 hi = mid;
             }
         }
+        // Chatter frequency from the spectrum just over the limit; a flip shows as a peak at
+        // an odd multiple of half the tooth-passing frequency (within 0.5 % of it).
+        let sim = self.simulate(spindle_rpm, hi, 0.0, ForceModel::Linear)?;
+        let f_min = self.modes.iter().map(|m| m.omega).fold(f64::INFINITY, f64::min) / (2.0 * PI);
+        let f_max = self.modes.iter().map(|m| m.omega).fold(0.0, f64::max) / (2.0 * PI);
+        let f = sim.dominant_frequency_hz(0.5 * f_min, 2.0 * f_max);
+        let half_harmonic = f * sim.period_s - 0.5;
+        let kind = if (half_harmonic - half_harmonic.round()).abs() < 0.005 * f * sim.period_s {
+            BoundaryKind::Flip
+        } else {
+            BoundaryKind::Hopf
+        };
         Ok(Some(LobePoint {
             spindle_rpm,
             critical_depth_mm: 0.5 * (lo + hi),
-            chatter_frequency_hz: 0.0,
-            kind: BoundaryKind::Hopf,
+            chatter_frequency_hz: f,
+            kind,
         }))
     }
 }

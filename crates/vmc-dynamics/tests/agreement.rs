@@ -236,3 +236,20 @@ fn determinism() {
     let b = td.simulate(9000.0, 2.0, 0.1, ForceModel::Process).unwrap();
     assert_eq!(a, b);
 }
+
+/// The time-domain boundary also yields the chatter frequency (spectral peak) and the kind:
+/// at 9000 rpm (Hopf) and 10 000 rpm (flip) on the a_e/D = 0.05 benchmark they match SDM,
+/// frequencies within 1 %.
+#[test]
+fn time_domain_frequency_and_kind_match_sdm() {
+    let (tool, modes) = (benchmark_tool(), benchmark_modes());
+    let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
+    let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, TimeOptions::default()).unwrap();
+    for (n, kind) in [(9000.0, BoundaryKind::Hopf), (10_000.0, BoundaryKind::Flip)] {
+        let s = sdm.at_speed(n).unwrap().critical_depth(None, 20.0, 1e-3).unwrap().unwrap();
+        let t = td.critical_depth(n, 20.0, 1e-2).unwrap().unwrap();
+        assert_eq!((s.kind, t.kind), (kind, kind), "{n}: {s:?} {t:?}");
+        assert!((t.chatter_frequency_hz / s.chatter_frequency_hz - 1.0).abs() < 0.01, "{n}: {s:?} {t:?}");
+        assert!((t.critical_depth_mm / s.critical_depth_mm - 1.0).abs() < 0.05, "{n}: {s:?} {t:?}");
+    }
+}
