@@ -2,14 +2,15 @@
 //! K_n = 2e8 N/m², 922 Hz, ζ = 0.011, 0.03993 kg), a_e/D = 0.05 down milling, one core.
 //!
 //! Figures (release, one core via `taskset -c 0 cargo bench -p vmc-dynamics --bench lobes`, on a
-//! 2-core machine shared with other work, so ±10 % run to run):
+//! 2-core machine shared with other work; two runs, so figures vary with the load):
 //! * `sdm_grid_201x100` — full grid, 201 speeds (5000–13000 rpm) × 100 depths (0.15–15 mm),
-//!   m = 40, 20 100 stability evaluations: 0.89 s (0.80–1.0 s; ≈ 44 µs per evaluation).
+//!   m = 40, 20 100 stability evaluations: 0.84–0.89 s (≈ 43 µs per evaluation).
 //! * `sdm_tracer_201` — boundary tracer on the same speeds, tolerance 0.03 mm:
 //!   1 648 evaluations (12× fewer; within one grid cell of the grid's boundary at all 201
-//!   speeds, asserted in `tests/agreement.rs`): 84 ms.
+//!   speeds, asserted in `tests/agreement.rs`): 52–84 ms.
 //! * `time_domain_400_teeth` — linear time-domain simulation, 400 tooth periods × 64 RK4
-//!   steps = 25 600 steps: 5.1 ms, i.e. 5.0 M RK4 steps/s = 78 000 tooth passes/s.
+//!   steps = 25 600 steps: 3.0–5.1 ms, i.e. 5.0–8.7 M RK4 steps/s = 78 000–135 000 tooth
+//!   passes/s (64 steps each).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use vmc_dynamics::milling::{MillingSdm, SdmOptions};
