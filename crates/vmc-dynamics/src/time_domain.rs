@@ -10,8 +10,8 @@
 //! h = f_z sinφ + (Δx sinφ + Δy cosφ), F_t = a_p(K_t h + K_te), F_n = a_p(K_n h + K_ne) +
 //! (C a_p / v_c)(ẋ sinφ + ẏ cosφ), F_x = −F_t cosφ − F_n sinφ, F_y = F_t sinφ − F_n cosφ.
 //! [`ForceModel::Process`] uses all terms and drops a tooth's force when h ≤ 0 (it left the
-//! cut); [`ForceModel::Linear`] keeps only the regenerative terms (no feed, no edge forces, no
-//! loss of contact) — the linear delay equation that ZOA and SDM analyse.
+//! cut); [`ForceModel::Linear`] keeps only the regenerative and process-damping terms (no feed,
+//! no edge forces, no loss of contact) — the linear delay equation that ZOA and SDM analyse.
 //!
 //! Instability criterion: in the linear model the vibration starts from a small initial
 //! displacement and its amplitude A_k = √Σ(q² + (q̇/ω)²) is sampled once per tooth period
@@ -30,7 +30,7 @@ use crate::sdm::BoundaryKind;
 /// Force model of the simulation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ForceModel {
-    /// Regenerative terms only, linear (for stability).
+    /// Regenerative and process-damping terms only, linear (for stability).
     Linear,
     /// Static feed, edge forces and loss of contact (the milling process).
     Process,
