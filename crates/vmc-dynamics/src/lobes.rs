@@ -1,0 +1,72 @@
+//! One API for the stability lobes of the three methods.
+//!
+//! [`lobes`] returns, for each requested speed that has a boundary, the critical axial depth
+//! (the smallest unstable depth), the chatter frequency and the kind of stability loss.
+//! Depth search range: (0, 20 × the ZOA minimum depth]; tolerance 1e-3 × the ZOA minimum.
+//! SDM uses the boundary tracer of [`crate::milling`] (speeds in the given order, default
+//! 40 steps per period); ZOA the frequency scan of [`crate::zoa`] (always `Hopf`); the time
+//! domain bisects the linear simulation of [`crate::time_domain`] (frequency from the spectrum).
+
+use serde::{Deserialize, Serialize};
+
+use crate::milling::{MillingSdm, SdmOptions};
+use crate::params::{DynamicsError, Milling, TipModes, Tool};
+use crate::sdm::BoundaryKind;
+use crate::time_domain::{TimeDomain, TimeOptions};
+use crate::zoa::Zoa;
+
+/// Stability method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Method {
+    /// First-order semi-discretisation.
+    Sdm,
+    /// Zero-order analytic solution.
+    Zoa,
+    /// Time-domain simulation.
+    Time,
+}
+
+/// One point of a stability-lobe diagram.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LobePoint {
+    /// Spindle speed in rpm.
+    pub spindle_rpm: f64,
+    /// Critical axial depth in mm.
+    pub critical_depth_mm: f64,
+    /// Chatter frequency in Hz.
+    pub chatter_frequency_hz: f64,
+    /// How stability is lost.
+    pub kind: BoundaryKind,
+}
+
+/// Stability lobes at the given speeds (speeds without a boundary in range are omitted).
+pub fn lobes(
+    method: Method,
+    tool: &Tool,
+    modes: &TipModes,
+    immersion: f64,
+    milling: Milling,
+    speeds_rpm: &[f64],
+) -> Result<Vec<LobePoint>, DynamicsError> {
+    for &n in speeds_rpm {
+        crate::params::validate_speed(n)?;
+    }
+    let zoa = Zoa::new(tool, modes, immersion, milling)?;
+    let (min_mm, _) = zoa.minimum_depth();
+    let (max_mm, tol_mm) = (20.0 * min_mm, 1e-3 * min_mm);
+    match method {
+        Method::Zoa => speeds_rpm
+            .iter()
+            .filter_map(|&n| zoa.critical_depth(n).transpose())
+            .collect(),
+        Method::Sdm => MillingSdm::new(tool, modes, immersion, milling, SdmOptions::default())?
+            .trace(speeds_rpm, max_mm, tol_mm),
+        Method::Time => {
+            let td = TimeDomain::new(tool, modes, immersion, milling, TimeOptions::default())?;
+            speeds_rpm
+                .iter()
+                .filter_map(|&n| td.critical_depth(n, max_mm, tol_mm).transpose())
+                .collect()
+        }
+    }
+}
