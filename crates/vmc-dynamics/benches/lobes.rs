@@ -36,19 +36,23 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("sdm_grid_201x100", |b| {
         b.iter(|| {
-            let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
+            let sdm =
+                MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
             sdm.grid(&speeds, &depths).unwrap()
         })
     });
     g.bench_function("sdm_tracer_201", |b| {
         b.iter(|| {
-            let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
+            let sdm =
+                MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
             sdm.trace(&speeds, 15.0, 0.03).unwrap()
         })
     });
     let opts = TimeOptions::default();
     let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, opts).unwrap();
-    g.throughput(Throughput::Elements((opts.steps_per_tooth * opts.tooth_periods) as u64));
+    g.throughput(Throughput::Elements(
+        (opts.steps_per_tooth * opts.tooth_periods) as u64,
+    ));
     g.bench_function("time_domain_400_teeth", |b| {
         b.iter(|| td.simulate(9000.0, 2.0, 0.0, ForceModel::Linear).unwrap())
     });

@@ -54,7 +54,10 @@ impl Cantilever {
         positive("length_mm", self.length_mm)?;
         positive("outer_diameter_mm", self.outer_diameter_mm)?;
         crate::params::non_negative("inner_diameter_mm", self.inner_diameter_mm)?;
-        positive("outer_diameter_mm - inner_diameter_mm", self.outer_diameter_mm - self.inner_diameter_mm)
+        positive(
+            "outer_diameter_mm - inner_diameter_mm",
+            self.outer_diameter_mm - self.inner_diameter_mm,
+        )
     }
 
     fn section(&self) -> (f64, f64) {
@@ -74,7 +77,11 @@ impl Cantilever {
         Ok((0..count)
             .map(|n| {
                 let bl = clamped_free_root(n);
-                let w = bl * bl * (self.youngs_modulus_pa * inertia / (self.density_kg_per_m3 * area * l.powi(4))).sqrt();
+                let w = bl
+                    * bl
+                    * (self.youngs_modulus_pa * inertia
+                        / (self.density_kg_per_m3 * area * l.powi(4)))
+                    .sqrt();
                 Mode {
                     frequency_hz: w / (2.0 * PI),
                     damping_ratio,
@@ -91,7 +98,11 @@ mod tests {
 
     #[test]
     fn roots_and_tip_modal_mass() {
-        let known = [1.875_104_068_711_961, 4.694_091_132_974_175, 7.854_757_438_237_613];
+        let known = [
+            1.875_104_068_711_961,
+            4.694_091_132_974_175,
+            7.854_757_438_237_613,
+        ];
         for (n, k) in known.iter().enumerate() {
             assert!((clamped_free_root(n) - k).abs() < 1e-9, "{n}");
         }
@@ -101,10 +112,17 @@ mod tests {
         for n in 0..3 {
             let b = clamped_free_root(n);
             let sigma = (b.cosh() + b.cos()) / (b.sinh() + b.sin());
-            let w = |x: f64| (b * x).cosh() - (b * x).cos() - sigma * ((b * x).sinh() - (b * x).sin());
+            let w =
+                |x: f64| (b * x).cosh() - (b * x).cos() - sigma * ((b * x).sinh() - (b * x).sin());
             let k = 20_000;
-            let int: f64 = (0..k).map(|i| w((i as f64 + 0.5) / k as f64).powi(2)).sum::<f64>() / k as f64;
-            assert!((int - 1.0).abs() < 1e-6 && (w(1.0).powi(2) - 4.0).abs() < 1e-8, "{n}: {int}");
+            let int: f64 = (0..k)
+                .map(|i| w((i as f64 + 0.5) / k as f64).powi(2))
+                .sum::<f64>()
+                / k as f64;
+            assert!(
+                (int - 1.0).abs() < 1e-6 && (w(1.0).powi(2) - 4.0).abs() < 1e-8,
+                "{n}: {int}"
+            );
         }
         // Static check: first-mode tip stiffness is close to (but above) 3EI/L³.
         let c = Cantilever {
@@ -119,6 +137,9 @@ mod tests {
         let k_static = 3.0 * 210e9 * i / 1e-3;
         let ratio = m[0].stiffness_n_per_m / k_static;
         assert!(ratio > 1.0 && ratio < 1.05, "{ratio}");
-        assert!(m[1].frequency_hz / m[0].frequency_hz > 6.26 && m[1].frequency_hz / m[0].frequency_hz < 6.27);
+        assert!(
+            m[1].frequency_hz / m[0].frequency_hz > 6.26
+                && m[1].frequency_hz / m[0].frequency_hz < 6.27
+        );
     }
 }

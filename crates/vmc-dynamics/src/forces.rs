@@ -110,13 +110,23 @@ pub fn cutting_matrix_at(tool: &Tool, window: &Engagement, phi_rad: f64) -> Matr
 
 /// Mean of H(φ) over the spindle-angle interval [φ_a, φ_b] (exact integral of the screened
 /// trigonometric terms), in N/m².
-pub fn cutting_matrix_mean(tool: &Tool, window: &Engagement, phi_a: f64, phi_b: f64) -> Matrix2<f64> {
+pub fn cutting_matrix_mean(
+    tool: &Tool,
+    window: &Engagement,
+    phi_a: f64,
+    phi_b: f64,
+) -> Matrix2<f64> {
     let (ss, cc, sc) = screened_integrals(tool, window, phi_a, phi_b);
     cutting_from(tool, ss, cc, sc) / (phi_b - phi_a)
 }
 
 /// Mean of the process-damping shape D(φ) = Σ g·[s², sc; sc, c²] over [φ_a, φ_b].
-pub fn damping_matrix_mean(tool: &Tool, window: &Engagement, phi_a: f64, phi_b: f64) -> Matrix2<f64> {
+pub fn damping_matrix_mean(
+    tool: &Tool,
+    window: &Engagement,
+    phi_a: f64,
+    phi_b: f64,
+) -> Matrix2<f64> {
     let (ss, cc, sc) = screened_integrals(tool, window, phi_a, phi_b);
     Matrix2::new(ss, sc, sc, cc) / (phi_b - phi_a)
 }

@@ -34,7 +34,6 @@ pub mod sdm;
 pub mod time_domain;
 pub mod zoa;
 
-
 pub use lobes::{lobes, LobePoint, Method};
 pub use params::{Cut, DynamicsError, Milling, Mode, TipModes, Tool};
 pub use sdm::BoundaryKind;

@@ -26,7 +26,10 @@ use crate::forces::{cutting_matrix_mean, cutting_speed_m_per_s, damping_matrix_m
 use crate::lobes::LobePoint;
 use crate::modal::ModalModel;
 use crate::params::{positive, validate_speed, DynamicsError, Milling, TipModes, Tool};
-use crate::sdm::{chatter_frequency_hz, classify, critical_multiplier, monodromy_from, BoundaryKind, Step, StepRef};
+use crate::sdm::{
+    chatter_frequency_hz, classify, critical_multiplier, monodromy_from, BoundaryKind, Step,
+    StepRef,
+};
 
 /// Fractions of the previous speed's critical depth probed for unstable islands.
 const ISLAND_PROBES: [f64; 2] = [0.55, 0.8];
@@ -42,7 +45,9 @@ pub struct SdmOptions {
 
 impl Default for SdmOptions {
     fn default() -> Self {
-        Self { steps_per_period: 40 }
+        Self {
+            steps_per_period: 40,
+        }
     }
 }
 
@@ -178,12 +183,19 @@ impl MillingSdm {
     }
 
     /// Spectral radii on a grid: `result[i][j]` at `speeds_rpm[i]`, `depths_mm[j]`.
-    pub fn grid(&self, speeds_rpm: &[f64], depths_mm: &[f64]) -> Result<Vec<Vec<f64>>, DynamicsError> {
+    pub fn grid(
+        &self,
+        speeds_rpm: &[f64],
+        depths_mm: &[f64],
+    ) -> Result<Vec<Vec<f64>>, DynamicsError> {
         speeds_rpm
             .iter()
             .map(|&n| {
                 let s = self.at_speed(n)?;
-                depths_mm.iter().map(|&a| Ok(s.stability(a)?.spectral_radius)).collect()
+                depths_mm
+                    .iter()
+                    .map(|&a| Ok(s.stability(a)?.spectral_radius))
+                    .collect()
             })
             .collect()
     }
@@ -215,7 +227,12 @@ impl MillingSdm {
 
     /// Boundary tracer: critical depth at each speed (in the given order) to within `tol_mm`,
     /// searching in (0, `max_depth_mm`]; speeds with no boundary below the maximum are omitted.
-    pub fn trace(&self, speeds_rpm: &[f64], max_depth_mm: f64, tol_mm: f64) -> Result<Vec<LobePoint>, DynamicsError> {
+    pub fn trace(
+        &self,
+        speeds_rpm: &[f64],
+        max_depth_mm: f64,
+        tol_mm: f64,
+    ) -> Result<Vec<LobePoint>, DynamicsError> {
         positive("max_depth_mm", max_depth_mm)?;
         positive("tol_mm", tol_mm)?;
         let mut out = Vec::with_capacity(speeds_rpm.len());
@@ -239,7 +256,8 @@ impl SpeedSdm<'_> {
     pub fn monodromy(&self, depth_mm: f64) -> DMatrix<f64> {
         let sdm = self.sdm;
         let a_m = depth_mm * 1e-3;
-        let pd = sdm.tool.process_damping_n_per_m * a_m / cutting_speed_m_per_s(&sdm.tool, self.spindle_rpm);
+        let pd = sdm.tool.process_damping_n_per_m * a_m
+            / cutting_speed_m_per_s(&sdm.tool, self.spindle_rpm);
         let cut_steps: Vec<Option<Step>> = self
             .terms
             .iter()
@@ -256,7 +274,10 @@ impl SpeedSdm<'_> {
             .iter()
             .map(|s| match s {
                 Some(s) => s.as_ref(),
-                None => StepRef { p: &self.free, r: None },
+                None => StepRef {
+                    p: &self.free,
+                    r: None,
+                },
             })
             .collect();
         monodromy_from(&refs, &sdm.c)
@@ -337,7 +358,13 @@ impl SpeedSdm<'_> {
     }
 
     /// Bisection between a stable `lo` and an unstable `hi` (with its stability) to `tol_mm`.
-    fn bisect(&self, mut lo: f64, mut hi: f64, mut hi_st: Stability, tol_mm: f64) -> Result<LobePoint, DynamicsError> {
+    fn bisect(
+        &self,
+        mut lo: f64,
+        mut hi: f64,
+        mut hi_st: Stability,
+        tol_mm: f64,
+    ) -> Result<LobePoint, DynamicsError> {
         while hi - lo > tol_mm {
             let mid = 0.5 * (lo + hi);
             let st = self.stability(mid)?;

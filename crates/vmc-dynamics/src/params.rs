@@ -197,12 +197,18 @@ pub struct TipModes {
 impl TipModes {
     /// Flexible in x only (y rigid), the classical 1-DOF benchmark layout.
     pub fn x_only(modes: Vec<Mode>) -> Self {
-        Self { x: modes, y: Vec::new() }
+        Self {
+            x: modes,
+            y: Vec::new(),
+        }
     }
 
     /// The same single mode in x and in y.
     pub fn symmetric(mode: Mode) -> Self {
-        Self { x: vec![mode], y: vec![mode] }
+        Self {
+            x: vec![mode],
+            y: vec![mode],
+        }
     }
 
     /// Checks that there is a mode and that every mode is valid.
@@ -210,7 +216,10 @@ impl TipModes {
         if self.x.is_empty() && self.y.is_empty() {
             return Err(DynamicsError::NoModes);
         }
-        self.x.iter().chain(self.y.iter()).try_for_each(Mode::validate)
+        self.x
+            .iter()
+            .chain(self.y.iter())
+            .try_for_each(Mode::validate)
     }
 
     /// Total number of modes.

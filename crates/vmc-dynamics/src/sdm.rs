@@ -270,7 +270,10 @@ mod tests {
     #[test]
     fn delayed_mathieu_matches_semidiscretizationmethod_jl() {
         let rho = mathieu_radius(3.0, 2.0, -0.15, 0.1, 628);
-        assert!((rho - 0.513_159_634_037_461_7).abs() < 1.5e-3, "rho = {rho}");
+        assert!(
+            (rho - 0.513_159_634_037_461_7).abs() < 1.5e-3,
+            "rho = {rho}"
+        );
         assert!((rho - 0.512_052).abs() < 1e-5, "rho = {rho}");
     }
 
@@ -296,7 +299,10 @@ mod tests {
                     hi = mid;
                 }
             }
-            assert!((lo / b_crit - 1.0).abs() < 1e-3, "w = {w}: {lo} vs {b_crit}");
+            assert!(
+                (lo / b_crit - 1.0).abs() < 1e-3,
+                "w = {w}: {lo} vs {b_crit}"
+            );
         }
         // Real branch b = −a with a < 0 … 1: at a = −0.5 the border is b = 0.5, multiplier +1.
         let mu_in = hayes_multiplier(-0.5, 0.49, 40);
@@ -317,7 +323,10 @@ mod tests {
         println!("Mathieu |ρ_m − ρ_640| for m = 20, 40, 80: {errs:?}");
         for w in errs.windows(2) {
             let order = (w[0] / w[1]).log2();
-            assert!((1.8..2.3).contains(&order), "order {order}, errors {errs:?}");
+            assert!(
+                (1.8..2.3).contains(&order),
+                "order {order}, errors {errs:?}"
+            );
         }
     }
 

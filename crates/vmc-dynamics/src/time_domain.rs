@@ -24,7 +24,9 @@ use std::f64::consts::PI;
 
 use crate::forces::{cutting_speed_m_per_s, Engagement};
 use crate::lobes::LobePoint;
-use crate::params::{non_negative, positive, validate_speed, DynamicsError, Milling, TipModes, Tool};
+use crate::params::{
+    non_negative, positive, validate_speed, DynamicsError, Milling, TipModes, Tool,
+};
 use crate::sdm::BoundaryKind;
 
 /// Force model of the simulation.
@@ -105,7 +107,10 @@ impl Simulation {
         let (k, _) = spectrum
             .iter()
             .enumerate()
-            .fold((0, f64::NEG_INFINITY), |b, (k, v)| if *v > b.1 { (k, *v) } else { b });
+            .fold(
+                (0, f64::NEG_INFINITY),
+                |b, (k, v)| if *v > b.1 { (k, *v) } else { b },
+            );
         let mut f = lo_hz + df * k as f64;
         if k > 0 && k + 1 < count {
             let (a, b, c) = (spectrum[k - 1], spectrum[k], spectrum[k + 1]);
@@ -169,9 +174,16 @@ impl TimeDomain {
         tool.validate()?;
         modes.validate()?;
         let window = Engagement::new(immersion, milling)?;
-        for (name, v) in [("steps_per_tooth", options.steps_per_tooth), ("tooth_periods", options.tooth_periods)] {
+        for (name, v) in [
+            ("steps_per_tooth", options.steps_per_tooth),
+            ("tooth_periods", options.tooth_periods),
+        ] {
             if v < 8 {
-                return Err(DynamicsError::TooFewSteps { name, min: 8, value: v });
+                return Err(DynamicsError::TooFewSteps {
+                    name,
+                    min: 8,
+                    value: v,
+                });
             }
         }
         positive("initial_displacement_m", options.initial_displacement_m)?;
@@ -243,7 +255,8 @@ impl TimeDomain {
         let f = self.force(phi, p, v, delayed, k);
         for (k, m) in self.modes.iter().enumerate() {
             out[k] = s[n + k];
-            out[n + k] = -m.omega * m.omega * s[k] - 2.0 * m.zeta * m.omega * s[n + k] + f[m.axis] / m.mass_kg;
+            out[n + k] = -m.omega * m.omega * s[k] - 2.0 * m.zeta * m.omega * s[n + k]
+                + f[m.axis] / m.mass_kg;
         }
     }
 
@@ -290,7 +303,12 @@ impl TimeDomain {
         // Ring buffer of tip displacement and velocity over one delay (m + 1 samples).
         let mut hist_p = vec![[0.0; 2]; m + 1];
         let mut hist_v = vec![[0.0; 2]; m + 1];
-        let (mut k1, mut k2, mut k3, mut k4) = (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; 2 * n]);
+        let (mut k1, mut k2, mut k3, mut k4) = (
+            vec![0.0; 2 * n],
+            vec![0.0; 2 * n],
+            vec![0.0; 2 * n],
+            vec![0.0; 2 * n],
+        );
         let mut tmp = vec![0.0; 2 * n];
         let mut out = Simulation {
             period_s,
@@ -349,7 +367,9 @@ impl TimeDomain {
 
     /// Growth ratio of the linear model at a speed and depth (> 1: unstable).
     pub fn growth_ratio(&self, spindle_rpm: f64, depth_mm: f64) -> Result<f64, DynamicsError> {
-        Ok(self.simulate(spindle_rpm, depth_mm, 0.0, ForceModel::Linear)?.growth_ratio())
+        Ok(self
+            .simulate(spindle_rpm, depth_mm, 0.0, ForceModel::Linear)?
+            .growth_ratio())
     }
 
     /// True when the linear model's vibration does not grow over the horizon.
@@ -360,7 +380,12 @@ impl TimeDomain {
     /// Critical depth by bisection on (0, `max_depth_mm`] to `tol_mm`; `None` if stable at the
     /// maximum. Chatter frequency: spectral peak of the simulation just over the limit; kind:
     /// flip when that peak sits at an odd multiple of half the tooth-passing frequency.
-    pub fn critical_depth(&self, spindle_rpm: f64, max_depth_mm: f64, tol_mm: f64) -> Result<Option<LobePoint>, DynamicsError> {
+    pub fn critical_depth(
+        &self,
+        spindle_rpm: f64,
+        max_depth_mm: f64,
+        tol_mm: f64,
+    ) -> Result<Option<LobePoint>, DynamicsError> {
         positive("max_depth_mm", max_depth_mm)?;
         positive("tol_mm", tol_mm)?;
         if self.is_stable(spindle_rpm, max_depth_mm)? {
@@ -378,7 +403,12 @@ impl TimeDomain {
         // Chatter frequency from the spectrum just over the limit; a flip shows as a peak at
         // an odd multiple of half the tooth-passing frequency (within 0.5 % of it).
         let sim = self.simulate(spindle_rpm, hi, 0.0, ForceModel::Linear)?;
-        let f_min = self.modes.iter().map(|m| m.omega).fold(f64::INFINITY, f64::min) / (2.0 * PI);
+        let f_min = self
+            .modes
+            .iter()
+            .map(|m| m.omega)
+            .fold(f64::INFINITY, f64::min)
+            / (2.0 * PI);
         let f_max = self.modes.iter().map(|m| m.omega).fold(0.0, f64::max) / (2.0 * PI);
         let f = sim.dominant_frequency_hz(0.5 * f_min, 2.0 * f_max);
         let half_harmonic = f * sim.period_s - 0.5;

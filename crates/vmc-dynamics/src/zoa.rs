@@ -47,7 +47,12 @@ pub struct ZoaRoot {
 
 impl Zoa {
     /// Validates the inputs and averages the directional matrix.
-    pub fn new(tool: &Tool, modes: &TipModes, immersion: f64, milling: Milling) -> Result<Self, DynamicsError> {
+    pub fn new(
+        tool: &Tool,
+        modes: &TipModes,
+        immersion: f64,
+        milling: Milling,
+    ) -> Result<Self, DynamicsError> {
         tool.validate()?;
         let model = ModalModel::new(modes)?;
         let window = Engagement::new(immersion, milling)?;
@@ -156,7 +161,8 @@ impl Zoa {
         let max_lobe = (60.0 * w_max / (self.teeth * spindle_rpm * 2.0 * PI)).ceil() as usize + 1;
         let mut best: Option<LobePoint> = None;
         for branch in 0..2 {
-            let roots: Vec<Option<ZoaRoot>> = self.omegas.iter().map(|&w| self.root(w, branch)).collect();
+            let roots: Vec<Option<ZoaRoot>> =
+                self.omegas.iter().map(|&w| self.root(w, branch)).collect();
             for lobe in 0..=max_lobe {
                 let f = |w: f64, r: &ZoaRoot| self.speed_rpm(w, r.phase_rad, lobe) - spindle_rpm;
                 for i in 1..self.omegas.len() {
@@ -186,7 +192,15 @@ impl Zoa {
 
     /// Bisection of n(ω) − n₀ on [w0, w1]; rejects brackets where n(ω) jumps (phase wrap or
     /// eigenvalue swap) instead of crossing.
-    fn refine(&self, mut w0: f64, mut w1: f64, mut f0: f64, branch: usize, lobe: usize, n0: f64) -> Option<(f64, ZoaRoot)> {
+    fn refine(
+        &self,
+        mut w0: f64,
+        mut w1: f64,
+        mut f0: f64,
+        branch: usize,
+        lobe: usize,
+        n0: f64,
+    ) -> Option<(f64, ZoaRoot)> {
         let mut last = None;
         for _ in 0..60 {
             let wm = 0.5 * (w0 + w1);
@@ -220,7 +234,10 @@ mod tests {
         let h_bar = 2.0 * 2e8 / 4.0;
         let closed_mm = 1e3 * 2.0 * mode.stiffness_n_per_m * 0.011 * 1.011 / h_bar;
         let (a_mm, f_hz) = zoa.minimum_depth();
-        assert!((a_mm / closed_mm - 1.0).abs() < 1e-9, "{a_mm} vs {closed_mm}");
+        assert!(
+            (a_mm / closed_mm - 1.0).abs() < 1e-9,
+            "{a_mm} vs {closed_mm}"
+        );
         // Chatter at r = √(1 + 2ζ), above the natural frequency.
         assert!((f_hz / (922.0 * (1.022f64).sqrt()) - 1.0).abs() < 1e-6);
         // The lobe bottoms approach the minimum: the best of a dense speed scan is within 0.1 %.
@@ -228,14 +245,23 @@ mod tests {
             .filter_map(|i| zoa.critical_depth(8000.0 + 40.0 * i as f64).unwrap())
             .map(|p| p.critical_depth_mm)
             .fold(f64::INFINITY, f64::min);
-        assert!(lowest >= closed_mm * (1.0 - 1e-9) && lowest < closed_mm * 1.001, "{lowest}");
+        assert!(
+            lowest >= closed_mm * (1.0 - 1e-9) && lowest < closed_mm * 1.001,
+            "{lowest}"
+        );
         // Every lobe curve has the same minimum depth; lobe k + 1 lies at lower speeds.
         let l0 = zoa.lobe_curve(0, 0);
         let l1 = zoa.lobe_curve(1, 0);
-        let min0 = l0.iter().map(|p| p.critical_depth_mm).fold(f64::INFINITY, f64::min);
+        let min0 = l0
+            .iter()
+            .map(|p| p.critical_depth_mm)
+            .fold(f64::INFINITY, f64::min);
         assert!(min0 >= closed_mm * (1.0 - 1e-9) && min0 < closed_mm * 1.001);
         let at_min = |l: &[LobePoint]| {
-            l.iter().min_by(|a, b| a.critical_depth_mm.total_cmp(&b.critical_depth_mm)).unwrap().spindle_rpm
+            l.iter()
+                .min_by(|a, b| a.critical_depth_mm.total_cmp(&b.critical_depth_mm))
+                .unwrap()
+                .spindle_rpm
         };
         assert!(at_min(&l1) < at_min(&l0));
     }

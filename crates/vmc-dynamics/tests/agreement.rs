@@ -26,10 +26,19 @@ fn sdm_and_time_domain_agree_on_benchmark() {
     let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
     let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, TimeOptions::default()).unwrap();
     for n in [6000.0, 9000.0, 10000.0, 12000.0, 14500.0] {
-        let p = sdm.at_speed(n).unwrap().critical_depth(None, 20.0, 1e-4).unwrap().unwrap();
+        let p = sdm
+            .at_speed(n)
+            .unwrap()
+            .critical_depth(None, 20.0, 1e-4)
+            .unwrap()
+            .unwrap();
         let under = td.growth_ratio(n, 0.95 * p.critical_depth_mm).unwrap();
         let over = td.growth_ratio(n, 1.05 * p.critical_depth_mm).unwrap();
-        assert!(under < 1.0 && over > 1.0, "{n} rpm, a = {} mm: {under} / {over}", p.critical_depth_mm);
+        assert!(
+            under < 1.0 && over > 1.0,
+            "{n} rpm, a = {} mm: {under} / {over}",
+            p.critical_depth_mm
+        );
     }
 }
 
@@ -42,16 +51,33 @@ fn sdm_and_time_domain_agree_on_benchmark() {
 fn sdm_and_zoa_agree_in_slotting() {
     let tool = Tool::new(4, 20.0, 6e8, 2e8);
     let modes = TipModes::symmetric(benchmark_mode());
-    let sdm = MillingSdm::new(&tool, &modes, 1.0, Milling::Down, SdmOptions { steps_per_period: 80 }).unwrap();
+    let sdm = MillingSdm::new(
+        &tool,
+        &modes,
+        1.0,
+        Milling::Down,
+        SdmOptions {
+            steps_per_period: 80,
+        },
+    )
+    .unwrap();
     let zoa = Zoa::new(&tool, &modes, 1.0, Milling::Down).unwrap();
     let mut worst: f64 = 0.0;
     for i in 0..11 {
         let n = 3000.0 + 500.0 * f64::from(i);
-        let s = sdm.at_speed(n).unwrap().critical_depth(None, 1.0, 1e-6).unwrap().unwrap();
+        let s = sdm
+            .at_speed(n)
+            .unwrap()
+            .critical_depth(None, 1.0, 1e-6)
+            .unwrap()
+            .unwrap();
         let z = zoa.critical_depth(n).unwrap().unwrap();
         assert_eq!(s.kind, BoundaryKind::Hopf, "{n}");
         worst = worst.max((s.critical_depth_mm / z.critical_depth_mm - 1.0).abs());
-        assert!((s.chatter_frequency_hz / z.chatter_frequency_hz - 1.0).abs() < 0.01, "{n}: {s:?} {z:?}");
+        assert!(
+            (s.chatter_frequency_hz / z.chatter_frequency_hz - 1.0).abs() < 0.01,
+            "{n}: {s:?} {z:?}"
+        );
     }
     println!("SDM–ZOA worst relative difference: {worst}");
     assert!(worst < 0.01, "worst relative difference {worst}");
@@ -63,13 +89,22 @@ fn sdm_and_zoa_agree_in_slotting() {
 fn flip_lobe_at_low_immersion() {
     let (tool, modes) = (benchmark_tool(), benchmark_modes());
     let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
-    let s = sdm.at_speed(10_000.0).unwrap().critical_depth(None, 20.0, 1e-4).unwrap().unwrap();
+    let s = sdm
+        .at_speed(10_000.0)
+        .unwrap()
+        .critical_depth(None, 20.0, 1e-4)
+        .unwrap()
+        .unwrap();
     assert_eq!(s.kind, BoundaryKind::Flip);
     // Period doubling: chatter at half the tooth-passing frequency plus its harmonics.
     let tooth_hz = 10_000.0 * 2.0 / 60.0;
     let k = s.chatter_frequency_hz / tooth_hz - 0.5;
     assert!((k - k.round()).abs() < 1e-6, "{}", s.chatter_frequency_hz);
-    let z = Zoa::new(&tool, &modes, 0.05, Milling::Down).unwrap().critical_depth(10_000.0).unwrap().unwrap();
+    let z = Zoa::new(&tool, &modes, 0.05, Milling::Down)
+        .unwrap()
+        .critical_depth(10_000.0)
+        .unwrap()
+        .unwrap();
     assert_eq!(z.kind, BoundaryKind::Hopf);
     assert!(z.critical_depth_mm > 1.5 * s.critical_depth_mm);
 }
@@ -85,9 +120,11 @@ fn tracer_matches_grid_with_ten_times_fewer_evaluations() {
     let speeds: Vec<f64> = (0..201).map(|i| 5000.0 + 40.0 * f64::from(i)).collect();
     let max_mm = 15.0;
     let depths: Vec<f64> = (1..=100).map(|j| max_mm * f64::from(j) / 100.0).collect();
-    let grid_sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
+    let grid_sdm =
+        MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
     let radii = grid_sdm.grid(&speeds, &depths).unwrap();
-    let tracer_sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
+    let tracer_sdm =
+        MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
     let traced = tracer_sdm.trace(&speeds, max_mm, 0.03).unwrap();
     assert_eq!(grid_sdm.evaluations(), 201 * 100);
     assert!(
@@ -96,7 +133,11 @@ fn tracer_matches_grid_with_ten_times_fewer_evaluations() {
         tracer_sdm.evaluations(),
         grid_sdm.evaluations()
     );
-    let missing: Vec<f64> = speeds.iter().filter(|n| !traced.iter().any(|p| p.spindle_rpm == **n)).cloned().collect();
+    let missing: Vec<f64> = speeds
+        .iter()
+        .filter(|n| !traced.iter().any(|p| p.spindle_rpm == **n))
+        .cloned()
+        .collect();
     assert!(missing.is_empty(), "no boundary at {missing:?}");
     let mut islands = 0;
     for (column, p) in radii.iter().zip(&traced) {
@@ -113,9 +154,17 @@ fn tracer_matches_grid_with_ten_times_fewer_evaluations() {
         let near = |a: f64| (p.critical_depth_mm - a).abs() <= 0.01 * max_mm;
         if switches.len() > 1 && !near(switches[0]) {
             islands += 1;
-            assert!(switches.iter().any(|a| near(*a)), "{} rpm: {p:?} vs {switches:?}", p.spindle_rpm);
+            assert!(
+                switches.iter().any(|a| near(*a)),
+                "{} rpm: {p:?} vs {switches:?}",
+                p.spindle_rpm
+            );
         } else {
-            assert!(near(switches[0]), "{} rpm: {p:?} vs {switches:?}", p.spindle_rpm);
+            assert!(
+                near(switches[0]),
+                "{} rpm: {p:?} vs {switches:?}",
+                p.spindle_rpm
+            );
         }
     }
     println!(
@@ -137,12 +186,17 @@ fn lobes_api_and_determinism() {
         let b = lobes(method, &tool, &modes, 0.5, Milling::Up, &speeds).unwrap();
         assert_eq!(a.len(), 3, "{method:?}");
         assert_eq!(a, b, "{method:?}");
-        assert!(a.iter().all(|p| p.critical_depth_mm > 0.0 && p.critical_depth_mm.is_finite()));
+        assert!(a
+            .iter()
+            .all(|p| p.critical_depth_mm > 0.0 && p.critical_depth_mm.is_finite()));
     }
     let sdm = lobes(Method::Sdm, &tool, &modes, 0.5, Milling::Up, &speeds).unwrap();
     let time = lobes(Method::Time, &tool, &modes, 0.5, Milling::Up, &speeds).unwrap();
     for (s, t) in sdm.iter().zip(&time) {
-        assert!((s.critical_depth_mm / t.critical_depth_mm - 1.0).abs() < 0.03, "{s:?} {t:?}");
+        assert!(
+            (s.critical_depth_mm / t.critical_depth_mm - 1.0).abs() < 0.03,
+            "{s:?} {t:?}"
+        );
     }
 }
 
@@ -155,9 +209,22 @@ fn process_damping_stabilises() {
     let base = MillingSdm::new(&tool, &modes, 0.5, Milling::Down, SdmOptions::default()).unwrap();
     tool.process_damping_n_per_m = 1e5;
     let damped = MillingSdm::new(&tool, &modes, 0.5, Milling::Down, SdmOptions::default()).unwrap();
-    let a0 = base.at_speed(3000.0).unwrap().critical_depth(None, 20.0, 1e-4).unwrap().unwrap();
-    let a1 = damped.at_speed(3000.0).unwrap().critical_depth(None, 20.0, 1e-4).unwrap().unwrap();
-    assert!(a1.critical_depth_mm > 1.05 * a0.critical_depth_mm, "{a0:?} {a1:?}");
+    let a0 = base
+        .at_speed(3000.0)
+        .unwrap()
+        .critical_depth(None, 20.0, 1e-4)
+        .unwrap()
+        .unwrap();
+    let a1 = damped
+        .at_speed(3000.0)
+        .unwrap()
+        .critical_depth(None, 20.0, 1e-4)
+        .unwrap()
+        .unwrap();
+    assert!(
+        a1.critical_depth_mm > 1.05 * a0.critical_depth_mm,
+        "{a0:?} {a1:?}"
+    );
 }
 
 /// The process model (feed, loss of contact) stays bounded under the limit and settles to the
@@ -169,13 +236,28 @@ fn process_simulation_settles_when_stable() {
     tool.kne_n_per_m = 1e4;
     let td = TimeDomain::new(&tool, &modes, 0.5, Milling::Down, TimeOptions::default()).unwrap();
     let sdm = MillingSdm::new(&tool, &modes, 0.5, Milling::Down, SdmOptions::default()).unwrap();
-    let limit = sdm.at_speed(9000.0).unwrap().critical_depth(None, 20.0, 1e-4).unwrap().unwrap();
-    let sim = td.simulate(9000.0, 0.5 * limit.critical_depth_mm, 0.1, ForceModel::Process).unwrap();
+    let limit = sdm
+        .at_speed(9000.0)
+        .unwrap()
+        .critical_depth(None, 20.0, 1e-4)
+        .unwrap()
+        .unwrap();
+    let sim = td
+        .simulate(
+            9000.0,
+            0.5 * limit.critical_depth_mm,
+            0.1,
+            ForceModel::Process,
+        )
+        .unwrap();
     let d = &sim.displacement_m;
     let last = d[d.len() - 1];
     let prev = d[d.len() - 2];
     assert!(last[0].abs() > 1e-7 && last[0].abs() < 1e-3, "{last:?}");
-    assert!((last[0] - prev[0]).abs() < 1e-3 * last[0].abs(), "{limit:?} {last:?} {prev:?}");
+    assert!(
+        (last[0] - prev[0]).abs() < 1e-3 * last[0].abs(),
+        "{limit:?} {last:?} {prev:?}"
+    );
     assert_eq!(sim.steps, 400 * 64);
 }
 
@@ -185,14 +267,29 @@ fn process_simulation_settles_when_stable() {
 fn milling_sdm_converges_second_order() {
     let (tool, modes) = (benchmark_tool(), benchmark_modes());
     let rho = |m: usize| {
-        let sdm = MillingSdm::new(&tool, &modes, 0.5, Milling::Up, SdmOptions { steps_per_period: m }).unwrap();
+        let sdm = MillingSdm::new(
+            &tool,
+            &modes,
+            0.5,
+            Milling::Up,
+            SdmOptions {
+                steps_per_period: m,
+            },
+        )
+        .unwrap();
         sdm.stability(6000.0, 0.2).unwrap().spectral_radius
     };
     let reference = rho(320);
-    let errs: Vec<f64> = [20, 40, 80].iter().map(|&m| (rho(m) - reference).abs()).collect();
+    let errs: Vec<f64> = [20, 40, 80]
+        .iter()
+        .map(|&m| (rho(m) - reference).abs())
+        .collect();
     let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
     println!("milling |ρ_m − ρ_320| for m = 20, 40, 80: {errs:?}, orders {orders:?}");
-    assert!(orders.iter().all(|o| (1.7..2.4).contains(o)), "{errs:?} {orders:?}");
+    assert!(
+        orders.iter().all(|o| (1.7..2.4).contains(o)),
+        "{errs:?} {orders:?}"
+    );
 }
 
 /// Several modes per direction (the first two modes of a steel cantilever, L = 100 mm,
@@ -210,14 +307,34 @@ fn multi_mode_cantilever_sdm_and_time_domain_agree() {
     let m = beam.modes(2, 0.02).unwrap();
     let modes = TipModes { x: m.clone(), y: m };
     let tool = Tool::new(3, 12.0, 6e8, 2e8);
-    let sdm = MillingSdm::new(&tool, &modes, 0.3, Milling::Up, SdmOptions { steps_per_period: 60 }).unwrap();
-    let opts = TimeOptions { steps_per_tooth: 128, ..TimeOptions::default() };
+    let sdm = MillingSdm::new(
+        &tool,
+        &modes,
+        0.3,
+        Milling::Up,
+        SdmOptions {
+            steps_per_period: 60,
+        },
+    )
+    .unwrap();
+    let opts = TimeOptions {
+        steps_per_tooth: 128,
+        ..TimeOptions::default()
+    };
     let td = TimeDomain::new(&tool, &modes, 0.3, Milling::Up, opts).unwrap();
     for n in [9000.0, 14000.0] {
-        let p = sdm.at_speed(n).unwrap().critical_depth(None, 50.0, 1e-4).unwrap().unwrap();
+        let p = sdm
+            .at_speed(n)
+            .unwrap()
+            .critical_depth(None, 50.0, 1e-4)
+            .unwrap()
+            .unwrap();
         let under = td.growth_ratio(n, 0.95 * p.critical_depth_mm).unwrap();
         let over = td.growth_ratio(n, 1.05 * p.critical_depth_mm).unwrap();
-        assert!(under < 1.0 && over > 1.0, "{n} rpm, {p:?}: {under} / {over}");
+        assert!(
+            under < 1.0 && over > 1.0,
+            "{n} rpm, {p:?}: {under} / {over}"
+        );
     }
 }
 
@@ -230,7 +347,10 @@ fn determinism() {
     assert_eq!(s.monodromy(2.0), s.monodromy(2.0));
     let speeds = [6000.0, 9000.0];
     let depths = [1.0, 2.0, 4.0];
-    assert_eq!(sdm.grid(&speeds, &depths).unwrap(), sdm.grid(&speeds, &depths).unwrap());
+    assert_eq!(
+        sdm.grid(&speeds, &depths).unwrap(),
+        sdm.grid(&speeds, &depths).unwrap()
+    );
     let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, TimeOptions::default()).unwrap();
     let a = td.simulate(9000.0, 2.0, 0.1, ForceModel::Process).unwrap();
     let b = td.simulate(9000.0, 2.0, 0.1, ForceModel::Process).unwrap();
@@ -246,10 +366,21 @@ fn time_domain_frequency_and_kind_match_sdm() {
     let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
     let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, TimeOptions::default()).unwrap();
     for (n, kind) in [(9000.0, BoundaryKind::Hopf), (10_000.0, BoundaryKind::Flip)] {
-        let s = sdm.at_speed(n).unwrap().critical_depth(None, 20.0, 1e-3).unwrap().unwrap();
+        let s = sdm
+            .at_speed(n)
+            .unwrap()
+            .critical_depth(None, 20.0, 1e-3)
+            .unwrap()
+            .unwrap();
         let t = td.critical_depth(n, 20.0, 1e-2).unwrap().unwrap();
         assert_eq!((s.kind, t.kind), (kind, kind), "{n}: {s:?} {t:?}");
-        assert!((t.chatter_frequency_hz / s.chatter_frequency_hz - 1.0).abs() < 0.01, "{n}: {s:?} {t:?}");
-        assert!((t.critical_depth_mm / s.critical_depth_mm - 1.0).abs() < 0.05, "{n}: {s:?} {t:?}");
+        assert!(
+            (t.chatter_frequency_hz / s.chatter_frequency_hz - 1.0).abs() < 0.01,
+            "{n}: {s:?} {t:?}"
+        );
+        assert!(
+            (t.critical_depth_mm / s.critical_depth_mm - 1.0).abs() < 0.05,
+            "{n}: {s:?} {t:?}"
+        );
     }
 }

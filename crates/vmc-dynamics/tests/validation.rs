@@ -25,63 +25,175 @@ fn tool_errors() {
     assert_eq!(sdm_err(&t, &modes(), 0.5), DynamicsError::NoTeeth);
     let mut t = tool();
     t.diameter_mm = 0.0;
-    assert_eq!(sdm_err(&t, &modes(), 0.5), DynamicsError::NonPositive { name: "diameter_mm", value: 0.0 });
+    assert_eq!(
+        sdm_err(&t, &modes(), 0.5),
+        DynamicsError::NonPositive {
+            name: "diameter_mm",
+            value: 0.0
+        }
+    );
     let mut t = tool();
     t.kt_n_per_m2 = f64::NAN;
-    assert_eq!(sdm_err(&t, &modes(), 0.5), DynamicsError::NonFinite { name: "kt_n_per_m2" });
+    assert_eq!(
+        sdm_err(&t, &modes(), 0.5),
+        DynamicsError::NonFinite {
+            name: "kt_n_per_m2"
+        }
+    );
     let mut t = tool();
     t.kn_n_per_m2 = -1.0;
-    assert_eq!(sdm_err(&t, &modes(), 0.5), DynamicsError::Negative { name: "kn_n_per_m2", value: -1.0 });
+    assert_eq!(
+        sdm_err(&t, &modes(), 0.5),
+        DynamicsError::Negative {
+            name: "kn_n_per_m2",
+            value: -1.0
+        }
+    );
     let mut t = tool();
     t.helix_deg = 30.0;
-    assert_eq!(sdm_err(&t, &modes(), 0.5), DynamicsError::UnsupportedHelix(30.0));
+    assert_eq!(
+        sdm_err(&t, &modes(), 0.5),
+        DynamicsError::UnsupportedHelix(30.0)
+    );
     let mut t = tool();
     t.process_damping_n_per_m = -5.0;
-    assert!(matches!(sdm_err(&t, &modes(), 0.5), DynamicsError::Negative { name: "process_damping_n_per_m", .. }));
+    assert!(matches!(
+        sdm_err(&t, &modes(), 0.5),
+        DynamicsError::Negative {
+            name: "process_damping_n_per_m",
+            ..
+        }
+    ));
 }
 
 #[test]
 fn mode_errors() {
-    assert_eq!(sdm_err(&tool(), &TipModes::default(), 0.5), DynamicsError::NoModes);
+    assert_eq!(
+        sdm_err(&tool(), &TipModes::default(), 0.5),
+        DynamicsError::NoModes
+    );
     let mut m = Mode::from_mass(922.0, 0.011, 0.03993);
     m.damping_ratio = -0.01;
     assert_eq!(
         sdm_err(&tool(), &TipModes::x_only(vec![m]), 0.5),
-        DynamicsError::Negative { name: "damping_ratio", value: -0.01 }
+        DynamicsError::Negative {
+            name: "damping_ratio",
+            value: -0.01
+        }
     );
-    let m = Mode { frequency_hz: 0.0, damping_ratio: 0.01, stiffness_n_per_m: 1e6 };
-    assert!(matches!(sdm_err(&tool(), &TipModes::symmetric(m), 0.5), DynamicsError::NonPositive { name: "frequency_hz", .. }));
-    let m = Mode { frequency_hz: 900.0, damping_ratio: 0.01, stiffness_n_per_m: f64::INFINITY };
-    assert_eq!(sdm_err(&tool(), &TipModes::symmetric(m), 0.5), DynamicsError::NonFinite { name: "stiffness_n_per_m" });
+    let m = Mode {
+        frequency_hz: 0.0,
+        damping_ratio: 0.01,
+        stiffness_n_per_m: 1e6,
+    };
+    assert!(matches!(
+        sdm_err(&tool(), &TipModes::symmetric(m), 0.5),
+        DynamicsError::NonPositive {
+            name: "frequency_hz",
+            ..
+        }
+    ));
+    let m = Mode {
+        frequency_hz: 900.0,
+        damping_ratio: 0.01,
+        stiffness_n_per_m: f64::INFINITY,
+    };
+    assert_eq!(
+        sdm_err(&tool(), &TipModes::symmetric(m), 0.5),
+        DynamicsError::NonFinite {
+            name: "stiffness_n_per_m"
+        }
+    );
 }
 
 #[test]
 fn cut_errors() {
     for bad in [0.0, -0.1, 1.0001] {
-        assert_eq!(sdm_err(&tool(), &modes(), bad), DynamicsError::ImmersionOutOfRange(bad));
+        assert_eq!(
+            sdm_err(&tool(), &modes(), bad),
+            DynamicsError::ImmersionOutOfRange(bad)
+        );
         assert!(Zoa::new(&tool(), &modes(), bad, Milling::Up).is_err());
     }
-    assert_eq!(sdm_err(&tool(), &modes(), f64::NAN), DynamicsError::NonFinite { name: "immersion" });
-    let sdm = MillingSdm::new(&tool(), &modes(), 0.5, Milling::Up, SdmOptions::default()).unwrap();
-    assert_eq!(sdm.stability(0.0, 1.0).unwrap_err(), DynamicsError::ZeroSpeed(0.0));
-    assert!(matches!(sdm.stability(5000.0, -1.0).unwrap_err(), DynamicsError::Negative { .. }));
     assert_eq!(
-        lobes(Method::Zoa, &tool(), &modes(), 0.5, Milling::Up, &[5000.0, -1.0]).unwrap_err(),
+        sdm_err(&tool(), &modes(), f64::NAN),
+        DynamicsError::NonFinite { name: "immersion" }
+    );
+    let sdm = MillingSdm::new(&tool(), &modes(), 0.5, Milling::Up, SdmOptions::default()).unwrap();
+    assert_eq!(
+        sdm.stability(0.0, 1.0).unwrap_err(),
+        DynamicsError::ZeroSpeed(0.0)
+    );
+    assert!(matches!(
+        sdm.stability(5000.0, -1.0).unwrap_err(),
+        DynamicsError::Negative { .. }
+    ));
+    assert_eq!(
+        lobes(
+            Method::Zoa,
+            &tool(),
+            &modes(),
+            0.5,
+            Milling::Up,
+            &[5000.0, -1.0]
+        )
+        .unwrap_err(),
         DynamicsError::ZeroSpeed(-1.0)
     );
-    let cut = Cut { spindle_rpm: 5000.0, immersion: 0.5, milling: Milling::Up, feed_per_tooth_mm: -0.1, axial_depth_mm: 1.0 };
-    assert!(matches!(cut.validate().unwrap_err(), DynamicsError::Negative { name: "feed_per_tooth_mm", .. }));
-    let cut = Cut { feed_per_tooth_mm: 0.1, ..cut };
+    let cut = Cut {
+        spindle_rpm: 5000.0,
+        immersion: 0.5,
+        milling: Milling::Up,
+        feed_per_tooth_mm: -0.1,
+        axial_depth_mm: 1.0,
+    };
+    assert!(matches!(
+        cut.validate().unwrap_err(),
+        DynamicsError::Negative {
+            name: "feed_per_tooth_mm",
+            ..
+        }
+    ));
+    let cut = Cut {
+        feed_per_tooth_mm: 0.1,
+        ..cut
+    };
     assert!(cut.validate().is_ok());
 }
 
 #[test]
 fn option_errors() {
-    let err = MillingSdm::new(&tool(), &modes(), 0.5, Milling::Up, SdmOptions { steps_per_period: 2 }).unwrap_err();
-    assert_eq!(err, DynamicsError::TooFewSteps { name: "steps_per_period", min: 4, value: 2 });
-    let opts = TimeOptions { tooth_periods: 3, ..TimeOptions::default() };
+    let err = MillingSdm::new(
+        &tool(),
+        &modes(),
+        0.5,
+        Milling::Up,
+        SdmOptions {
+            steps_per_period: 2,
+        },
+    )
+    .unwrap_err();
+    assert_eq!(
+        err,
+        DynamicsError::TooFewSteps {
+            name: "steps_per_period",
+            min: 4,
+            value: 2
+        }
+    );
+    let opts = TimeOptions {
+        tooth_periods: 3,
+        ..TimeOptions::default()
+    };
     let err = TimeDomain::new(&tool(), &modes(), 0.5, Milling::Up, opts).unwrap_err();
-    assert_eq!(err, DynamicsError::TooFewSteps { name: "tooth_periods", min: 8, value: 3 });
+    assert_eq!(
+        err,
+        DynamicsError::TooFewSteps {
+            name: "tooth_periods",
+            min: 8,
+            value: 3
+        }
+    );
     let beam = Cantilever {
         youngs_modulus_pa: 210e9,
         density_kg_per_m3: 7850.0,
@@ -89,7 +201,13 @@ fn option_errors() {
         outer_diameter_mm: 10.0,
         inner_diameter_mm: 12.0,
     };
-    assert!(matches!(beam.modes(3, 0.02).unwrap_err(), DynamicsError::NonPositive { .. }));
+    assert!(matches!(
+        beam.modes(3, 0.02).unwrap_err(),
+        DynamicsError::NonPositive { .. }
+    ));
     // Messages name the parameter.
-    assert_eq!(DynamicsError::ZeroSpeed(0.0).to_string(), "spindle speed must be > 0 rpm, got 0");
+    assert_eq!(
+        DynamicsError::ZeroSpeed(0.0).to_string(),
+        "spindle speed must be > 0 rpm, got 0"
+    );
 }
