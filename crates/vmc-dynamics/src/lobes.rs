@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::milling::{MillingSdm, SdmOptions};
 use crate::params::{DynamicsError, Milling, TipModes, Tool};
-use crate::sdm::BoundaryKind;
+pub use crate::sdm::LobePoint;
 use crate::time_domain::{TimeDomain, TimeOptions};
 use crate::zoa::Zoa;
 
@@ -24,19 +24,6 @@ pub enum Method {
     Zoa,
     /// Time-domain simulation.
     Time,
-}
-
-/// One point of a stability-lobe diagram.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct LobePoint {
-    /// Spindle speed in rpm.
-    pub spindle_rpm: f64,
-    /// Critical axial depth in mm.
-    pub critical_depth_mm: f64,
-    /// Chatter frequency in Hz.
-    pub chatter_frequency_hz: f64,
-    /// How stability is lost.
-    pub kind: BoundaryKind,
 }
 
 /// Stability lobes at the given speeds (speeds without a boundary in range are omitted).

@@ -23,9 +23,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use nalgebra::{Complex, DMatrix};
 
 use crate::forces::{cutting_matrix_mean, cutting_speed_m_per_s, damping_matrix_mean, Engagement};
-use crate::lobes::LobePoint;
 use crate::modal::ModalModel;
 use crate::params::{positive, validate_speed, DynamicsError, Milling, TipModes, Tool};
+use crate::sdm::LobePoint;
 use crate::sdm::{
     chatter_frequency_hz, classify, critical_multiplier, monodromy_from, BoundaryKind, Step,
     StepRef,

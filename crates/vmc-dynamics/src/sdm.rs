@@ -39,6 +39,19 @@ pub enum BoundaryKind {
     Flip,
 }
 
+/// One point of a stability-lobe diagram.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LobePoint {
+    /// Spindle speed in rpm.
+    pub spindle_rpm: f64,
+    /// Critical axial depth in mm.
+    pub critical_depth_mm: f64,
+    /// Chatter frequency in Hz.
+    pub chatter_frequency_hz: f64,
+    /// How stability is lost.
+    pub kind: BoundaryKind,
+}
+
 /// Discrete map of one semi-discretisation step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Step {

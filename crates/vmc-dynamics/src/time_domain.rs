@@ -23,11 +23,11 @@
 use std::f64::consts::PI;
 
 use crate::forces::{cutting_speed_m_per_s, Engagement};
-use crate::lobes::LobePoint;
 use crate::params::{
     non_negative, positive, validate_speed, DynamicsError, Milling, TipModes, Tool,
 };
 use crate::sdm::BoundaryKind;
+use crate::sdm::LobePoint;
 
 /// Force model of the simulation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -19,10 +19,10 @@ use std::f64::consts::PI;
 use nalgebra::{Complex, Matrix2};
 
 use crate::forces::{average_cutting_matrix, Engagement};
-use crate::lobes::LobePoint;
 use crate::modal::ModalModel;
 use crate::params::{validate_speed, DynamicsError, Milling, TipModes, Tool};
 use crate::sdm::BoundaryKind;
+use crate::sdm::LobePoint;
 
 /// Frequency samples of the chatter-frequency scan.
 const SCAN_POINTS: usize = 8000;
