@@ -5,6 +5,7 @@
 //! them together, the G-code front end ([`gcode`] syntax, [`interp`] semantics), the [`motion`]
 //! planner, the [`sim`] loop, [`report`]s, Rerun [`record`]ings and [`progress`] bars. Knowledge side: the `vmc-predict` crate, re-exported
 //! as [`predict`]; it does not depend on this crate (the information boundary, docs/architecture.md).
+pub use vmc_dynamics as dynamics;
 pub use vmc_predict as predict;
 
 pub mod benchmark;
@@ -20,6 +21,7 @@ pub mod instruments;
 pub mod interp;
 pub mod kinematics;
 pub mod machine;
+pub mod milling;
 pub mod motion;
 pub mod placement;
 pub mod program;

@@ -522,3 +522,66 @@ fn an_arc_without_centre_or_radius_names_the_line_and_column() {
         ],
     );
 }
+
+#[test]
+fn lobes_writes_the_csv_of_its_table_and_refuses_bad_input_in_one_line() {
+    let tmp = TempDir::new("lobes");
+    let o = vmc(
+        tmp.path(),
+        &[
+            "lobes",
+            "--method",
+            "zoa",
+            "--rpm",
+            "5000:15000:11",
+            "--out",
+            "l.csv",
+        ],
+    );
+    assert_success(&o, "lobes");
+    let out = stdout(&o);
+    assert!(out.contains("minimum critical depth"), "{out}");
+    let csv = std::fs::read_to_string(tmp.path().join("l.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        rows[0],
+        "spindle_rpm,critical_depth_mm,chatter_frequency_hz,kind"
+    );
+    assert_eq!(rows.len(), 12, "{csv}");
+    // The printed minimum is the smallest depth of the file.
+    let min = rows[1..]
+        .iter()
+        .map(|r| r.split(',').nth(1).unwrap().parse::<f64>().unwrap())
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        out.contains(&format!("minimum critical depth {min:.3} mm")),
+        "{out}\n{csv}"
+    );
+    // The file is not overwritten without --force.
+    let again = vmc(tmp.path(), &["lobes", "--rpm", "5000", "--out", "l.csv"]);
+    assert!(!again.status.success());
+    assert!(stderr(&again).contains("--force"), "{}", stderr(&again));
+    std::fs::write(tmp.path().join("bad.toml"), "[tool]\nteeth = 0\ndiameter_mm = 10\nkt_n_per_m2 = 1e8\nkn_n_per_m2 = 1e8\n[[modes.x]]\nfrequency_hz = 900\ndamping_ratio = 0.01\nstiffness_n_per_m = 1e6\n").unwrap();
+    for (args, want) in [
+        (
+            &["lobes", "--immersion", "0"][..],
+            "--immersion: immersion a_e/D must be in (0, 1], got 0",
+        ),
+        (
+            &["lobes", "--rpm", "0"][..],
+            "--rpm: a spindle speed must be > 0 rpm, got 0",
+        ),
+        (
+            &["lobes", "--tool", "bad.toml"][..],
+            "bad.toml: the tool has no teeth",
+        ),
+    ] {
+        let o = vmc(tmp.path(), args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert_eq!(
+            stderr(&o).trim(),
+            format!("vmc-twin: error: {want}"),
+            "{args:?}"
+        );
+    }
+}

@@ -57,6 +57,10 @@ pub enum Command {
     /// Would this program crash the machine? Checks every move for travel limits and for
     /// contact of tool, holder and spindle nose with the table, fixture and stock.
     Check(CheckArgs),
+    /// Stability lobes of a tool: the critical axial depth of cut against spindle speed, for a
+    /// radial immersion and up or down milling (semi-discretisation, zero-order analytic or
+    /// time-domain simulation).
+    Lobes(LobesArgs),
     /// Measure the speed figures (compensation query, 8 h of machine time, campaign) and how
     /// they scale with the interpolation cycle and the number of calibration cycles.
     Bench(BenchArgs),
@@ -486,6 +490,92 @@ impl CheckArgs {
             fixture: self.fixture,
             rrd: self.rrd,
             force: self.force,
+        })
+    }
+}
+
+/// Stability method of `lobes --method`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum MethodArg {
+    /// First-order semi-discretisation (Insperger–Stépán).
+    Sdm,
+    /// Zero-order analytic solution (Altintas–Budak).
+    Zoa,
+    /// Time-domain cutting simulation with bisection on the depth.
+    Time,
+}
+
+/// Milling direction of `lobes --milling`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum MillingArg {
+    /// Up (conventional) milling.
+    Up,
+    /// Down (climb) milling.
+    Down,
+}
+
+/// Arguments of `lobes`.
+#[derive(clap::Args)]
+pub struct LobesArgs {
+    /// Tool file (TOML: teeth, diameter, cutting coefficients, tool-tip modes); default: the
+    /// one-degree-of-freedom benchmark of the field (machines/benchmarks/insperger-1dof.toml).
+    #[arg(long)]
+    pub tool: Option<PathBuf>,
+    /// Stability method.
+    #[arg(long, value_enum, default_value = "sdm")]
+    pub method: MethodArg,
+    /// Radial immersion a_e/D, in (0, 1] (1 = slotting).
+    #[arg(long, default_value_t = 1.0)]
+    pub immersion: f64,
+    /// Milling direction.
+    #[arg(long, value_enum, default_value = "down")]
+    pub milling: MillingArg,
+    /// Spindle speeds, rpm: first:last:count (e.g. 5000:25000:201) or a comma-separated list.
+    #[arg(long, default_value = "5000:25000:201")]
+    pub rpm: String,
+    /// Write the lobes as CSV (spindle_rpm, critical_depth_mm, chatter_frequency_hz, kind).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub force: ForceArg,
+}
+
+impl LobesArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid tool file, an immersion outside (0, 1], malformed speeds.
+    pub fn config(self) -> Result<commands::lobes::LobesConfig> {
+        let (tool, tool_source) = match &self.tool {
+            Some(path) => (
+                crate::milling::ToolDynamics::load(path)?,
+                path.display().to_string(),
+            ),
+            None => (
+                crate::milling::ToolDynamics::benchmark(),
+                crate::milling::DEFAULT_TOOL_PATH.to_string(),
+            ),
+        };
+        crate::dynamics::params::validate_immersion(self.immersion)
+            .map_err(|e| anyhow::anyhow!("--immersion: {e}"))?;
+        let speeds_rpm =
+            crate::milling::parse_speeds(&self.rpm).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?;
+        Ok(commands::lobes::LobesConfig {
+            tool,
+            tool_source,
+            method: match self.method {
+                MethodArg::Sdm => crate::dynamics::Method::Sdm,
+                MethodArg::Zoa => crate::dynamics::Method::Zoa,
+                MethodArg::Time => crate::dynamics::Method::Time,
+            },
+            immersion: self.immersion,
+            milling: match self.milling {
+                MillingArg::Up => crate::dynamics::Milling::Up,
+                MillingArg::Down => crate::dynamics::Milling::Down,
+            },
+            speeds_rpm,
+            out: self.out,
+            force: self.force.force,
         })
     }
 }
