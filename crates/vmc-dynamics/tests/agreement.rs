@@ -14,6 +14,15 @@ fn benchmark_mode() -> Mode {
     Mode::from_mass(922.0, 0.011, 0.03993)
 }
 
+/// The SDM boundary at `rpm`, searched up to 20 mm to 1e-4 mm.
+fn limit_at(sdm: &MillingSdm, rpm: f64) -> LobePoint {
+    sdm.at_speed(rpm)
+        .unwrap()
+        .critical_depth(None, 20.0, 1e-4)
+        .unwrap()
+        .unwrap()
+}
+
 fn benchmark_modes() -> TipModes {
     TipModes::x_only(vec![benchmark_mode()])
 }
@@ -209,18 +218,8 @@ fn process_damping_stabilises() {
     let base = MillingSdm::new(&tool, &modes, 0.5, Milling::Down, SdmOptions::default()).unwrap();
     tool.process_damping_n_per_m = 1e5;
     let damped = MillingSdm::new(&tool, &modes, 0.5, Milling::Down, SdmOptions::default()).unwrap();
-    let a0 = base
-        .at_speed(3000.0)
-        .unwrap()
-        .critical_depth(None, 20.0, 1e-4)
-        .unwrap()
-        .unwrap();
-    let a1 = damped
-        .at_speed(3000.0)
-        .unwrap()
-        .critical_depth(None, 20.0, 1e-4)
-        .unwrap()
-        .unwrap();
+    let a0 = limit_at(&base, 3000.0);
+    let a1 = limit_at(&damped, 3000.0);
     assert!(
         a1.critical_depth_mm > 1.05 * a0.critical_depth_mm,
         "{a0:?} {a1:?}"
@@ -236,12 +235,7 @@ fn process_simulation_settles_when_stable() {
     tool.kne_n_per_m = 1e4;
     let td = TimeDomain::new(&tool, &modes, 0.5, Milling::Down, TimeOptions::default()).unwrap();
     let sdm = MillingSdm::new(&tool, &modes, 0.5, Milling::Down, SdmOptions::default()).unwrap();
-    let limit = sdm
-        .at_speed(9000.0)
-        .unwrap()
-        .critical_depth(None, 20.0, 1e-4)
-        .unwrap()
-        .unwrap();
+    let limit = limit_at(&sdm, 9000.0);
     let sim = td
         .simulate(
             9000.0,

@@ -642,15 +642,20 @@ mod tests {
         read_csv(&text, "lagged.csv", &req).unwrap()
     }
 
-    fn fit_lagged(arch: Architecture, taus: Vec<f64>) -> ThermalModel {
-        let table = lagged_table();
-        let split = Split::resolve(
+    /// The split of a table by its `spindle_rpm` cycles: the last one held out.
+    fn cycle_split(table: &Table) -> Split {
+        Split::resolve(
             &table.time_s,
             None,
             Some(("spindle_rpm", table.column("spindle_rpm").unwrap())),
             0.25,
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    fn fit_lagged(arch: Architecture, taus: Vec<f64>) -> ThermalModel {
+        let table = lagged_table();
+        let split = cycle_split(&table);
         let settings = FitSettings {
             architecture: arch,
             features: FeatureSpec {
@@ -719,13 +724,7 @@ mod tests {
         // A last cycle whose drift carries an offset the earlier cycles never show: only a model
         // fitted on every row can know it.
         let table = lagged_table_with(4.0);
-        let split = Split::resolve(
-            &table.time_s,
-            None,
-            Some(("spindle_rpm", table.column("spindle_rpm").unwrap())),
-            0.25,
-        )
-        .unwrap();
+        let split = cycle_split(&table);
         let fit_with = |refit_all| {
             let settings = FitSettings {
                 architecture: Architecture::Linear,
