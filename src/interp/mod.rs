@@ -31,11 +31,17 @@
 mod arc;
 mod decode;
 mod exec;
+mod expr;
+mod flow;
+#[cfg(test)]
+mod flow_tests;
 #[cfg(test)]
 mod tests;
 
 pub use crate::gcode::{GcodeError, GcodeErrorKind};
 pub use exec::Interpreter;
+pub use expr::NUM_PARAMS;
+pub use flow::{MAX_CALL_DEPTH, MAX_ITERATIONS};
 
 /// Largest P (turn count) accepted on G2/G3: guards against programs that would expand to
 /// absurd paths (and hangs downstream).
@@ -49,6 +55,9 @@ pub struct InterpConfig {
     pub start_mm: [f64; 3],
     /// Work offsets G54…G59 (index 0…5) in machine coordinates, mm (default: all zero).
     pub work_offsets_mm: [[f64; 3]; 6],
+    /// Block delete switch: when on, lines starting with `/` are skipped (default: off, as
+    /// LinuxCNC starts).
+    pub block_delete: bool,
 }
 
 impl Default for InterpConfig {
@@ -56,6 +65,7 @@ impl Default for InterpConfig {
         Self {
             start_mm: [0.0; 3],
             work_offsets_mm: [[0.0; 3]; 6],
+            block_delete: false,
         }
     }
 }
@@ -75,15 +85,7 @@ impl Default for InterpConfig {
 /// # Ok::<(), vmc_twin::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
-    let mut interp = Interpreter::new(cfg.clone());
-    let mut out = Vec::new();
-    for block in crate::gcode::parse_program(src) {
-        interp.execute_block(&block?, &mut out)?;
-        if interp.is_ended() {
-            break;
-        }
-    }
-    Ok(out)
+    flow::run(src, cfg)
 }
 
 /// Active plane for arcs (G17 / G18 / G19).
@@ -138,6 +140,8 @@ pub enum CanonKind {
     ToolChange { tool: u32 },
     /// M2 / M30.
     ProgramEnd,
+    /// `(MSG, text)`: shown to the operator; no motion.
+    Message(String),
 }
 
 /// A canonical action with the source line (1-based) it came from.

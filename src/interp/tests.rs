@@ -318,7 +318,10 @@ fn preamble_codes_that_confirm_our_state_are_accepted() {
 fn a_failed_block_leaves_the_interpreter_unchanged() {
     let mut it = Interpreter::new(InterpConfig::default());
     let mut out = Vec::new();
-    let block = |s: &str| crate::gcode::parse_line(1, s).unwrap().unwrap();
+    let block = |s: &str| {
+        crate::gcode::Block::from_literal_line(&crate::gcode::parse_line(1, s).unwrap().unwrap())
+            .unwrap()
+    };
     it.execute_block(&block("G0 X1"), &mut out).unwrap();
     // S and G20 would execute before the arc geometry fails.
     assert!(it

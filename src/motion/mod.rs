@@ -466,6 +466,7 @@ impl PlanBuilder<'_> {
                 self.spindle_dir = dir;
                 self.spindle_rpm = if dir == SpindleDir::Off { 0.0 } else { rpm };
             }
+            CanonKind::Message(_) => {}
             CanonKind::ProgramEnd => {
                 self.spindle_dir = SpindleDir::Off;
                 self.spindle_rpm = 0.0;

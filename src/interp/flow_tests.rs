@@ -1,0 +1,116 @@
+//! Tests of parameters, expressions and O-word control flow (values checked against
+//! LinuxCNC's `rs274`).
+
+use super::*;
+
+fn xs(src: &str) -> Vec<f64> {
+    run_program(src, &InterpConfig::default())
+        .unwrap_or_else(|e| panic!("program rejected: {e}"))
+        .into_iter()
+        .filter_map(|m| match m.kind {
+            CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } => Some(end_mm[0]),
+            _ => None,
+        })
+        .collect()
+}
+
+fn err(src: &str) -> GcodeError {
+    run_program(src, &InterpConfig::default()).expect_err("program must be rejected")
+}
+
+#[test]
+fn settings_take_effect_after_the_line_is_read() {
+    assert_eq!(
+        xs("#1=2\n#1=1 G0 X#1\nG0 X#1\n#1=5 #2=#1\nG0 X#2"),
+        vec![2.0, 1.0, 1.0]
+    );
+}
+
+#[test]
+fn named_parameters_are_local_to_a_call_and_globals_are_shared() {
+    let src = "#<a>=1 #<_g>=2\no10 sub\n#<a>=7\n#<_g>=[#1+#2+#3]\no10 endsub\n\
+               o10 call [3] [4]\nG0 X#<a> Y#<_g>\nM2";
+    let moves = run_program(src, &InterpConfig::default()).unwrap();
+    assert_eq!(
+        moves[0].kind,
+        CanonKind::Traverse {
+            end_mm: [1.0, 7.0, 0.0]
+        }
+    );
+}
+
+#[test]
+fn call_arguments_are_restored_and_return_sets_value() {
+    let src = "#1=2 #3=1\no1 sub\n#3=77\no1 return [#1*10]\no1 endsub\n\
+               o1 call [11]\nG0 X#1 Y#3 Z#<_value>\nM2";
+    let moves = run_program(src, &InterpConfig::default()).unwrap();
+    assert_eq!(
+        moves[0].kind,
+        CanonKind::Traverse {
+            end_mm: [2.0, 1.0, 110.0]
+        }
+    );
+}
+
+#[test]
+fn if_elseif_else_take_one_branch() {
+    let prog = |v: i32| {
+        format!(
+            "#1={v}\no1 if [#1 EQ 1]\nG0 X1\no1 elseif [#1 EQ 2]\nG0 X2\no1 else\nG0 X3\n\
+             o1 endif\nG0 X9"
+        )
+    };
+    assert_eq!(xs(&prog(1)), vec![1.0, 9.0]);
+    assert_eq!(xs(&prog(2)), vec![2.0, 9.0]);
+    assert_eq!(xs(&prog(5)), vec![3.0, 9.0]);
+}
+
+#[test]
+fn loops_while_do_repeat_break_and_continue() {
+    let w = "#1=0\no1 while [#1 LT 3]\n#1=[#1+1]\no2 if [#1 EQ 2]\no1 continue\no2 endif\n\
+             G0 X#1\no1 endwhile";
+    assert_eq!(xs(w), vec![1.0, 3.0]);
+    let d = "#1=0\no1 do\n#1=[#1+1]\nG0 X#1\no2 if [#1 GE 2]\no1 break\no2 endif\no1 while [1]";
+    assert_eq!(xs(d), vec![1.0, 2.0]);
+    let r = "#1=0\no1 repeat [3]\n#1=[#1+1]\nG0 X#1\no1 endrepeat\nG0 X9";
+    assert_eq!(xs(r), vec![1.0, 2.0, 3.0, 9.0]);
+}
+
+#[test]
+fn endless_loops_and_recursion_are_refused_not_hung() {
+    let e = err("o1 while [1]\no1 endwhile");
+    assert!(e.is_unsupported() && e.line == 2, "{e}");
+    let e = err("o1 sub\no1 call\no1 endsub\no1 call");
+    assert!(e.is_unsupported(), "{e}");
+}
+
+#[test]
+fn structure_errors_are_invalid_with_their_line() {
+    for (src, line) in [
+        ("G0 X1\no1 endif", 2),
+        ("o1 if [1]\nG0 X1", 1),
+        ("o1 if [1]\no2 endif", 2),
+        ("o1 break", 1),
+        ("o5 call", 1),
+        ("G0 X#<nope>", 1),
+        ("o1 sub\no2 sub\no2 endsub\no1 endsub", 2),
+    ] {
+        let e = err(src);
+        assert_eq!(
+            (e.line, e.kind),
+            (line, GcodeErrorKind::Invalid),
+            "{src}: {e}"
+        );
+    }
+}
+
+#[test]
+fn block_delete_skips_only_when_switched_on() {
+    assert_eq!(xs("/G0 X5\nG0 X1"), vec![5.0, 1.0]);
+    let cfg = InterpConfig {
+        block_delete: true,
+        ..InterpConfig::default()
+    };
+    let moves = run_program("/G0 X5\nG0 X1", &cfg).unwrap();
+    assert_eq!(moves.len(), 1);
+}
