@@ -1,8 +1,9 @@
 //! The modal state machine: executes decoded blocks in RS274/NGC order (see the parent module).
 
 use super::arc::{arc_center, ArcError, ArcForm, MM_PER_INCH};
-use super::decode::{decode, Decoded, Distance, Motion, NonModal, Units};
-use super::{CanonKind, CanonMove, InterpConfig, Plane, SpindleDir, MAX_ARC_TURNS};
+use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, Units};
+use super::expr::Params;
+use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
 use crate::gcode::{Block, GcodeError, Word};
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
@@ -26,6 +27,12 @@ pub struct Interpreter {
     spindle_reported: (SpindleDir, f64),
     selected_tool: u32,
     ended: bool,
+    /// (mist, flood).
+    coolant: (bool, bool),
+    /// G92 offset as stored (G92.2 suspends the active one, G92.3 restores it from here), mm.
+    axis_offset_saved_mm: [f64; 3],
+    /// G28 and G30 positions, machine coordinates, mm.
+    homes_mm: [[f64; 3]; 2],
 }
 
 /// What the motion step of a block will do.
@@ -53,6 +60,9 @@ impl Interpreter {
             spindle_reported: (SpindleDir::Off, 0.0),
             selected_tool: 0,
             ended: false,
+            coolant: (false, false),
+            axis_offset_saved_mm: [0.0; 3],
+            homes_mm: [[0.0; 3]; 2],
         }
     }
 
@@ -61,11 +71,32 @@ impl Interpreter {
         self.pos_mm
     }
 
-    /// Copies the parameters the modal state reads (stored G28/G30 positions) in.
-    pub(super) fn sync_params_in(&mut self, _params: &super::expr::Params) {}
+    /// Reads the parameters that mirror the modal state (LinuxCNC's numbers, in mm): G28
+    /// position #5161–#5163, G30 #5181–#5183, stored G92 offset #5211–#5213, G54…G59
+    /// #5221–#5223 … #5321–#5323.
+    pub(super) fn sync_params_in(&mut self, params: &Params) {
+        for a in 0..3 {
+            self.homes_mm[0][a] = params.get(5161 + a);
+            self.homes_mm[1][a] = params.get(5181 + a);
+            self.axis_offset_saved_mm[a] = params.get(5211 + a);
+            for (i, offset) in self.cfg.work_offsets_mm.iter_mut().enumerate() {
+                offset[a] = params.get(5221 + 20 * i + a);
+            }
+        }
+    }
 
-    /// Copies the modal state that parameters mirror (stored G28/G30 positions) out.
-    pub(super) fn sync_params_out(&self, _params: &mut super::expr::Params) {}
+    /// Writes the parameters that mirror the modal state (see [`Self::sync_params_in`]).
+    pub(super) fn sync_params_out(&self, params: &mut Params) {
+        for a in 0..3 {
+            params.set(5161 + a, self.homes_mm[0][a]);
+            params.set(5181 + a, self.homes_mm[1][a]);
+            params.set(5211 + a, self.axis_offset_saved_mm[a]);
+            for (i, offset) in self.cfg.work_offsets_mm.iter().enumerate() {
+                params.set(5221 + 20 * i + a, offset[a]);
+            }
+        }
+        params.set(5220, (self.coord_index + 1) as f64);
+    }
 
     /// True once M2/M30 has run; later blocks are ignored.
     pub fn is_ended(&self) -> bool {
@@ -121,6 +152,17 @@ impl Interpreter {
             self.spindle.0 = dir;
         }
         self.report_spindle(&mut emit);
+        if d.coolant.iter().any(Option::is_some) {
+            if d.coolant[2].is_some() {
+                self.coolant = (false, false);
+            }
+            self.coolant.0 |= d.coolant[0].is_some();
+            self.coolant.1 |= d.coolant[1].is_some();
+            emit(CanonKind::Coolant {
+                mist: self.coolant.0,
+                flood: self.coolant.1,
+            });
+        }
         if let (Some((NonModal::Dwell, _)), Some(p)) = (d.non_modal, d.p) {
             emit(CanonKind::Dwell {
                 duration_s: p.value,
@@ -132,8 +174,35 @@ impl Interpreter {
         self.distance = d.distance.unwrap_or(self.distance);
         self.arc_distance = d.arc_distance.unwrap_or(self.arc_distance);
         match d.non_modal {
-            Some((NonModal::SetAxisOffsets, _)) => self.set_axis_offsets(&d),
-            Some((NonModal::ResetAxisOffsets, _)) => self.axis_offset_mm = [0.0; 3],
+            Some((NonModal::SetAxisOffsets, _)) => {
+                self.set_axis_offsets(&d);
+                self.axis_offset_saved_mm = self.axis_offset_mm;
+            }
+            Some((NonModal::ResetAxisOffsets, _)) => {
+                self.axis_offset_mm = [0.0; 3];
+                self.axis_offset_saved_mm = [0.0; 3];
+            }
+            Some((NonModal::SuspendAxisOffsets, _)) => self.axis_offset_mm = [0.0; 3],
+            Some((NonModal::RestoreAxisOffsets, _)) => {
+                self.axis_offset_mm = self.axis_offset_saved_mm;
+            }
+            Some((NonModal::SetHome(i), _)) => self.homes_mm[i] = self.pos_mm,
+            Some((NonModal::SetCoordData, _)) => self.set_coord_data(&d),
+            Some((NonModal::Home(i), _)) => {
+                // Through the intermediate point (current position where no axis is given),
+                // then to the stored position along the given axes (all if none is given).
+                let via = self.target_mm(&d, false);
+                emit(CanonKind::Traverse { end_mm: via });
+                let mut end_mm = via;
+                let all = !d.has_axis_words();
+                for ((end, home), word) in end_mm.iter_mut().zip(self.homes_mm[i]).zip(&d.axes) {
+                    if all || word.is_some() {
+                        *end = home;
+                    }
+                }
+                emit(CanonKind::Traverse { end_mm });
+                self.pos_mm = end_mm;
+            }
             _ => {}
         }
         if let Some((m, _)) = d.motion {
@@ -157,9 +226,15 @@ impl Interpreter {
                 emit(kind);
             }
         }
-        if d.stop.is_some() {
-            emit(CanonKind::ProgramEnd);
-            self.ended = true;
+        match d.stop {
+            Some((Stop::End, _)) => {
+                emit(CanonKind::ProgramEnd);
+                self.ended = true;
+            }
+            Some((Stop::Pause, _)) => emit(CanonKind::Pause(PauseKind::Program)),
+            Some((Stop::OptionalPause, _)) => emit(CanonKind::Pause(PauseKind::Optional)),
+            Some((Stop::PalletShuttle, _)) => emit(CanonKind::Pause(PauseKind::PalletShuttle)),
+            None => {}
         }
         Ok(())
     }
@@ -193,6 +268,24 @@ impl Interpreter {
             if let Some(w) = word {
                 let g5x = self.cfg.work_offsets_mm[self.coord_index][axis];
                 self.axis_offset_mm[axis] = self.pos_mm[axis] - g5x - w.value * self.scale();
+            }
+        }
+    }
+
+    /// G10 L2 (offsets given) / L20 (offsets such that the current point has the given
+    /// coordinates) for work offset P (0 = the active one). Values are absolute (G91 ignored).
+    fn set_coord_data(&mut self, d: &Decoded) {
+        let l20 = d.l.is_some_and(|l| l.value == 20.0);
+        let p = d.p.map_or(0, |p| p.value.round() as usize);
+        let index = if p == 0 { self.coord_index } else { p - 1 };
+        for (axis, word) in d.axes.iter().enumerate() {
+            if let Some(w) = word {
+                let v_mm = w.value * self.scale();
+                self.cfg.work_offsets_mm[index][axis] = if l20 {
+                    self.pos_mm[axis] - self.axis_offset_mm[axis] - v_mm
+                } else {
+                    v_mm
+                };
             }
         }
     }
@@ -288,8 +381,18 @@ impl Interpreter {
     /// circle).
     fn motion_step(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
         let explicit = d.motion.map(|m| m.0);
-        if let Some((NonModal::SetAxisOffsets, col)) = d.non_modal {
-            if !d.has_axis_words() {
+        if let Some((
+            nm @ (NonModal::SetAxisOffsets | NonModal::Home(_) | NonModal::SetCoordData),
+            col,
+        )) = d.non_modal
+        {
+            let name = match nm {
+                NonModal::SetAxisOffsets => "G92",
+                NonModal::Home(0) => "G28",
+                NonModal::Home(_) => "G30",
+                _ => "G10",
+            };
+            if !d.has_axis_words() && nm == NonModal::SetAxisOffsets {
                 return Err(GcodeError::invalid(
                     block.line,
                     col,
@@ -297,7 +400,7 @@ impl Interpreter {
                 ));
             }
             if let Some((m, mcol)) = d.motion.filter(|m| m.0 != Motion::Cancel) {
-                let msg = format!("G92 and {} both use the axis words", motion_name(m));
+                let msg = format!("{name} and {} both use the axis words", motion_name(m));
                 return Err(GcodeError::invalid(block.line, mcol, msg));
             }
             return Ok(MotionStep::None);
@@ -332,11 +435,39 @@ impl Interpreter {
         let line = block.line;
         let inv = |w: &Word, msg: &str| GcodeError::invalid(line, w.col, msg);
         let arc_move = matches!(step, MotionStep::Move(Motion::Arc { .. }));
-        if let Some(w) = d.first_arc_word().filter(|_| !arc_move) {
+        let g10 = d.non_modal.filter(|n| n.0 == NonModal::SetCoordData);
+        if let (Some(r), Some(_)) = (d.r, d.path_control.filter(|c| c.0 == 640)) {
+            return Err(GcodeError::unsupported(
+                line,
+                r.col,
+                "G64 R (planner option) is not supported",
+            ));
+        }
+        let g10_r = |w: &Word| g10.is_some() && w.letter == 'R';
+        if let Some(w) = d.first_arc_word().filter(|w| !arc_move && !g10_r(w)) {
             return Err(inv(
                 &w,
                 &format!("{} word without G2/G3 to use it", w.letter),
             ));
+        }
+        let g64 = d.path_control.filter(|c| c.0 == 640);
+        if let Some(l) = d.l.filter(|_| g10.is_none()) {
+            return Err(inv(&l, "L word without G10 to use it"));
+        }
+        if let Some(q) = d.q.filter(|_| g64.is_none()) {
+            return Err(inv(&q, "Q word without G64 to use it"));
+        }
+        if let Some((_, col)) = g10 {
+            return self.check_g10(line, col, d);
+        }
+        if let (Some(p), Some(_)) = (d.p, g64) {
+            if p.value < 0.0 {
+                return Err(inv(&p, "G64 P tolerance must not be negative"));
+            }
+            return Ok(());
+        }
+        if let Some(q) = d.q.filter(|q| q.value < 0.0) {
+            return Err(inv(&q, "G64 Q tolerance must not be negative"));
         }
         let dwell = d.non_modal.filter(|n| n.0 == NonModal::Dwell);
         match (d.p, dwell, arc_move) {
@@ -366,6 +497,64 @@ impl Interpreter {
                     "G53 cannot be used in G91 incremental mode",
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// G10 needs L2 or L20 and P0…P6 (P7–P9, G59.1–G59.3, are not supported).
+    fn check_g10(&self, line: usize, col: usize, d: &Decoded) -> Result<(), GcodeError> {
+        let l = match d.l {
+            Some(l) if l.value == 2.0 || l.value == 20.0 => l,
+            Some(l) if [1.0, 10.0, 11.0].contains(&l.value) => {
+                let msg = format!("G10 L{} (tool table) is not supported", l.value);
+                return Err(GcodeError::unsupported(line, l.col, msg));
+            }
+            Some(l) => {
+                let msg = format!("G10 L{} is not a valid G10 form (L2 or L20)", l.value);
+                return Err(GcodeError::invalid(line, l.col, msg));
+            }
+            None => {
+                return Err(GcodeError::invalid(
+                    line,
+                    col,
+                    "G10 needs an L word (L2 or L20)",
+                ))
+            }
+        };
+        let Some(p) = d.p else {
+            return Err(GcodeError::invalid(
+                line,
+                col,
+                "G10 needs a P word (coordinate system 0-9)",
+            ));
+        };
+        if p.value.fract() != 0.0 || !(0.0..=9.0).contains(&p.value) {
+            let msg = format!(
+                "G10 L{} P{}: P must be a coordinate system 0-9",
+                l.value, p.value
+            );
+            return Err(GcodeError::invalid(line, p.col, msg));
+        }
+        if p.value > 6.0 {
+            let msg = format!(
+                "G10 P{} (extra coordinate system) is not supported",
+                p.value
+            );
+            return Err(GcodeError::unsupported(line, p.col, msg));
+        }
+        if let Some(w) = d.r.filter(|r| r.value != 0.0) {
+            return Err(GcodeError::unsupported(
+                line,
+                w.col,
+                "G10 R (coordinate system rotation) is not supported",
+            ));
+        }
+        if let Some(w) = d.ijk.iter().flatten().next() {
+            return Err(GcodeError::invalid(
+                line,
+                w.col,
+                format!("{} word with G10", w.letter),
+            ));
         }
         Ok(())
     }

@@ -1,6 +1,8 @@
 //! Parameters and the evaluation of values (LinuxCNC semantics).
 //!
-//! - Numbered parameters `#1…#5399` start at 0 and always exist; other numbers are refused.
+//! - Numbered parameters `#1…#5601` start at 0 and always exist; other numbers are refused.
+//!   Those that mirror the modal state (stored G28/G30 positions, G92 offset, G54…G59 work
+//!   offsets, in mm) are kept in step with it.
 //!   `#1…#30` are saved on a subroutine call, set from the call's arguments (0 when missing)
 //!   and restored on return.
 //! - Named parameters: `#<_name>` is global, `#<name>` local to the subroutine call (or the
@@ -14,8 +16,8 @@ use std::collections::HashMap;
 
 use crate::gcode::{BinOp, Expr, Func, GcodeError, Param};
 
-/// Number of numbered parameters (`#0…#5399`; `#0` reads 0 and cannot be set).
-pub const NUM_PARAMS: usize = 5400;
+/// Number of numbered parameters (`#0…#5601`, LinuxCNC's; `#0` reads 0 and cannot be set).
+pub const NUM_PARAMS: usize = 5602;
 /// Numbered parameters local to a subroutine call (`#1…#30`).
 pub(super) const CALL_PARAMS: usize = 30;
 /// Tolerance of `EQ` and `NE`.
@@ -63,7 +65,6 @@ impl Params {
     }
 
     /// Numbered parameter `n` (range already checked).
-    #[cfg(test)]
     pub fn get(&self, n: usize) -> f64 {
         self.numbered[n]
     }

@@ -64,6 +64,7 @@ pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, Gcode
         iterations: 0,
         block_delete: cfg.block_delete,
     };
+    runner.interp.sync_params_out(&mut runner.params);
     let mut out = Vec::new();
     let mut pc = 0;
     while pc < prog.lines.len() {

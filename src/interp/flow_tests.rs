@@ -114,3 +114,87 @@ fn block_delete_skips_only_when_switched_on() {
     let moves = run_program("/G0 X5\nG0 X1", &cfg).unwrap();
     assert_eq!(moves.len(), 1);
 }
+
+fn kinds(src: &str) -> Vec<CanonKind> {
+    run_program(src, &InterpConfig::default())
+        .unwrap_or_else(|e| panic!("program rejected: {e}"))
+        .into_iter()
+        .map(|m| m.kind)
+        .collect()
+}
+
+#[test]
+fn g28_goes_through_the_intermediate_point_to_the_stored_position() {
+    let k = kinds("G0 X5 Y5 Z5\n#5161=1 #5162=2 #5163=3\nG28 Z7\nG28\nG0 X4\nG30.1\nG0 X9\nG30");
+    let t = |x, y, z| CanonKind::Traverse { end_mm: [x, y, z] };
+    assert_eq!(
+        k,
+        vec![
+            t(5.0, 5.0, 5.0),
+            t(5.0, 5.0, 7.0),
+            t(5.0, 5.0, 3.0),
+            t(5.0, 5.0, 3.0),
+            t(1.0, 2.0, 3.0),
+            t(4.0, 2.0, 3.0),
+            t(9.0, 2.0, 3.0),
+            t(9.0, 2.0, 3.0),
+            t(4.0, 2.0, 3.0),
+        ]
+    );
+}
+
+#[test]
+fn g92_2_suspends_and_g92_3_restores_the_offset() {
+    assert_eq!(
+        xs("G0 X4\nG92 X1\nG0 X0\nG92.2\nG0 X0\nG92.3\nG0 X0\nG92.1\nG0 X0"),
+        vec![4.0, 3.0, 0.0, 3.0, 0.0]
+    );
+}
+
+#[test]
+fn g10_l2_and_l20_set_work_offsets() {
+    assert_eq!(
+        xs("G10 L2 P1 X10\nG0 X0\nG10 L2 P2 X20\nG55 G0 X1"),
+        vec![10.0, 21.0]
+    );
+    assert_eq!(
+        xs("G0 X7\nG10 L20 P0 X2\nG0 X0\nG0 X2 (reads #5221)\nG0 X#5221"),
+        vec![7.0, 5.0, 7.0, 10.0]
+    );
+    for src in [
+        "G10 P1 X1",
+        "G10 L2 X1",
+        "G10 L3 P1 X1",
+        "G10 L2 P1.5 X1",
+        "G1 L2 X1 F1",
+        "G0 Q1 X1",
+    ] {
+        assert_eq!(err(src).kind, GcodeErrorKind::Invalid, "{src}");
+    }
+    assert!(err("G10 L2 P7 X1").is_unsupported());
+}
+
+#[test]
+fn coolant_pauses_and_path_control_make_no_motion() {
+    assert_eq!(
+        kinds("M8\nM7\nM9\nM0\nM1\nM60\nG64 P0.1 Q0.1\nG61\nG61.1"),
+        vec![
+            CanonKind::Coolant {
+                mist: false,
+                flood: true
+            },
+            CanonKind::Coolant {
+                mist: true,
+                flood: true
+            },
+            CanonKind::Coolant {
+                mist: false,
+                flood: false
+            },
+            CanonKind::Pause(PauseKind::Program),
+            CanonKind::Pause(PauseKind::Optional),
+            CanonKind::Pause(PauseKind::PalletShuttle),
+        ]
+    );
+    assert_eq!(err("M8 M7").kind, GcodeErrorKind::Invalid);
+}

@@ -12,20 +12,32 @@
 //! machine position). An F word is read in the units active when it is executed (RS274/NGC
 //! order: before this block's G20/G21) and stored in mm/min.
 //!
-//! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, G4, G17–G19,
-//! G20/G21, G54–G59, G90/G91, G90.1/G91.1, G92/G92.1, motion (G0–G3, G53), M2/M30.
+//! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, M7/M8/M9, G4,
+//! G17–G19, G20/G21, G54–G59, G61/G61.1/G64, G90/G91, G90.1/G91.1, G10/G28/G30/G28.1/G30.1/
+//! G92/G92.1/G92.2/G92.3, motion (G0–G3, G53), M0/M1/M60/M2/M30.
 //! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
 //! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
 //! |value| ≤ 1e9 so that all results stay finite.
+//!
+//! Parameters, expressions and O-word control flow: see `expr` and `flow`. Values are
+//! evaluated, and parameter settings applied, before the block executes.
 //!
 //! Spindle: one [`CanonKind::Spindle`] is emitted per block when the (direction, speed) pair
 //! differs from the one last emitted (an S word alone while stopped is reported with `Off`).
 //! M6 stops a running spindle first (a `Spindle { dir: Off, .. }` before the `ToolChange`); the
 //! program must restart it with M3/M4.
 //!
-//! Also accepted, because they only confirm the state we are always in: G40 (cutter
-//! compensation off), G49 (tool length offset off), G80 (cancel motion mode), G94 (feed per
-//! minute). Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
+//! Also accepted:
+//! - G28/G30: rapid to the intermediate point (the axis words, in the current modes), then to
+//!   the stored position (#5161… / #5181…, set by G28.1/G30.1, default 0) along the given
+//!   axes, all axes if none is given. G10 L2/L20 P0…P6 set work offsets (R0 only).
+//! - M7/M8/M9 ([`CanonKind::Coolant`]), M0/M1/M60 ([`CanonKind::Pause`]): no motion.
+//! - G61, G61.1, G64 (P, Q): accepted; the planner stops exactly at the end of every move
+//!   whatever the mode, so they change nothing.
+//! - G40 (cutter compensation off), G49 (tool length offset off), G80 (cancel motion mode),
+//!   G94 (feed per minute), because they only confirm the state we are always in.
+//!
+//! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
 
 mod arc;
@@ -142,6 +154,21 @@ pub enum CanonKind {
     ProgramEnd,
     /// `(MSG, text)`: shown to the operator; no motion.
     Message(String),
+    /// M7 / M8 / M9: the coolant state after the command.
+    Coolant { mist: bool, flood: bool },
+    /// M0 / M1 / M60: the program waits for the operator (no motion, no machine time).
+    Pause(PauseKind),
+}
+
+/// Why a program pauses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PauseKind {
+    /// M0.
+    Program,
+    /// M1 (only if the optional-stop switch is on).
+    Optional,
+    /// M60: pallet shuttle, then pause.
+    PalletShuttle,
 }
 
 /// A canonical action with the source line (1-based) it came from.

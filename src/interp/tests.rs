@@ -476,8 +476,14 @@ const ERROR_CASES: &[(&str, usize, usize, GcodeErrorKind, &str)] = &[
         "G43 (tool length offset)",
     ),
     ("G1 G0 X1", 1, 4, GcodeErrorKind::Invalid, "G1 and G0"),
-    ("M8", 1, 1, GcodeErrorKind::Unsupported, "M8 (coolant)"),
-    ("G64 P0.01", 1, 1, GcodeErrorKind::Unsupported, "G64"),
+    (
+        "M19",
+        1,
+        1,
+        GcodeErrorKind::Unsupported,
+        "M19 (spindle orientation)",
+    ),
+    ("G81 X1 Z-1 R1", 1, 1, GcodeErrorKind::Unsupported, "G81"),
     ("G0 X1e3", 1, 6, GcodeErrorKind::Unsupported, "E word"),
     (
         "G0 Y12345678901",
