@@ -37,6 +37,7 @@ fn run(command: Command) -> Result<()> {
             commands::select_sensors::select_sensors(&args.config()?, out)
         }
         Command::Check(args) => commands::check::check(&args.config()?, out),
+        Command::Interpret(args) => commands::interpret::interpret(&args.config()?, out),
         Command::Bench(args) => commands::bench::bench(&args.config()?, out),
     }
 }

@@ -57,6 +57,9 @@ pub enum Command {
     /// Would this program crash the machine? Checks every move for travel limits and for
     /// contact of tool, holder and spindle nose with the table, fixture and stock.
     Check(CheckArgs),
+    /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
+    /// `rs274`, to compare with a controller.
+    Interpret(InterpretArgs),
     /// Measure the speed figures (compensation query, 8 h of machine time, campaign) and how
     /// they scale with the interpolation cycle and the number of calibration cycles.
     Bench(BenchArgs),
@@ -486,6 +489,36 @@ impl CheckArgs {
             fixture: self.fixture,
             rrd: self.rrd,
             force: self.force,
+        })
+    }
+}
+
+/// Arguments of `interpret`.
+#[derive(clap::Args)]
+pub struct InterpretArgs {
+    /// G-code program to interpret.
+    pub program: PathBuf,
+    /// Machine description (TOML) whose home position and work offsets G54…G59 to use;
+    /// default: start at the origin with zero work offsets, as `rs274` does.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+}
+
+impl InterpretArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine.
+    pub fn config(self) -> Result<commands::interpret::InterpretConfig> {
+        let mut interp = crate::interp::InterpConfig::default();
+        if let Some(path) = &self.machine {
+            let machine = commands::load_machine(Some(path), None)?;
+            interp.start_mm = machine.axes.home_mm;
+            interp.work_offsets_mm = machine.axes.work_offsets_mm;
+        }
+        Ok(commands::interpret::InterpretConfig {
+            program: self.program,
+            interp,
         })
     }
 }

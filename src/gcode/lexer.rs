@@ -148,9 +148,7 @@ impl Lexer<'_> {
         if lower.starts_with("abort,") {
             return Err(self.unsupported(open, "'(abort, ...)' comment is not supported"));
         }
-        Ok(lower
-            .starts_with("msg,")
-            .then(|| trimmed[4..].trim().to_string()))
+        Ok(lower.starts_with("msg,").then(|| trimmed[4..].to_string()))
     }
 
     /// Reads a letter and its value. The cursor is on the letter.
@@ -429,7 +427,7 @@ mod tests {
             l.words[2].value,
             Expr::Neg(Box::new(Expr::Func(Func::Sin, Box::new(Expr::Num(30.0)))))
         );
-        assert_eq!(l.messages, vec!["hi".to_string()]);
+        assert_eq!(l.messages, vec![" hi".to_string()]);
         let o = parse_line(1, "O<My Sub> call [1] [#<_a>]")
             .unwrap()
             .unwrap();
