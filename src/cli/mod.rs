@@ -502,15 +502,22 @@ pub struct InterpretArgs {
     /// default: start at the origin with zero work offsets, as `rs274` does.
     #[arg(long)]
     pub machine: Option<PathBuf>,
+    /// Tool table (TOML, `[[tool]]` with `number`, `length_mm`, `diameter_mm`) for G43 H;
+    /// default: every tool has length 0.
+    #[arg(long)]
+    pub tools: Option<PathBuf>,
 }
 
 impl InterpretArgs {
     /// The validated config.
     ///
     /// # Errors
-    /// An unreadable or invalid machine.
+    /// An unreadable or invalid machine or tool table.
     pub fn config(self) -> Result<commands::interpret::InterpretConfig> {
         let mut interp = crate::interp::InterpConfig::default();
+        if let Some(path) = &self.tools {
+            interp.tool_lengths_mm = commands::interpret::load_tool_lengths(path)?;
+        }
         if let Some(path) = &self.machine {
             let machine = commands::load_machine(Some(path), None)?;
             interp.start_mm = machine.axes.home_mm;

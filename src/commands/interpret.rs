@@ -23,6 +23,53 @@ pub struct InterpretConfig {
     pub interp: InterpConfig,
 }
 
+/// One tool of a tool table file.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolEntry {
+    number: u32,
+    length_mm: f64,
+    diameter_mm: f64,
+}
+
+/// The tool table file: `[[tool]]` entries with `number`, `length_mm`, `diameter_mm`.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolTable {
+    tool: Vec<ToolEntry>,
+}
+
+/// Reads a tool table (TOML, see `docs/usage.md`) as (tool number, length in mm) pairs.
+///
+/// # Errors
+/// An unreadable file, bad TOML, a tool given twice, a length or diameter that is not finite
+/// (or a negative diameter).
+pub fn load_tool_lengths(path: &std::path::Path) -> Result<Vec<(u32, f64)>> {
+    let file = path.display().to_string();
+    let text = crate::files::read_text(path).with_context(|| file.clone())?;
+    let table: ToolTable = toml::from_str(&text).with_context(|| file.clone())?;
+    let mut out: Vec<(u32, f64)> = Vec::new();
+    for t in &table.tool {
+        if out.iter().any(|o| o.0 == t.number) {
+            anyhow::bail!("{file}: tool {} appears twice", t.number);
+        }
+        if !t.length_mm.is_finite() || t.length_mm.abs() > 1e4 {
+            anyhow::bail!(
+                "{file}: tool {}: length_mm must be finite within ±10000 mm",
+                t.number
+            );
+        }
+        if !(t.diameter_mm.is_finite() && t.diameter_mm >= 0.0) {
+            anyhow::bail!(
+                "{file}: tool {}: diameter_mm must be a finite number >= 0",
+                t.number
+            );
+        }
+        out.push((t.number, t.length_mm));
+    }
+    Ok(out)
+}
+
 /// Interprets the program and prints its canonical calls.
 ///
 /// # Errors

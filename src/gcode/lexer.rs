@@ -6,7 +6,7 @@ use super::expr::{Assign, ExprWord, Line, OKind, OName, OWord};
 use super::GcodeError;
 
 /// Letters whose words the interpreter understands.
-const SUPPORTED_LETTERS: &str = "FGIJKLMNPQRSTXYZ";
+const SUPPORTED_LETTERS: &str = "FGHIJKLMNPQRSTXYZ";
 
 /// Parses one line (1-based `line`). `Ok(None)` for a line that does nothing (blank, plain
 /// comments only, or a lone N word).
@@ -185,13 +185,16 @@ impl Lexer<'_> {
         };
         self.skip_blanks();
         let kw_start = self.pos;
-        while matches!(self.peek(), Some(c) if c.is_ascii_alphabetic()) {
+        // Blanks may split a keyword (`end sub`, `else if`), as everywhere outside comments.
+        let mut keyword = String::new();
+        while let Some(c) = self.peek() {
+            if c.is_ascii_alphabetic() {
+                keyword.push(c.to_ascii_lowercase());
+            } else if !c.is_whitespace() {
+                break;
+            }
             self.pos += 1;
         }
-        let keyword: String = self.chars[kw_start..self.pos]
-            .iter()
-            .collect::<String>()
-            .to_ascii_lowercase();
         let kind = match keyword.as_str() {
             "sub" => OKind::Sub,
             "endsub" => OKind::EndSub,
@@ -317,7 +320,7 @@ fn unsupported_letter_msg(letter: char) -> String {
         'A' | 'B' | 'C' | 'U' | 'V' | 'W' => {
             format!("{letter} axis word is not supported (3-axis XYZ machine)")
         }
-        'D' | 'E' | 'H' => format!("{letter} word is not supported"),
+        'D' | 'E' => format!("{letter} word is not supported"),
         _ => format!("unknown word letter '{letter}'"),
     }
 }
@@ -469,7 +472,6 @@ mod tests {
         for (text, col) in [
             ("o100", 1),
             ("G0 A1", 4),
-            ("G43 H1", 5),
             ("G1 @1 ^90", 4),
             ("(abort, stop)", 1),
         ] {

@@ -22,7 +22,7 @@
 //! - Columns are 1-based character (not byte) positions in the line.
 //!
 //! Rejected with [`GcodeErrorKind::Unsupported`] (valid LinuxCNC we do not implement):
-//! polar words `@ ^`, axis words `A B C U V W`, words `D E H L Q`, O-words with a computed
+//! polar words `@ ^`, axis words `A B C U V W`, words `D E`, O-words with a computed
 //! number, Fanuc-style `O` program numbers, and the `(abort, …)` comment. Everything else that
 //! cannot be read is [`GcodeErrorKind::Invalid`].
 //!

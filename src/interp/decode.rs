@@ -54,6 +54,17 @@ pub(super) enum Stop {
     End,
 }
 
+/// Group 8: tool length offset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum ToolLength {
+    /// G43: from the tool table.
+    Table,
+    /// G43.1: the Z word is the length.
+    Given,
+    /// G49: off.
+    Off,
+}
+
 /// Group 6: length units.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Units {
@@ -81,6 +92,7 @@ enum GAction {
     Distance(Distance),
     ArcDistance(Distance),
     CoordSystem(usize),
+    ToolLength(ToolLength),
     /// G40, G49, G94: cancel a mode we never have on (state already as commanded).
     Nothing,
     /// G61 / G61.1 / G64: path control (the planner stops exactly at every move's end).
@@ -97,6 +109,7 @@ pub(super) struct Decoded {
     pub distance: Option<Distance>,
     pub arc_distance: Option<Distance>,
     pub coord_system: Option<usize>,
+    pub tool_length: Option<(ToolLength, usize)>,
     /// M0, M1, M60, M2, M30 and the column.
     pub stop: Option<(Stop, usize)>,
     /// Path control code (G61, G61.1, G64) column.
@@ -115,6 +128,7 @@ pub(super) struct Decoded {
     pub f: Option<Word>,
     pub s: Option<Word>,
     pub t: Option<Word>,
+    pub h: Option<Word>,
     pub l: Option<Word>,
     pub q: Option<Word>,
 }
@@ -170,6 +184,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     GAction::Distance(x) => d.distance = Some(x),
                     GAction::ArcDistance(x) => d.arc_distance = Some(x),
                     GAction::CoordSystem(i) => d.coord_system = Some(i),
+                    GAction::ToolLength(t) => d.tool_length = Some((t, w.col)),
                     GAction::Nothing => {}
                     GAction::PathControl => d.path_control = Some((code, w.col)),
                 }
@@ -219,6 +234,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'F' => d.f = Some(*w),
             'S' => d.s = Some(*w),
             'T' => d.t = Some(*w),
+            'H' => d.h = Some(*w),
             'L' => d.l = Some(*w),
             'Q' => d.q = Some(*w),
             other => {
@@ -297,7 +313,9 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         200 => (6, A::Units(Units::Inch)),
         210 => (6, A::Units(Units::Mm)),
         400 => (7, A::Nothing),
-        490 => (8, A::Nothing),
+        430 => (8, A::ToolLength(ToolLength::Table)),
+        431 => (8, A::ToolLength(ToolLength::Given)),
+        490 => (8, A::ToolLength(ToolLength::Off)),
         540..=590 if code.is_multiple_of(10) => (12, A::CoordSystem(((code - 540) / 10) as usize)),
         _ => return Err(g_unsupported(code)),
     })
@@ -312,7 +330,7 @@ fn g_unsupported(code: u32) -> Rejected {
         330 | 331 => "spindle-synchronised motion",
         382..=385 => "probing",
         410 | 411 | 420 | 421 => "cutter radius compensation",
-        430..=432 => "tool length offset",
+        432 => "additional tool length offset",
         520 => "local coordinate offset",
         591..=593 => "extra coordinate system",
         700 | 710..=712 | 720..=722 => "lathe cycle",
@@ -386,7 +404,7 @@ mod tests {
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
         for text in [
-            "G43", "G41.1", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
+            "G43.2", "G41.1", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
         ] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");

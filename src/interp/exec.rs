@@ -1,7 +1,7 @@
 //! The modal state machine: executes decoded blocks in RS274/NGC order (see the parent module).
 
 use super::arc::{arc_center, ArcError, ArcForm, MM_PER_INCH};
-use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, Units};
+use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, ToolLength, Units};
 use super::expr::Params;
 use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
 use crate::gcode::{Block, GcodeError, Word};
@@ -33,6 +33,8 @@ pub struct Interpreter {
     axis_offset_saved_mm: [f64; 3],
     /// G28 and G30 positions, machine coordinates, mm.
     homes_mm: [[f64; 3]; 2],
+    /// Active tool length offset (G43/G43.1), along Z, mm.
+    tool_offset_mm: f64,
 }
 
 /// What the motion step of a block will do.
@@ -63,6 +65,7 @@ impl Interpreter {
             coolant: (false, false),
             axis_offset_saved_mm: [0.0; 3],
             homes_mm: [[0.0; 3]; 2],
+            tool_offset_mm: 0.0,
         }
     }
 
@@ -170,6 +173,17 @@ impl Interpreter {
         }
         self.plane = d.plane.unwrap_or(self.plane);
         self.units = d.units.unwrap_or(self.units);
+        match d.tool_length {
+            Some((ToolLength::Table, _)) => {
+                let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+                self.tool_offset_mm = self.tool_length_mm(tool).unwrap_or(0.0);
+            }
+            Some((ToolLength::Given, _)) => {
+                self.tool_offset_mm = d.axes[2].map_or(0.0, |z| z.value * self.scale());
+            }
+            Some((ToolLength::Off, _)) => self.tool_offset_mm = 0.0,
+            None => {}
+        }
         self.coord_index = d.coord_system.unwrap_or(self.coord_index);
         self.distance = d.distance.unwrap_or(self.distance);
         self.arc_distance = d.arc_distance.unwrap_or(self.arc_distance);
@@ -247,9 +261,32 @@ impl Interpreter {
         }
     }
 
-    /// Program-to-machine offset (G5x + G92) along `axis`, mm.
+    /// Program-to-machine offset (G5x + G92 + tool length) along `axis`, mm.
     fn offset_mm(&self, axis: usize) -> f64 {
-        self.cfg.work_offsets_mm[self.coord_index][axis] + self.axis_offset_mm[axis]
+        self.cfg.work_offsets_mm[self.coord_index][axis]
+            + self.axis_offset_mm[axis]
+            + self.tlo_mm(axis)
+    }
+
+    /// Tool length offset along `axis`, mm (Z only).
+    fn tlo_mm(&self, axis: usize) -> f64 {
+        if axis == 2 {
+            self.tool_offset_mm
+        } else {
+            0.0
+        }
+    }
+
+    /// Length of tool `tool` from the table; `Some(0)` for every tool when the table is empty.
+    fn tool_length_mm(&self, tool: u32) -> Option<f64> {
+        if self.cfg.tool_lengths_mm.is_empty() {
+            return Some(0.0);
+        }
+        self.cfg
+            .tool_lengths_mm
+            .iter()
+            .find(|t| t.0 == tool)
+            .map(|t| t.1)
     }
 
     fn report_spindle(&mut self, emit: &mut impl FnMut(CanonKind)) {
@@ -267,7 +304,8 @@ impl Interpreter {
         for (axis, word) in d.axes.iter().enumerate() {
             if let Some(w) = word {
                 let g5x = self.cfg.work_offsets_mm[self.coord_index][axis];
-                self.axis_offset_mm[axis] = self.pos_mm[axis] - g5x - w.value * self.scale();
+                self.axis_offset_mm[axis] =
+                    self.pos_mm[axis] - g5x - self.tlo_mm(axis) - w.value * self.scale();
             }
         }
     }
@@ -282,7 +320,7 @@ impl Interpreter {
             if let Some(w) = word {
                 let v_mm = w.value * self.scale();
                 self.cfg.work_offsets_mm[index][axis] = if l20 {
-                    self.pos_mm[axis] - self.axis_offset_mm[axis] - v_mm
+                    self.pos_mm[axis] - self.axis_offset_mm[axis] - self.tlo_mm(axis) - v_mm
                 } else {
                     v_mm
                 };
@@ -381,6 +419,23 @@ impl Interpreter {
     /// circle).
     fn motion_step(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
         let explicit = d.motion.map(|m| m.0);
+        if let Some((ToolLength::Given, col)) = d.tool_length {
+            if let Some(w) = d.axes[0].or(d.axes[1]) {
+                let msg = format!(
+                    "G43.1 {} (tool offset across the spindle) is not supported",
+                    w.letter
+                );
+                return Err(GcodeError::unsupported(block.line, w.col, msg));
+            }
+            if d.motion.is_some_and(|m| m.0 != Motion::Cancel) || d.non_modal.is_some() {
+                return Err(GcodeError::invalid(
+                    block.line,
+                    col,
+                    "G43.1 and another code both use the axis words",
+                ));
+            }
+            return Ok(MotionStep::None);
+        }
         if let Some((
             nm @ (NonModal::SetAxisOffsets | NonModal::Home(_) | NonModal::SetCoordData),
             col,
@@ -449,6 +504,20 @@ impl Interpreter {
                 &w,
                 &format!("{} word without G2/G3 to use it", w.letter),
             ));
+        }
+        match (d.h, d.tool_length) {
+            (Some(h), Some((ToolLength::Table, _))) if h.value < 0.0 || h.value.fract() != 0.0 => {
+                return Err(inv(&h, "H word must be a non-negative integer"));
+            }
+            (Some(_), Some((ToolLength::Table, _))) | (None, _) => {}
+            (Some(h), _) => return Err(inv(&h, "H word without G43 to use it")),
+        }
+        if let Some((ToolLength::Table, col)) = d.tool_length {
+            let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+            if self.tool_length_mm(tool).is_none() {
+                let msg = format!("G43: tool {tool} is not in the tool table");
+                return Err(GcodeError::invalid(line, col, msg));
+            }
         }
         let g64 = d.path_control.filter(|c| c.0 == 640);
         if let Some(l) = d.l.filter(|_| g10.is_none()) {

@@ -198,3 +198,32 @@ fn coolant_pauses_and_path_control_make_no_motion() {
     );
     assert_eq!(err("M8 M7").kind, GcodeErrorKind::Invalid);
 }
+
+#[test]
+fn g43_shifts_absolute_z_by_the_tool_length_until_g49() {
+    let cfg = InterpConfig {
+        tool_lengths_mm: vec![(1, 100.0), (2, 50.0)],
+        ..InterpConfig::default()
+    };
+    let zs = |src: &str| -> Vec<f64> {
+        run_program(src, &cfg)
+            .unwrap()
+            .into_iter()
+            .filter_map(|m| match m.kind {
+                CanonKind::Traverse { end_mm } => Some(end_mm[2]),
+                _ => None,
+            })
+            .collect()
+    };
+    assert_eq!(
+        zs("G43 H1 G0 Z5\nG91 G0 Z1\nG90 T2 M6\nG43\nG0 Z0\nG49 G0 Z0\nG43.1 Z2\nG0 Z0"),
+        vec![105.0, 106.0, 50.0, 0.0, 2.0]
+    );
+    assert_eq!(
+        run_program("G43 H3", &cfg).unwrap_err().kind,
+        GcodeErrorKind::Invalid
+    );
+    assert_eq!(err("G0 X1 H1").kind, GcodeErrorKind::Invalid);
+    // Without a table every tool has length 0.
+    assert_eq!(xs("G43 H7 G0 X1 Z3"), vec![1.0]);
+}

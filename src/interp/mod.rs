@@ -34,7 +34,9 @@
 //! - M7/M8/M9 ([`CanonKind::Coolant`]), M0/M1/M60 ([`CanonKind::Pause`]): no motion.
 //! - G61, G61.1, G64 (P, Q): accepted; the planner stops exactly at the end of every move
 //!   whatever the mode, so they change nothing.
-//! - G40 (cutter compensation off), G49 (tool length offset off), G80 (cancel motion mode),
+//! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
+//!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
+//! - G40 (cutter compensation off), G80 (cancel motion mode),
 //!   G94 (feed per minute), because they only confirm the state we are always in.
 //!
 //! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
@@ -67,6 +69,9 @@ pub struct InterpConfig {
     pub start_mm: [f64; 3],
     /// Work offsets G54…G59 (index 0…5) in machine coordinates, mm (default: all zero).
     pub work_offsets_mm: [[f64; 3]; 6],
+    /// Tool lengths (tool number, length in mm) for G43 H. Empty (the default): every tool has
+    /// length 0, the machine's positions being those of its own tool's tip.
+    pub tool_lengths_mm: Vec<(u32, f64)>,
     /// Block delete switch: when on, lines starting with `/` are skipped (default: off, as
     /// LinuxCNC starts).
     pub block_delete: bool,
@@ -77,6 +82,7 @@ impl Default for InterpConfig {
         Self {
             start_mm: [0.0; 3],
             work_offsets_mm: [[0.0; 3]; 6],
+            tool_lengths_mm: Vec::new(),
             block_delete: false,
         }
     }
@@ -91,9 +97,9 @@ impl Default for InterpConfig {
 /// assert_eq!(moves[0].line, 2);
 /// assert_eq!(moves[0].kind, CanonKind::Feed { end_mm: [10.0, 0.0, 0.0], feed_mm_per_min: 600.0 });
 /// assert_eq!(moves[1].kind, CanonKind::ProgramEnd);
-/// let err = run_program("G1 X1 F100\nG43 Z5", &InterpConfig::default()).unwrap_err();
+/// let err = run_program("G1 X1 F100\nG41 X5", &InterpConfig::default()).unwrap_err();
 /// assert!(err.is_unsupported());
-/// assert_eq!(err.to_string(), "line 2, column 1: G43 (tool length offset) is not supported");
+/// assert_eq!(err.to_string(), "line 2, column 1: G41 (cutter radius compensation) is not supported");
 /// # Ok::<(), vmc_twin::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
