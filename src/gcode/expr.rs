@@ -190,6 +190,9 @@ pub enum OKind {
     Break,
     /// `continue`.
     Continue,
+    /// No keyword: `O100` alone starts a Fanuc-style subroutine (called by `M98 P100`, ended
+    /// by `M99`) or names the program (`O<name>`).
+    Program,
 }
 
 /// An O-word statement: `o100 if [#1 GT 2]`.

@@ -211,12 +211,7 @@ impl Lexer<'_> {
             "endrepeat" => OKind::EndRepeat,
             "break" => OKind::Break,
             "continue" => OKind::Continue,
-            "" => {
-                return Err(self.unsupported(
-                    start,
-                    "O word without a keyword (Fanuc-style program number) is not supported",
-                ))
-            }
+            "" => OKind::Program,
             other => {
                 return Err(self.invalid(kw_start, format!("unknown O-word keyword {other:?}")))
             }
@@ -469,12 +464,7 @@ mod tests {
 
     #[test]
     fn outside_the_subset_is_unsupported() {
-        for (text, col) in [
-            ("o100", 1),
-            ("G0 A1", 4),
-            ("G1 @1 ^90", 4),
-            ("(abort, stop)", 1),
-        ] {
+        for (text, col) in [("G0 A1", 4), ("G1 @1 ^90", 4), ("(abort, stop)", 1)] {
             let e = err(text);
             assert_eq!(
                 (e.col, e.kind),

@@ -23,7 +23,7 @@
 //!
 //! Rejected with [`GcodeErrorKind::Unsupported`] (valid LinuxCNC we do not implement):
 //! polar words `@ ^`, axis words `A B C U V W`, words `D E`, O-words with a computed
-//! number, Fanuc-style `O` program numbers, and the `(abort, …)` comment. Everything else that
+//! number, and the `(abort, …)` comment. `O100` alone starts a Fanuc-style subroutine. Everything else that
 //! cannot be read is [`GcodeErrorKind::Invalid`].
 //!
 //! G and M numbers are kept exactly as integers ×10 ([`Word::code_x10`]: `G91.1` → 911), so

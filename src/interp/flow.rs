@@ -8,6 +8,11 @@
 //!   `return [v]` / `endsub [v]` set `#<_value>` and `#<_value_returned>`.
 //! - `if/elseif/else/endif`, `while/endwhile`, `do … while`, `repeat/endrepeat`, `break` and
 //!   `continue` pair up by O-word name and nesting.
+//! - Fanuc style: `O100` alone starts a subroutine that ends at the next `M99`; `M98 P100
+//!   L3` runs it 3 times (the rest of the M98 block executes first); it shares every parameter
+//!   with its caller. Reached in the main flow, an `O` line is only a label; `M99` in the
+//!   main program ends it (as in LinuxCNC's stand-alone interpreter; a controller would
+//!   restart it).
 //! - At most [`MAX_ITERATIONS`] loop iterations and [`MAX_CALL_DEPTH`] nested calls: a
 //!   program beyond either is refused as unsupported (LinuxCNC itself would run forever).
 
@@ -35,7 +40,10 @@ struct Program {
 /// One active call.
 struct Frame {
     return_to: usize,
-    saved: [f64; CALL_PARAMS],
+    /// `#1…#30` of the caller (O-word calls; Fanuc-style calls share all parameters).
+    saved: Option<[f64; CALL_PARAMS]>,
+    /// Fanuc-style call: (index of the `O` line, repetitions left).
+    fanuc: Option<(usize, i64)>,
 }
 
 /// Runs a whole program (see the parent module).
@@ -63,6 +71,7 @@ pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, Gcode
         repeats: HashMap::new(),
         iterations: 0,
         block_delete: cfg.block_delete,
+        main_m99_end: None,
     };
     runner.interp.sync_params_out(&mut runner.params);
     let mut out = Vec::new();
@@ -74,6 +83,13 @@ pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, Gcode
             }
         }
         pc = runner.step(&prog, pc, &mut out)?;
+        if let Some(line) = runner.main_m99_end {
+            out.push(CanonMove {
+                line,
+                kind: CanonKind::ProgramEnd,
+            });
+            return Ok(out);
+        }
         if runner.interp.is_ended() {
             return Ok(out);
         }
@@ -187,6 +203,11 @@ fn pair(prog: &mut Program) -> Result<(), (usize, GcodeError)> {
                     None => return fail(format!("{} outside a loop named {}", kw(o.kind), o.name)),
                 }
             }
+            OKind::Program => {
+                prog.subs
+                    .entry(format!("fanuc {}", key(&o.name)))
+                    .or_insert(i);
+            }
             OKind::Call | OKind::Return => {}
         }
     }
@@ -208,6 +229,7 @@ fn pair(prog: &mut Program) -> Result<(), (usize, GcodeError)> {
 
 fn kw(k: OKind) -> &'static str {
     match k {
+        OKind::Program => "",
         OKind::Sub => "sub",
         OKind::EndSub => "endsub",
         OKind::Call => "call",
@@ -235,6 +257,8 @@ struct Runner {
     repeats: HashMap<usize, i64>,
     iterations: u64,
     block_delete: bool,
+    /// Line of an M99 in the main program, which ends it.
+    main_m99_end: Option<usize>,
 }
 
 impl Runner {
@@ -275,6 +299,13 @@ impl Runner {
                 kind: CanonKind::Message(m.clone()),
             });
         }
+        let m98 = take_m(&mut words, 98.0);
+        let m99 = take_m(&mut words, 99.0);
+        let (mut p, mut count) = (None, 1.0);
+        if m98.is_some() {
+            p = take_letter(&mut words, 'P');
+            count = take_letter(&mut words, 'L').map_or(1.0, |w| w.value);
+        }
         if !words.is_empty() {
             let block = Block {
                 line: l.line,
@@ -285,8 +316,108 @@ impl Runner {
             self.interp.sync_params_in(&self.params);
             self.interp.execute_block(&block, out)?;
             self.interp.sync_params_out(&mut self.params);
+            if self.interp.is_ended() {
+                return Ok(pc + 1);
+            }
+        }
+        if let Some(col) = m98 {
+            return self.fanuc_call(prog, pc, l, col, p, count);
+        }
+        if let Some(col) = m99 {
+            return self.fanuc_return(l, col);
         }
         Ok(pc + 1)
+    }
+
+    /// `M98 P… L…`: runs Fanuc-style subroutine `O…` L times.
+    fn fanuc_call(
+        &mut self,
+        prog: &Program,
+        pc: usize,
+        l: &Line,
+        col: usize,
+        p: Option<Word>,
+        count: f64,
+    ) -> Result<usize, GcodeError> {
+        let Some(p) = p else {
+            return Err(GcodeError::invalid(
+                l.line,
+                col,
+                "M98 needs a P word (subroutine number)",
+            ));
+        };
+        if count.fract() != 0.0 || count < 0.0 {
+            return Err(GcodeError::invalid(
+                l.line,
+                col,
+                "M98 L must be a whole number >= 0",
+            ));
+        }
+        let name = key(&OName::Number(p.value));
+        let Some(&start) = prog.subs.get(&format!("fanuc {name}")) else {
+            if let Some(e) = &prog.tail_error {
+                return Err(e.clone());
+            }
+            let msg = if prog.subs.contains_key(&name) {
+                format!(
+                    "M98 P{}: {name} is an O-word subroutine (use {name} call)",
+                    p.value
+                )
+            } else {
+                format!("M98 P{}: no subroutine {name}", p.value)
+            };
+            return Err(GcodeError::invalid(l.line, p.col, msg));
+        };
+        if count < 1.0 {
+            return Ok(pc + 1);
+        }
+        if self.frames.len() >= MAX_CALL_DEPTH {
+            return Err(GcodeError::unsupported(
+                l.line,
+                col,
+                format!("subroutine calls nested deeper than {MAX_CALL_DEPTH}"),
+            ));
+        }
+        self.count_iteration(l.line, col)?;
+        self.frames.push(Frame {
+            return_to: pc + 1,
+            saved: None,
+            fanuc: Some((start, count as i64 - 1)),
+        });
+        Ok(start + 1)
+    }
+
+    /// `M99`: repeats or ends the Fanuc-style subroutine.
+    fn fanuc_return(&mut self, l: &Line, col: usize) -> Result<usize, GcodeError> {
+        match self.frames.last_mut() {
+            None => {
+                // M99 in the main program: a controller restarts it; LinuxCNC's stand-alone
+                // interpreter, like this one, ends the program there.
+                self.main_m99_end = Some(l.line);
+                Ok(usize::MAX)
+            }
+            Some(Frame { fanuc: None, .. }) => Err(GcodeError::invalid(
+                l.line,
+                col,
+                "M99 inside an O-word subroutine (use endsub or return)",
+            )),
+            Some(Frame {
+                fanuc: Some((start, left)),
+                return_to,
+                ..
+            }) => {
+                if *left > 0 {
+                    *left -= 1;
+                    let start = *start;
+                    self.count_iteration(l.line, col)?;
+                    Ok(start + 1)
+                } else {
+                    let to = *return_to;
+                    self.frames.pop();
+                    Ok(to)
+                }
+            }
+        }
     }
 
     fn cond(&self, l: &Line, o: &OWord) -> Result<f64, GcodeError> {
@@ -296,12 +427,12 @@ impl Runner {
         }
     }
 
-    fn count_iteration(&mut self, l: &Line, o: &OWord) -> Result<(), GcodeError> {
+    fn count_iteration(&mut self, line: usize, col: usize) -> Result<(), GcodeError> {
         self.iterations += 1;
         if self.iterations > MAX_ITERATIONS {
             return Err(GcodeError::unsupported(
-                l.line,
-                o.col,
+                line,
+                col,
                 format!("more than {MAX_ITERATIONS} loop iterations (endless loop?)"),
             ));
         }
@@ -325,8 +456,10 @@ impl Runner {
     ) -> Result<usize, GcodeError> {
         Ok(match o.kind {
             OKind::Sub => Self::partner(prog, pc)? + 1,
+            // In the main flow (or inside a subroutine) an `O` line is only a label.
+            OKind::Program => pc + 1,
             OKind::EndSub | OKind::Return => {
-                let Some(frame) = self.frames.pop() else {
+                let Some(frame) = self.frames.pop().filter(|f| f.fanuc.is_none()) else {
                     return Err(GcodeError::invalid(
                         l.line,
                         o.col,
@@ -337,7 +470,9 @@ impl Runner {
                     Some(e) => Some(self.params.eval(e, l.line, o.col)?),
                     None => None,
                 };
-                self.params.leave_call(&frame.saved);
+                if let Some(saved) = &frame.saved {
+                    self.params.leave_call(saved);
+                }
                 self.params
                     .set_global("_value_returned", f64::from(u8::from(value.is_some())));
                 self.params.set_global("_value", value.unwrap_or(0.0));
@@ -369,7 +504,7 @@ impl Runner {
                         format!("subroutine calls nested deeper than {MAX_CALL_DEPTH}"),
                     ));
                 }
-                self.count_iteration(l, o)?;
+                self.count_iteration(l.line, o.col)?;
                 let mut args = Vec::with_capacity(o.args.len());
                 for a in &o.args {
                     args.push(self.params.eval(a, l.line, o.col)?);
@@ -377,7 +512,8 @@ impl Runner {
                 let saved = self.params.enter_call(&args);
                 self.frames.push(Frame {
                     return_to: pc + 1,
-                    saved,
+                    saved: Some(saved),
+                    fanuc: None,
                 });
                 start + 1
             }
@@ -416,7 +552,7 @@ impl Runner {
                         && head < pc =>
                 {
                     if self.cond(l, o)? != 0.0 {
-                        self.count_iteration(l, o)?;
+                        self.count_iteration(l.line, o.col)?;
                         head + 1
                     } else {
                         pc + 1
@@ -438,7 +574,7 @@ impl Runner {
                 }
             },
             OKind::EndWhile => {
-                self.count_iteration(l, o)?;
+                self.count_iteration(l.line, o.col)?;
                 Self::partner(prog, pc)?
             }
             OKind::Repeat => {
@@ -454,7 +590,7 @@ impl Runner {
                 let head = Self::partner(prog, pc)?;
                 let left = self.repeats.get(&head).copied().unwrap_or(1) - 1;
                 if left > 0 {
-                    self.count_iteration(l, o)?;
+                    self.count_iteration(l.line, o.col)?;
                     self.repeats.insert(head, left);
                     head + 1
                 } else {
@@ -471,7 +607,7 @@ impl Runner {
                 let head = Self::partner(prog, pc)?;
                 match prog.lines[head].oword.as_ref().map(|p| p.kind) {
                     Some(OKind::While) => {
-                        self.count_iteration(l, o)?;
+                        self.count_iteration(l.line, o.col)?;
                         head
                     }
                     // `do … while` and `repeat`: go to the loop's end, which decides.
@@ -480,4 +616,18 @@ impl Runner {
             }
         })
     }
+}
+
+/// Removes the word M`code` from `words`; its column if it was there.
+fn take_m(words: &mut Vec<Word>, code: f64) -> Option<usize> {
+    let i = words
+        .iter()
+        .position(|w| w.letter == 'M' && w.value == code)?;
+    Some(words.remove(i).col)
+}
+
+/// Removes the word with `letter` from `words`.
+fn take_letter(words: &mut Vec<Word>, letter: char) -> Option<Word> {
+    let i = words.iter().position(|w| w.letter == letter)?;
+    Some(words.remove(i))
 }

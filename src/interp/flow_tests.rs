@@ -227,3 +227,20 @@ fn g43_shifts_absolute_z_by_the_tool_length_until_g49() {
     // Without a table every tool has length 0.
     assert_eq!(xs("G43 H7 G0 X1 Z3"), vec![1.0]);
 }
+
+#[test]
+fn fanuc_subroutines_repeat_share_parameters_and_nest() {
+    let src = "#1=0\nG0 X1 M98 P2 L2\nG0 X#1\nM30\nO2\nM98 P1 L3\n#1=[FIX[#1]+1]\nM99\nO1\n#1=[#1+0.1]\nG0 X#1\nM99";
+    let x = xs(src);
+    assert_eq!(x.len(), 1 + 6 + 1);
+    assert!(
+        (x[6] - 1.3).abs() < 1e-9 && (x[7] - 2.0).abs() < 1e-9,
+        "{x:?}"
+    );
+    // In the main flow an `O` line is a label, and M99 ends the program.
+    assert_eq!(xs("O5\nG0 X1\nM99\nG0 X2"), vec![1.0]);
+    assert_eq!(xs("O<main>\nG0 X1"), vec![1.0]);
+    for src in ["M98", "M98 P7", "o1 sub\no1 endsub\nM98 P1"] {
+        assert_eq!(err(src).kind, GcodeErrorKind::Invalid, "{src}");
+    }
+}
