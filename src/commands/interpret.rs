@@ -182,6 +182,26 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                 };
                 call(out, text.to_string())?;
             }
+            CanonKind::Io { m, p, e, l, q } => {
+                let n = |v: &Option<f64>| v.map_or(0.0, |v| v);
+                let text = match m {
+                    62 => format!("SET_MOTION_OUTPUT_BIT({})", n(p)),
+                    63 => format!("CLEAR_MOTION_OUTPUT_BIT({})", n(p)),
+                    64 => format!("SET_AUX_OUTPUT_BIT({})", n(p)),
+                    65 => format!("CLEAR_AUX_OUTPUT_BIT({})", n(p)),
+                    66 => format!(
+                        "WAIT({}, {}, {}, {:.4})",
+                        n(p).max(n(e)),
+                        u8::from(e.is_some()),
+                        n(l),
+                        n(q)
+                    ),
+                    67 => format!("SET_MOTION_OUTPUT_VALUE({}, {:.4})", n(e), n(q)),
+                    68 => format!("SET_AUX_OUTPUT_VALUE({}, {:.4})", n(e), n(q)),
+                    _ => format!("M{m}(P {})", n(p)),
+                };
+                call(out, text)?;
+            }
             CanonKind::Message(text) => call(out, format!("MESSAGE(\"{text}\")"))?,
             CanonKind::ProgramEnd => call(out, "PROGRAM_END()".to_string())?,
         }

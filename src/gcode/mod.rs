@@ -22,7 +22,7 @@
 //! - Columns are 1-based character (not byte) positions in the line.
 //!
 //! Rejected with [`GcodeErrorKind::Unsupported`] (valid LinuxCNC we do not implement):
-//! polar words `@ ^`, axis words `A B C U V W`, words `D E`, O-words with a computed
+//! polar words `@ ^`, axis words `A B C U V W`, the `D` word, O-words with a computed
 //! number, and the `(abort, …)` comment. `O100` alone starts a Fanuc-style subroutine. Everything else that
 //! cannot be read is [`GcodeErrorKind::Invalid`].
 //!

@@ -130,6 +130,11 @@ pub(super) struct Decoded {
     pub t: Option<Word>,
     pub h: Option<Word>,
     pub l: Option<Word>,
+    pub e: Option<Word>,
+    /// M48–M53 (override switches) or M62–M68 (I/O): the M number and column.
+    pub io: Option<(u32, usize)>,
+    /// Column of M61 (set current tool).
+    pub set_tool: Option<usize>,
     pub q: Option<Word>,
 }
 
@@ -206,6 +211,14 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                         d.coolant[(code / 10 - 7) as usize] = Some(w.col);
                         8
                     }
+                    480..=530 | 620..=680 if code.is_multiple_of(10) => {
+                        d.io = Some((code / 10, w.col));
+                        105
+                    }
+                    610 => {
+                        d.set_tool = Some(w.col);
+                        6
+                    }
                     60 => {
                         d.tool_change = Some(w.col);
                         6
@@ -236,6 +249,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'T' => d.t = Some(*w),
             'H' => d.h = Some(*w),
             'L' => d.l = Some(*w),
+            'E' => d.e = Some(*w),
             'Q' => d.q = Some(*w),
             other => {
                 // The lexer only lets supported letters through.
@@ -350,9 +364,6 @@ fn m_unsupported(code: u32) -> Rejected {
     }
     let what = match code / 10 {
         19 => "spindle orientation",
-        48..=53 => "override control",
-        61 => "set current tool",
-        62..=68 => "digital/analog I/O",
         70..=73 => "modal state save/restore",
         98 | 99 => "subroutine call/return",
         100..=199 => "user-defined M code",

@@ -166,6 +166,18 @@ impl Interpreter {
                 flood: self.coolant.1,
             });
         }
+        if d.set_tool.is_some() {
+            self.selected_tool = d.q.map_or(0, |q| q.value as u32);
+        }
+        if let Some((m, _)) = d.io {
+            emit(CanonKind::Io {
+                m,
+                p: d.p.map(|w| w.value),
+                e: d.e.map(|w| w.value),
+                l: d.l.map(|w| w.value),
+                q: d.q.map(|w| w.value),
+            });
+        }
         if let (Some((NonModal::Dwell, _)), Some(p)) = (d.non_modal, d.p) {
             emit(CanonKind::Dwell {
                 duration_s: p.value,
@@ -505,6 +517,22 @@ impl Interpreter {
                 &format!("{} word without G2/G3 to use it", w.letter),
             ));
         }
+        if let Some((m, col)) = d.io {
+            return self.check_io(line, col, m, d);
+        }
+        if let Some(e) = d.e {
+            return Err(inv(&e, "E word without M66, M67 or M68 to use it"));
+        }
+        if let Some(col) = d.set_tool {
+            return match d.q {
+                Some(q) if q.value >= 0.0 && q.value.fract() == 0.0 => Ok(()),
+                _ => Err(GcodeError::invalid(
+                    line,
+                    col,
+                    "M61 needs Q, a tool number >= 0",
+                )),
+            };
+        }
         match (d.h, d.tool_length) {
             (Some(h), Some((ToolLength::Table, _))) if h.value < 0.0 || h.value.fract() != 0.0 => {
                 return Err(inv(&h, "H word must be a non-negative integer"));
@@ -568,6 +596,38 @@ impl Interpreter {
             }
         }
         Ok(())
+    }
+
+    /// The words an I/O or override M code needs (it claims P, E, L and Q).
+    fn check_io(&self, line: usize, col: usize, m: u32, d: &Decoded) -> Result<(), GcodeError> {
+        let need = |ok: bool, what: &str| {
+            if ok {
+                Ok(())
+            } else {
+                Err(GcodeError::invalid(line, col, format!("M{m} needs {what}")))
+            }
+        };
+        if d.non_modal.is_some() || matches!(d.motion, Some((Motion::Arc { .. }, _))) {
+            return Err(GcodeError::unsupported(
+                line,
+                col,
+                format!(
+                    "M{m} in a block with G4, G10, G28, G30, G53, G92 or an arc is not supported"
+                ),
+            ));
+        }
+        match m {
+            62..=65 => need(d.p.is_some(), "a P word (output number)"),
+            66 => need(
+                d.p.is_some() || d.e.is_some(),
+                "a P or E word (input number)",
+            ),
+            67 | 68 => need(
+                d.e.is_some() && d.q.is_some(),
+                "E (output number) and Q (value)",
+            ),
+            _ => Ok(()),
+        }
     }
 
     /// G10 needs L2 or L20 and P0…P6 (P7–P9, G59.1–G59.3, are not supported).

@@ -244,3 +244,22 @@ fn fanuc_subroutines_repeat_share_parameters_and_nest() {
         assert_eq!(err(src).kind, GcodeErrorKind::Invalid, "{src}");
     }
 }
+
+#[test]
+fn io_and_override_m_codes_are_actions_without_motion() {
+    let k = kinds("M64 P1\nM68 E0 Q2.5\nM66 P0 L0\nM50 P0\nM61 Q3 G0 X1");
+    assert_eq!(k.len(), 5);
+    assert_eq!(
+        k[1],
+        CanonKind::Io {
+            m: 68,
+            p: None,
+            e: Some(0.0),
+            l: None,
+            q: Some(2.5)
+        }
+    );
+    for src in ["M64", "M68 E1", "M61", "M62 P1 M63 P2"] {
+        assert_eq!(err(src).kind, GcodeErrorKind::Invalid, "{src}");
+    }
+}

@@ -31,7 +31,8 @@
 //! - G28/G30: rapid to the intermediate point (the axis words, in the current modes), then to
 //!   the stored position (#5161… / #5181…, set by G28.1/G30.1, default 0) along the given
 //!   axes, all axes if none is given. G10 L2/L20 P0…P6 set work offsets (R0 only).
-//! - M7/M8/M9 ([`CanonKind::Coolant`]), M0/M1/M60 ([`CanonKind::Pause`]): no motion.
+//! - M7/M8/M9 ([`CanonKind::Coolant`]), M0/M1/M60 ([`CanonKind::Pause`]), M48–M53 and
+//!   M62–M68 ([`CanonKind::Io`]): no motion. M61 Q sets the current tool without a change.
 //! - G61, G61.1, G64 (P, Q): accepted; the planner stops exactly at the end of every move
 //!   whatever the mode, so they change nothing.
 //! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
@@ -164,6 +165,20 @@ pub enum CanonKind {
     Coolant { mist: bool, flood: bool },
     /// M0 / M1 / M60: the program waits for the operator (no motion, no machine time).
     Pause(PauseKind),
+    /// M48–M53 (override switches), M62–M68 (digital/analog I/O, M66 waits on an input and
+    /// returns at once here): the M number and its P, E, L, Q values; no motion.
+    Io {
+        /// The M number (48…53, 62…68).
+        m: u32,
+        /// P, E, L, Q words, if given.
+        p: Option<f64>,
+        /// E word.
+        e: Option<f64>,
+        /// L word.
+        l: Option<f64>,
+        /// Q word.
+        q: Option<f64>,
+    },
 }
 
 /// Why a program pauses.

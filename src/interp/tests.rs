@@ -491,7 +491,7 @@ const ERROR_CASES: &[(&str, usize, usize, GcodeErrorKind, &str)] = &[
         "M19 (spindle orientation)",
     ),
     ("G81 X1 Z-1 R1", 1, 1, GcodeErrorKind::Unsupported, "G81"),
-    ("G0 X1e3", 1, 6, GcodeErrorKind::Unsupported, "E word"),
+    ("G0 X1e3", 1, 6, GcodeErrorKind::Invalid, "E word"),
     (
         "G0 Y12345678901",
         1,
