@@ -44,6 +44,7 @@
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
 
 mod arc;
+mod checks;
 mod decode;
 mod exec;
 mod expr;
