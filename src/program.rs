@@ -155,6 +155,7 @@ pub fn plan_source_unchecked(
     let cfg = InterpConfig {
         start_mm,
         work_offsets_mm: machine.axes.work_offsets_mm,
+        ..InterpConfig::default()
     };
     let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
         file: file.to_string(),

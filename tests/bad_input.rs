@@ -103,7 +103,14 @@ const PROGRAMS: &[(&str, &str)] = &[
         "line 2, column 4: X word value out of range (|value| > 1e9)",
     ),
     ("G21 G90\nG1 XNaN F100\nM30\n", "line 2, column 4: X word: missing number"),
-    ("G21\n#1=2\nM30\n", "line 2, column 1: parameter '#' is not supported"),
+    (
+        "G21\nG0 X#<nope>\nM30\n",
+        "line 2, column 4: named parameter #<nope> not defined",
+    ),
+    (
+        "G21\no1 while [1]\no1 endwhile\nM30\n",
+        "line 3, column 1: more than 1000000 loop iterations (endless loop?)",
+    ),
     (
         "G21 G90\nG0 X600 Y100 Z-100\nM30\n",
         "line 2: axis X reaches 600 mm, outside travel [0, 560] mm",

@@ -61,6 +61,9 @@ pub enum Command {
     /// radial immersion and up or down milling (semi-discretisation, zero-order analytic or
     /// time-domain simulation).
     Lobes(LobesArgs),
+    /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
+    /// `rs274`, to compare with a controller.
+    Interpret(InterpretArgs),
     /// Measure the speed figures (compensation query, 8 h of machine time, campaign) and how
     /// they scale with the interpolation cycle and the number of calibration cycles.
     Bench(BenchArgs),
@@ -576,6 +579,43 @@ impl LobesArgs {
             speeds_rpm,
             out: self.out,
             force: self.force.force,
+        })
+    }
+}
+
+/// Arguments of `interpret`.
+#[derive(clap::Args)]
+pub struct InterpretArgs {
+    /// G-code program to interpret.
+    pub program: PathBuf,
+    /// Machine description (TOML) whose home position and work offsets G54…G59 to use;
+    /// default: start at the origin with zero work offsets, as `rs274` does.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Tool table (TOML, `[[tool]]` with `number`, `length_mm`, `diameter_mm`) for G43 H;
+    /// default: every tool has length 0.
+    #[arg(long)]
+    pub tools: Option<PathBuf>,
+}
+
+impl InterpretArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid machine or tool table.
+    pub fn config(self) -> Result<commands::interpret::InterpretConfig> {
+        let mut interp = crate::interp::InterpConfig::default();
+        if let Some(path) = &self.tools {
+            interp.tool_lengths_mm = commands::interpret::load_tool_lengths(path)?;
+        }
+        if let Some(path) = &self.machine {
+            let machine = commands::load_machine(Some(path), None)?;
+            interp.start_mm = machine.axes.home_mm;
+            interp.work_offsets_mm = machine.axes.work_offsets_mm;
+        }
+        Ok(commands::interpret::InterpretConfig {
+            program: self.program,
+            interp,
         })
     }
 }

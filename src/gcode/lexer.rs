@@ -1,108 +1,135 @@
-//! Line lexer: one line of text → one [`Block`] of words (see the parent module for the
-//! dialect). Works on characters so that columns are character positions.
+//! Line lexer: one line of text → one [`Line`] (see the parent module for the dialect). Works on
+//! characters so that columns are character positions. Values (`X[#1+2]`) are read by
+//! `value`.
 
-use super::{Block, GcodeError, Word};
+use super::expr::{Assign, ExprWord, Line, OKind, OName, OWord};
+use super::GcodeError;
 
 /// Letters whose words the interpreter understands.
-const SUPPORTED_LETTERS: &str = "FGIJKMNPRSTXYZ";
+const SUPPORTED_LETTERS: &str = "EFGHIJKLMNPQRSTXYZ";
 
-/// LinuxCNC's unary functions; a letter followed by one of these starts an expression.
-const UNARY_FUNCTIONS: [&str; 13] = [
-    "ABS", "ACOS", "ASIN", "ATAN", "COS", "EXISTS", "EXP", "FIX", "FUP", "LN", "ROUND", "SIN",
-    "SQRT",
-];
-
-/// Parses one line (1-based `line`) into a block. `Ok(None)` for a line without words (blank,
+/// Parses one line (1-based `line`). `Ok(None)` for a line that does nothing (blank, plain
 /// comments only, or a lone N word).
-pub fn parse_line(line: usize, text: &str) -> Result<Option<Block>, GcodeError> {
+pub fn parse_line(line: usize, text: &str) -> Result<Option<Line>, GcodeError> {
     let chars: Vec<char> = text.chars().collect();
     let mut lx = Lexer {
         chars: &chars,
         pos: 0,
         line,
     };
+    let mut out = Line {
+        line,
+        first_col: 1,
+        ..Line::default()
+    };
     lx.skip_blanks();
     if lx.peek() == Some('/') {
-        return Err(lx.unsupported(lx.pos, "block delete '/' is not supported"));
+        out.block_delete = true;
+        lx.pos += 1;
     }
-    let mut words: Vec<Word> = Vec::new();
-    let mut line_number = None;
+    let mut first_col = None;
     while let Some(c) = lx.skip_blanks_and_peek() {
         let start = lx.pos;
         match c {
-            '(' => lx.comment()?,
+            '(' => {
+                if let Some(msg) = lx.comment()? {
+                    out.messages.push(msg);
+                }
+            }
             ';' => break,
-            '#' => return Err(lx.unsupported(start, "parameter '#' is not supported")),
-            '[' => return Err(lx.unsupported(start, "expression '[...]' is not supported")),
+            _ if out.oword.is_some() => {
+                return Err(lx.invalid(start, "nothing may follow an O-word statement on its line"))
+            }
+            '#' => {
+                let target = lx.param()?;
+                if lx.skip_blanks_and_peek() != Some('=') {
+                    return Err(
+                        lx.invalid(start, "parameter reference outside a word: '=' expected")
+                    );
+                }
+                lx.pos += 1;
+                let value = lx.value()?;
+                first_col.get_or_insert(start + 1);
+                out.assigns.push(Assign {
+                    target,
+                    value,
+                    col: start + 1,
+                });
+            }
             '@' | '^' => {
                 return Err(
                     lx.unsupported(start, format!("polar coordinate '{c}' is not supported"))
                 )
             }
+            'o' | 'O' => {
+                if !out.words.is_empty() || !out.assigns.is_empty() {
+                    return Err(lx.invalid(start, "an O-word must begin its line"));
+                }
+                out.oword = Some(lx.oword()?);
+                first_col.get_or_insert(start + 1);
+            }
             c if c.is_ascii_alphabetic() => {
                 let word = lx.word()?;
                 if word.letter == 'N' {
-                    if !words.is_empty() || line_number.is_some() {
+                    if !out.words.is_empty() || !out.assigns.is_empty() || out.line_number.is_some()
+                    {
                         return Err(lx.invalid(start, "N word must come first on the line"));
                     }
-                    line_number = Some(word.value);
+                    let Some(n) = word.value.literal() else {
+                        return Err(lx.invalid(start, "N word must be a plain number"));
+                    };
+                    out.line_number = Some(n);
                     continue;
                 }
                 if !matches!(word.letter, 'G' | 'M')
-                    && words.iter().any(|w| w.letter == word.letter)
+                    && out.words.iter().any(|w| w.letter == word.letter)
                 {
                     return Err(lx.invalid(start, format!("more than one {} word", word.letter)));
                 }
-                words.push(word);
+                first_col.get_or_insert(word.col);
+                out.words.push(word);
             }
             other => return Err(lx.invalid(start, format!("unexpected character {other:?}"))),
         }
     }
-    let Some(first_col) = words.first().map(|w| w.col) else {
-        return Ok(None);
-    };
-    Ok(Some(Block {
-        line,
-        line_number,
-        words,
-        first_col,
-    }))
+    out.first_col = first_col.unwrap_or(1);
+    Ok((!out.is_empty()).then_some(out))
 }
 
 /// Cursor over the characters of one line.
-struct Lexer<'a> {
-    chars: &'a [char],
-    pos: usize,
-    line: usize,
+pub(super) struct Lexer<'a> {
+    pub(super) chars: &'a [char],
+    pub(super) pos: usize,
+    pub(super) line: usize,
 }
 
 impl Lexer<'_> {
-    fn peek(&self) -> Option<char> {
+    pub(super) fn peek(&self) -> Option<char> {
         self.chars.get(self.pos).copied()
     }
 
-    fn skip_blanks(&mut self) {
+    pub(super) fn skip_blanks(&mut self) {
         while matches!(self.peek(), Some(c) if c.is_whitespace()) {
             self.pos += 1;
         }
     }
 
-    fn skip_blanks_and_peek(&mut self) -> Option<char> {
+    pub(super) fn skip_blanks_and_peek(&mut self) -> Option<char> {
         self.skip_blanks();
         self.peek()
     }
 
-    fn invalid(&self, pos: usize, msg: impl Into<String>) -> GcodeError {
+    pub(super) fn invalid(&self, pos: usize, msg: impl Into<String>) -> GcodeError {
         GcodeError::invalid(self.line, pos + 1, msg)
     }
 
-    fn unsupported(&self, pos: usize, msg: impl Into<String>) -> GcodeError {
+    pub(super) fn unsupported(&self, pos: usize, msg: impl Into<String>) -> GcodeError {
         GcodeError::unsupported(self.line, pos + 1, msg)
     }
 
-    /// Consumes `( … )`. LinuxCNC rejects nested and unclosed comments; `(abort, …)` stops a
-    /// LinuxCNC program, which we do not model.
-    fn comment(&mut self) -> Result<(), GcodeError> {
+    /// Consumes `( … )`; returns the text of a `(MSG, …)` comment. LinuxCNC rejects nested and
+    /// unclosed comments; `(abort, …)` stops a LinuxCNC program, which we do not model.
+    fn comment(&mut self) -> Result<Option<String>, GcodeError> {
         let open = self.pos;
         self.pos += 1;
         let body_start = self.pos;
@@ -116,14 +143,16 @@ impl Lexer<'_> {
         }
         let body: String = self.chars[body_start..self.pos].iter().collect();
         self.pos += 1;
-        if body.trim_start().to_ascii_lowercase().starts_with("abort,") {
+        let trimmed = body.trim_start();
+        let lower = trimmed.to_ascii_lowercase();
+        if lower.starts_with("abort,") {
             return Err(self.unsupported(open, "'(abort, ...)' comment is not supported"));
         }
-        Ok(())
+        Ok(lower.starts_with("msg,").then(|| trimmed[4..].to_string()))
     }
 
-    /// Reads a letter and its number. The cursor is on the letter.
-    fn word(&mut self) -> Result<Word, GcodeError> {
+    /// Reads a letter and its value. The cursor is on the letter.
+    fn word(&mut self) -> Result<ExprWord, GcodeError> {
         let col = self.pos + 1;
         let letter = self.peek().unwrap_or(' ').to_ascii_uppercase();
         let letter_pos = self.pos;
@@ -132,48 +161,118 @@ impl Lexer<'_> {
         }
         self.pos += 1;
         self.skip_blanks();
-        match self.peek() {
-            Some('#') => {
-                return Err(self.unsupported(
-                    letter_pos,
-                    format!("{letter} word with a '#' parameter value is not supported"),
-                ))
-            }
-            Some('[') => {
-                return Err(self.unsupported(
-                    letter_pos,
-                    format!("{letter} word with an '[expression]' value is not supported"),
-                ))
-            }
-            Some(c) if c.is_ascii_alphabetic() && self.starts_unary_function() => {
-                return Err(self.unsupported(
-                    letter_pos,
-                    format!("{letter} word with a function value is not supported"),
-                ))
-            }
-            _ => {}
-        }
-        let value = self
-            .number()
-            .map_err(|why| self.invalid(letter_pos, format!("{letter} word: {why}")))?;
-        Ok(Word { letter, value, col })
+        let value = self.value_for(letter, letter_pos)?;
+        Ok(ExprWord { letter, value, col })
     }
 
-    /// True if the letters at the cursor spell a unary function name followed by `[`.
-    fn starts_unary_function(&self) -> bool {
-        let mut end = self.pos;
-        while matches!(self.chars.get(end), Some(c) if c.is_ascii_alphabetic()) {
-            end += 1;
+    /// Reads `o100 keyword [args]` or `o<name> keyword [args]`. The cursor is on the `O`.
+    fn oword(&mut self) -> Result<OWord, GcodeError> {
+        let start = self.pos;
+        self.pos += 1;
+        self.skip_blanks();
+        let name = if self.peek() == Some('<') {
+            OName::Named(self.angle_name(start)?)
+        } else {
+            match self.number() {
+                Ok(n) => OName::Number(n),
+                Err(_) if matches!(self.peek(), Some('[' | '#')) => {
+                    return Err(
+                        self.unsupported(start, "O-word with a computed number is not supported")
+                    )
+                }
+                Err(why) => return Err(self.invalid(start, format!("O word: {why}"))),
+            }
+        };
+        self.skip_blanks();
+        let kw_start = self.pos;
+        // Blanks may split a keyword (`end sub`, `else if`), as everywhere outside comments.
+        let mut keyword = String::new();
+        while let Some(c) = self.peek() {
+            if c.is_ascii_alphabetic() {
+                keyword.push(c.to_ascii_lowercase());
+            } else if !c.is_whitespace() {
+                break;
+            }
+            self.pos += 1;
         }
-        let name: String = self.chars[self.pos..end]
-            .iter()
-            .collect::<String>()
-            .to_ascii_uppercase();
-        UNARY_FUNCTIONS.contains(&name.as_str())
+        let kind = match keyword.as_str() {
+            "sub" => OKind::Sub,
+            "endsub" => OKind::EndSub,
+            "call" => OKind::Call,
+            "return" => OKind::Return,
+            "if" => OKind::If,
+            "elseif" => OKind::ElseIf,
+            "else" => OKind::Else,
+            "endif" => OKind::EndIf,
+            "while" => OKind::While,
+            "endwhile" => OKind::EndWhile,
+            "do" => OKind::Do,
+            "repeat" => OKind::Repeat,
+            "endrepeat" => OKind::EndRepeat,
+            "break" => OKind::Break,
+            "continue" => OKind::Continue,
+            "" => OKind::Program,
+            other => {
+                return Err(self.invalid(kw_start, format!("unknown O-word keyword {other:?}")))
+            }
+        };
+        let mut args = Vec::new();
+        loop {
+            match self.skip_blanks_and_peek() {
+                Some('[') => args.push(self.value()?),
+                Some('(') => {
+                    self.comment()?;
+                }
+                _ => break,
+            }
+        }
+        let want = match kind {
+            OKind::If | OKind::ElseIf | OKind::While | OKind::Repeat => 1..=1,
+            OKind::Return | OKind::EndSub => 0..=1,
+            OKind::Call => 0..=30,
+            _ => 0..=0,
+        };
+        if !want.contains(&args.len()) {
+            return Err(self.invalid(
+                kw_start,
+                format!(
+                    "O-word {keyword} takes {} bracketed value(s), got {}",
+                    want.end(),
+                    args.len()
+                ),
+            ));
+        }
+        Ok(OWord {
+            name,
+            kind,
+            args,
+            col: start + 1,
+        })
+    }
+
+    /// Reads `<name>` (cursor on `<`): lower case, blanks removed.
+    pub(super) fn angle_name(&mut self, at: usize) -> Result<String, GcodeError> {
+        self.pos += 1;
+        let mut name = String::new();
+        loop {
+            match self.peek() {
+                None => return Err(self.invalid(at, "unclosed name '<'")),
+                Some('>') => break,
+                Some(c) if c.is_whitespace() => {}
+                Some(c) => name.push(c.to_ascii_lowercase()),
+            }
+            self.pos += 1;
+        }
+        self.pos += 1;
+        if name.is_empty() {
+            return Err(self.invalid(at, "empty name '<>'"));
+        }
+        Ok(name)
     }
 
     /// Reads `[+-] digits [. digits]` with blanks allowed between the characters.
-    fn number(&mut self) -> Result<f64, String> {
+    pub(super) fn number(&mut self) -> Result<f64, String> {
+        let save = self.pos;
         let mut text = String::new();
         if let Some(sign @ ('+' | '-')) = self.peek() {
             text.push(sign);
@@ -195,6 +294,7 @@ impl Lexer<'_> {
             self.pos += 1;
         }
         if digits == 0 {
+            self.pos = save;
             return Err("missing number".to_string());
         }
         if dots > 1 {
@@ -215,8 +315,7 @@ fn unsupported_letter_msg(letter: char) -> String {
         'A' | 'B' | 'C' | 'U' | 'V' | 'W' => {
             format!("{letter} axis word is not supported (3-axis XYZ machine)")
         }
-        'O' => "O word (subroutines and control flow) is not supported".to_string(),
-        'D' | 'E' | 'H' | 'L' | 'Q' => format!("{letter} word is not supported"),
+        'D' => format!("{letter} word is not supported"),
         _ => format!("unknown word letter '{letter}'"),
     }
 }
@@ -233,7 +332,7 @@ mod tests {
         block
             .words
             .iter()
-            .map(|w| (w.letter, w.value, w.col))
+            .map(|w| (w.letter, w.value.literal().expect("literal"), w.col))
             .collect()
     }
 
@@ -304,19 +403,68 @@ mod tests {
     }
 
     #[test]
-    fn parameters_expressions_and_o_words_are_unsupported() {
-        for (text, col) in [
-            ("#1=2", 1),
-            ("G1 X#1", 4),
-            ("G1 X[1+2]", 4),
-            ("G1 Xsin[30]", 4),
-            ("o100 sub", 1),
-            ("/G0 X1", 1),
-            ("G0 A1", 4),
-            ("G43 H1", 5),
-            ("G1 @1 ^90", 4),
-            ("(abort, stop)", 1),
+    fn parameters_expressions_and_o_words_are_read_as_syntax() {
+        use crate::gcode::{BinOp, Expr, Func, OKind, OName, Param};
+        let l = parse_line(1, "#1=2 G1 X[#1+2] Y-sin[30] (MSG, hi)")
+            .unwrap()
+            .unwrap();
+        assert_eq!(l.assigns.len(), 1);
+        assert_eq!(
+            l.assigns[0].target,
+            Param::Numbered(Box::new(Expr::Num(1.0)))
+        );
+        assert_eq!(
+            l.words[1].value,
+            Expr::Bin(
+                BinOp::Add,
+                Box::new(Expr::Param(Param::Numbered(Box::new(Expr::Num(1.0))))),
+                Box::new(Expr::Num(2.0))
+            )
+        );
+        assert_eq!(
+            l.words[2].value,
+            Expr::Neg(Box::new(Expr::Func(Func::Sin, Box::new(Expr::Num(30.0)))))
+        );
+        assert_eq!(l.messages, vec![" hi".to_string()]);
+        let o = parse_line(1, "O<My Sub> call [1] [#<_a>]")
+            .unwrap()
+            .unwrap();
+        let o = o.oword.unwrap();
+        assert_eq!(
+            (o.name, o.kind, o.args.len()),
+            (OName::Named("mysub".into()), OKind::Call, 2)
+        );
+        assert!(parse_line(1, "/G0 X1").unwrap().unwrap().block_delete);
+    }
+
+    #[test]
+    fn precedence_follows_linuxcnc() {
+        use crate::gcode::{BinOp, Expr};
+        let l = parse_line(1, "X[1+2*3**2 LT 4 OR 1]").unwrap().unwrap();
+        let Expr::Bin(op, lhs, _) = &l.words[0].value else {
+            panic!("binary expected")
+        };
+        assert_eq!(*op, BinOp::Or);
+        assert!(matches!(**lhs, Expr::Bin(BinOp::Lt, _, _)));
+    }
+
+    #[test]
+    fn malformed_expressions_are_invalid() {
+        for text in [
+            "X[1+]",
+            "X[1 FOO 2]",
+            "X[1",
+            "#1 2",
+            "o100 frobnicate",
+            "G0 X1 o100 if [1]",
         ] {
+            assert_eq!(err(text).kind, GcodeErrorKind::Invalid, "{text}");
+        }
+    }
+
+    #[test]
+    fn outside_the_subset_is_unsupported() {
+        for (text, col) in [("G0 A1", 4), ("G1 @1 ^90", 4), ("(abort, stop)", 1)] {
             let e = err(text);
             assert_eq!(
                 (e.col, e.kind),

@@ -1,27 +1,39 @@
-//! G-code syntax: text → blocks of words. Syntax only; what the words mean is the business of
-//! the interpreter (`interp`), which builds on this module.
+//! G-code syntax: text → lines of words whose values may be expressions. Syntax only; what the
+//! words mean, and the values of parameters and expressions, are the business of the
+//! interpreter (`interp`), which builds on this module.
 //!
-//! Dialect: the RS274/NGC subset of LinuxCNC that a 3-axis mill needs.
+//! Dialect: the RS274/NGC of LinuxCNC that a 3-axis mill post-processor emits.
 //! - One block per line. Letters are case-insensitive; spaces and tabs may appear anywhere
 //!   outside comments, even inside numbers (`X 1 2 . 5` is `X12.5`), as LinuxCNC allows.
-//! - Comments: `( … )` (not nested) and `;` to the end of the line.
+//! - Comments: `( … )` (not nested) and `;` to the end of the line; `(MSG, text)` is kept as a
+//!   message.
 //! - `%` alone on the first non-blank line opens the program; the next `%` line ends it and the
 //!   rest of the file is ignored (LinuxCNC's rule). A `%` line elsewhere also ends the program.
 //! - `N` line numbers (also fractional, `N4567.789`) must come first on the line; their value is
-//!   ignored (errors report the physical 1-based line instead).
-//! - Every value is an `f64` literal: `+`/`-`, digits, at most one `.`, at least one digit.
+//!   ignored (errors report the physical 1-based line instead). A leading `/` marks the line
+//!   for block delete.
+//! - Values ([`Expr`]): literals (`+`/`-`, digits, at most one `.`, at least one digit),
+//!   parameters `#5`, `##1`, `#[…]`, `#<local>`, `#<_global>`, bracketed expressions with
+//!   `** * / MOD + - EQ NE GT GE LT LE AND OR XOR`, unary minus, and the functions `ABS ACOS
+//!   ASIN COS EXP FIX FUP LN ROUND SIN SQRT TAN`, `ATAN[y]/[x]`, `EXISTS[#<name>]`.
+//! - Parameter settings `#… = value` anywhere on a line ([`Assign`]).
+//! - O-word statements `o100 sub|endsub|call|return|if|elseif|else|endif|while|endwhile|do|
+//!   repeat|endrepeat|break|continue [value]…` on a line of their own ([`OWord`]).
 //! - Columns are 1-based character (not byte) positions in the line.
 //!
 //! Rejected with [`GcodeErrorKind::Unsupported`] (valid LinuxCNC we do not implement):
-//! `#` parameters, `[expr]` and unary functions (`sin[…]`), `O` words (subroutines, loops),
-//! block delete `/`, polar words `@ ^`, axis words `A B C U V W`, words `D E H L Q`, and the
-//! `(abort, …)` comment. Everything else that cannot be read is [`GcodeErrorKind::Invalid`].
+//! polar words `@ ^`, axis words `A B C U V W`, the `D` word, O-words with a computed
+//! number, and the `(abort, …)` comment. `O100` alone starts a Fanuc-style subroutine. Everything else that
+//! cannot be read is [`GcodeErrorKind::Invalid`].
 //!
 //! G and M numbers are kept exactly as integers ×10 ([`Word::code_x10`]: `G91.1` → 911), so
 //! comparisons never depend on float rounding.
 
+mod expr;
 mod lexer;
+mod value;
 
+pub use expr::{Assign, BinOp, Expr, ExprWord, Func, Line, OKind, OName, OWord, Param};
 pub use lexer::parse_line;
 
 /// Why a program was rejected.
@@ -110,7 +122,7 @@ impl Word {
     }
 }
 
-/// One non-empty line of G-code: its words in source order (N word excluded).
+/// One block of G-code with its values evaluated: its words in source order (N word excluded).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Block {
     /// 1-based physical line in the source text.
@@ -124,32 +136,53 @@ pub struct Block {
 }
 
 impl Block {
+    /// The block of a line whose values are all literals (`None` if one is not).
+    pub fn from_literal_line(line: &Line) -> Option<Block> {
+        let words = line
+            .words
+            .iter()
+            .map(|w| {
+                w.value.literal().map(|value| Word {
+                    letter: w.letter,
+                    value,
+                    col: w.col,
+                })
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(Block {
+            line: line.line,
+            line_number: line.line_number,
+            words,
+            first_col: line.first_col,
+        })
+    }
+
     /// The word with this (upper-case) letter, if present. Not meaningful for G and M.
     pub fn get(&self, letter: char) -> Option<&Word> {
         self.words.iter().find(|w| w.letter == letter)
     }
 }
 
-/// Splits a program into blocks, honouring `%` delimiters. Lines without words (blank,
-/// comment-only, N-only) produce no block. Stops at the first error.
-pub fn parse_program(src: &str) -> Blocks<'_> {
-    Blocks {
+/// Splits a program into lines, honouring `%` delimiters. Lines that do nothing (blank,
+/// comment-only, N-only) produce no [`Line`]. Stops at the first error.
+pub fn parse_program(src: &str) -> Lines<'_> {
+    Lines {
         lines: src.lines().enumerate(),
         seen_content: false,
         done: false,
     }
 }
 
-/// Iterator over the blocks of a program; see [`parse_program`].
+/// Iterator over the lines of a program; see [`parse_program`].
 #[derive(Debug)]
-pub struct Blocks<'a> {
+pub struct Lines<'a> {
     lines: std::iter::Enumerate<std::str::Lines<'a>>,
     seen_content: bool,
     done: bool,
 }
 
-impl Iterator for Blocks<'_> {
-    type Item = Result<Block, GcodeError>;
+impl Iterator for Lines<'_> {
+    type Item = Result<Line, GcodeError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         if self.done {
@@ -188,7 +221,7 @@ impl Iterator for Blocks<'_> {
 mod tests {
     use super::*;
 
-    fn blocks(src: &str) -> Vec<Block> {
+    fn blocks(src: &str) -> Vec<Line> {
         parse_program(src)
             .collect::<Result<Vec<_>, _>>()
             .expect("program parses")
@@ -197,8 +230,13 @@ mod tests {
     #[test]
     fn g91_1_is_exactly_911() {
         let b = blocks("g91.1");
-        assert_eq!(b[0].words[0].code_x10(), Some(911));
-        assert_eq!(b[0].words[0].display(), "G91.1");
+        let w = Word {
+            letter: 'G',
+            value: b[0].words[0].value.literal().unwrap(),
+            col: 1,
+        };
+        assert_eq!(w.code_x10(), Some(911));
+        assert_eq!(w.display(), "G91.1");
     }
 
     #[test]
@@ -217,12 +255,12 @@ mod tests {
 
     #[test]
     fn parsing_stops_at_the_first_error() {
-        let results: Vec<_> = parse_program("G0 X1\nG0 X#1\nG0 X2\n").collect();
+        let results: Vec<_> = parse_program("G0 X1\nG0 X[1\nG0 X2\n").collect();
         assert_eq!(results.len(), 2);
         let err = results[1].clone().unwrap_err();
         assert_eq!(
             (err.line, err.col, err.kind),
-            (2, 4, GcodeErrorKind::Unsupported)
+            (2, 5, GcodeErrorKind::Invalid)
         );
     }
 

@@ -29,6 +29,40 @@ pub(super) enum NonModal {
     SetAxisOffsets,
     /// G92.1.
     ResetAxisOffsets,
+    /// G92.2: G92 offset off, stored values kept.
+    SuspendAxisOffsets,
+    /// G92.3: G92 offset back from the stored values.
+    RestoreAxisOffsets,
+    /// G28 (0) / G30 (1): go home through an optional intermediate point.
+    Home(usize),
+    /// G28.1 (0) / G30.1 (1): store the current position as home.
+    SetHome(usize),
+    /// G10: set work offsets (L2 / L20).
+    SetCoordData,
+}
+
+/// Group 4 M codes that stop: M0, M1, M60, M2/M30.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Stop {
+    /// M0.
+    Pause,
+    /// M1.
+    OptionalPause,
+    /// M60.
+    PalletShuttle,
+    /// M2 / M30.
+    End,
+}
+
+/// Group 8: tool length offset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum ToolLength {
+    /// G43: from the tool table.
+    Table,
+    /// G43.1: the Z word is the length.
+    Given,
+    /// G49: off.
+    Off,
 }
 
 /// Group 6: length units.
@@ -58,8 +92,11 @@ enum GAction {
     Distance(Distance),
     ArcDistance(Distance),
     CoordSystem(usize),
+    ToolLength(ToolLength),
     /// G40, G49, G94: cancel a mode we never have on (state already as commanded).
     Nothing,
+    /// G61 / G61.1 / G64: path control (the planner stops exactly at every move's end).
+    PathControl,
 }
 
 /// A decoded block. Each field holds the value and the 1-based column of the word that set it.
@@ -72,8 +109,13 @@ pub(super) struct Decoded {
     pub distance: Option<Distance>,
     pub arc_distance: Option<Distance>,
     pub coord_system: Option<usize>,
-    /// Column of M2/M30.
-    pub stop: Option<usize>,
+    pub tool_length: Option<(ToolLength, usize)>,
+    /// M0, M1, M60, M2, M30 and the column.
+    pub stop: Option<(Stop, usize)>,
+    /// Path control code (G61, G61.1, G64) column.
+    pub path_control: Option<(u32, usize)>,
+    /// Columns of M7 (mist on), M8 (flood on), M9 (both off).
+    pub coolant: [Option<usize>; 3],
     /// Column of M6.
     pub tool_change: Option<usize>,
     pub spindle: Option<(SpindleDir, usize)>,
@@ -86,6 +128,14 @@ pub(super) struct Decoded {
     pub f: Option<Word>,
     pub s: Option<Word>,
     pub t: Option<Word>,
+    pub h: Option<Word>,
+    pub l: Option<Word>,
+    pub e: Option<Word>,
+    /// M48–M53 (override switches) or M62–M68 (I/O): the M number and column.
+    pub io: Option<(u32, usize)>,
+    /// Column of M61 (set current tool).
+    pub set_tool: Option<usize>,
+    pub q: Option<Word>,
 }
 
 impl Decoded {
@@ -139,15 +189,35 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     GAction::Distance(x) => d.distance = Some(x),
                     GAction::ArcDistance(x) => d.arc_distance = Some(x),
                     GAction::CoordSystem(i) => d.coord_system = Some(i),
+                    GAction::ToolLength(t) => d.tool_length = Some((t, w.col)),
                     GAction::Nothing => {}
+                    GAction::PathControl => d.path_control = Some((code, w.col)),
                 }
             }
             'M' => {
                 let code = code_of(block, w)?;
                 let group = match code {
-                    20 | 300 => {
-                        d.stop = Some(w.col);
+                    0 | 10 | 20 | 300 | 600 => {
+                        let stop = match code {
+                            0 => Stop::Pause,
+                            10 => Stop::OptionalPause,
+                            600 => Stop::PalletShuttle,
+                            _ => Stop::End,
+                        };
+                        d.stop = Some((stop, w.col));
                         4
+                    }
+                    70 | 80 | 90 => {
+                        d.coolant[(code / 10 - 7) as usize] = Some(w.col);
+                        8
+                    }
+                    480..=530 | 620..=680 if code.is_multiple_of(10) => {
+                        d.io = Some((code / 10, w.col));
+                        105
+                    }
+                    610 => {
+                        d.set_tool = Some(w.col);
+                        6
                     }
                     60 => {
                         d.tool_change = Some(w.col);
@@ -177,6 +247,10 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'F' => d.f = Some(*w),
             'S' => d.s = Some(*w),
             'T' => d.t = Some(*w),
+            'H' => d.h = Some(*w),
+            'L' => d.l = Some(*w),
+            'E' => d.e = Some(*w),
+            'Q' => d.q = Some(*w),
             other => {
                 // The lexer only lets supported letters through.
                 return Err(GcodeError::unsupported(
@@ -234,6 +308,14 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         530 => (0, A::NonModal(NonModal::MachineCoords)),
         920 => (0, A::NonModal(NonModal::SetAxisOffsets)),
         921 => (0, A::NonModal(NonModal::ResetAxisOffsets)),
+        922 => (0, A::NonModal(NonModal::SuspendAxisOffsets)),
+        923 => (0, A::NonModal(NonModal::RestoreAxisOffsets)),
+        280 => (0, A::NonModal(NonModal::Home(0))),
+        300 => (0, A::NonModal(NonModal::Home(1))),
+        281 => (0, A::NonModal(NonModal::SetHome(0))),
+        301 => (0, A::NonModal(NonModal::SetHome(1))),
+        100 => (0, A::NonModal(NonModal::SetCoordData)),
+        610 | 611 | 640 => (13, A::PathControl),
         170 => (2, A::Plane(Plane::Xy)),
         180 => (2, A::Plane(Plane::Zx)),
         190 => (2, A::Plane(Plane::Yz)),
@@ -245,7 +327,9 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         200 => (6, A::Units(Units::Inch)),
         210 => (6, A::Units(Units::Mm)),
         400 => (7, A::Nothing),
-        490 => (8, A::Nothing),
+        430 => (8, A::ToolLength(ToolLength::Table)),
+        431 => (8, A::ToolLength(ToolLength::Given)),
+        490 => (8, A::ToolLength(ToolLength::Off)),
         540..=590 if code.is_multiple_of(10) => (12, A::CoordSystem(((code - 540) / 10) as usize)),
         _ => return Err(g_unsupported(code)),
     })
@@ -256,19 +340,15 @@ fn g_unsupported(code: u32) -> Rejected {
     let what = match code {
         50..=53 => "spline",
         70 | 80 => "lathe diameter/radius mode",
-        100 => "set offsets/tool data",
         171 | 181 | 191 => "UVW plane",
-        280 | 281 | 300 | 301 => "go to predefined position",
         330 | 331 => "spindle-synchronised motion",
         382..=385 => "probing",
         410 | 411 | 420 | 421 => "cutter radius compensation",
-        430..=432 => "tool length offset",
+        432 => "additional tool length offset",
         520 => "local coordinate offset",
         591..=593 => "extra coordinate system",
-        610 | 611 | 640 => "path control mode",
         700 | 710..=712 | 720..=722 => "lathe cycle",
         730 | 740 | 760 | 810..=890 => "canned cycle",
-        922 | 923 => "G92 offset suspend/restore",
         930 | 950 => "feed rate mode",
         960 | 970 => "spindle speed mode",
         980 | 990 => "canned cycle return level",
@@ -283,13 +363,7 @@ fn m_unsupported(code: u32) -> Rejected {
         return Rejected::Unknown;
     }
     let what = match code / 10 {
-        0 | 1 => "program pause",
-        7..=9 => "coolant",
         19 => "spindle orientation",
-        48..=53 => "override control",
-        60 => "pallet change",
-        61 => "set current tool",
-        62..=68 => "digital/analog I/O",
         70..=73 => "modal state save/restore",
         98 | 99 => "subroutine call/return",
         100..=199 => "user-defined M code",
@@ -304,8 +378,8 @@ mod tests {
     use crate::gcode::{parse_line, GcodeErrorKind};
 
     fn dec(text: &str) -> Result<Decoded, GcodeError> {
-        let block = parse_line(4, text).expect("lexes").expect("has words");
-        decode(&block)
+        let line = parse_line(4, text).expect("lexes").expect("has words");
+        decode(&Block::from_literal_line(&line).expect("literal values"))
     }
 
     #[test]
@@ -341,8 +415,7 @@ mod tests {
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
         for text in [
-            "G43", "G41.1", "G81 Z1", "G28", "G10", "G64", "G59.1", "G33", "M0", "M8", "M98",
-            "M19", "G38.2",
+            "G43.2", "G41.1", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
         ] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");

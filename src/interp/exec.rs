@@ -1,8 +1,13 @@
 //! The modal state machine: executes decoded blocks in RS274/NGC order (see the parent module).
 
-use super::arc::{arc_center, ArcError, ArcForm, MM_PER_INCH};
-use super::decode::{decode, Decoded, Distance, Motion, NonModal, Units};
-use super::{CanonKind, CanonMove, InterpConfig, Plane, SpindleDir, MAX_ARC_TURNS};
+use super::arc::{arc_center, ArcForm, MM_PER_INCH};
+use super::checks::{
+    arc_error_msg, check_g10, check_io, check_values, motion_name, plane_axes, plane_names, AXES,
+    IJK,
+};
+use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, ToolLength, Units};
+use super::expr::Params;
+use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
 use crate::gcode::{Block, GcodeError, Word};
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
@@ -26,6 +31,14 @@ pub struct Interpreter {
     spindle_reported: (SpindleDir, f64),
     selected_tool: u32,
     ended: bool,
+    /// (mist, flood).
+    coolant: (bool, bool),
+    /// G92 offset as stored (G92.2 suspends the active one, G92.3 restores it from here), mm.
+    axis_offset_saved_mm: [f64; 3],
+    /// G28 and G30 positions, machine coordinates, mm.
+    homes_mm: [[f64; 3]; 2],
+    /// Active tool length offset (G43/G43.1), along Z, mm.
+    tool_offset_mm: f64,
 }
 
 /// What the motion step of a block will do.
@@ -53,12 +66,43 @@ impl Interpreter {
             spindle_reported: (SpindleDir::Off, 0.0),
             selected_tool: 0,
             ended: false,
+            coolant: (false, false),
+            axis_offset_saved_mm: [0.0; 3],
+            homes_mm: [[0.0; 3]; 2],
+            tool_offset_mm: 0.0,
         }
     }
 
     /// Current tool position in machine coordinates, mm.
     pub fn position_mm(&self) -> [f64; 3] {
         self.pos_mm
+    }
+
+    /// Reads the parameters that mirror the modal state (LinuxCNC's numbers, in mm): G28
+    /// position #5161–#5163, G30 #5181–#5183, stored G92 offset #5211–#5213, G54…G59
+    /// #5221–#5223 … #5321–#5323.
+    pub(super) fn sync_params_in(&mut self, params: &Params) {
+        for a in 0..3 {
+            self.homes_mm[0][a] = params.get(5161 + a);
+            self.homes_mm[1][a] = params.get(5181 + a);
+            self.axis_offset_saved_mm[a] = params.get(5211 + a);
+            for (i, offset) in self.cfg.work_offsets_mm.iter_mut().enumerate() {
+                offset[a] = params.get(5221 + 20 * i + a);
+            }
+        }
+    }
+
+    /// Writes the parameters that mirror the modal state (see [`Self::sync_params_in`]).
+    pub(super) fn sync_params_out(&self, params: &mut Params) {
+        for a in 0..3 {
+            params.set(5161 + a, self.homes_mm[0][a]);
+            params.set(5181 + a, self.homes_mm[1][a]);
+            params.set(5211 + a, self.axis_offset_saved_mm[a]);
+            for (i, offset) in self.cfg.work_offsets_mm.iter().enumerate() {
+                params.set(5221 + 20 * i + a, offset[a]);
+            }
+        }
+        params.set(5220, (self.coord_index + 1) as f64);
     }
 
     /// True once M2/M30 has run; later blocks are ignored.
@@ -115,6 +159,29 @@ impl Interpreter {
             self.spindle.0 = dir;
         }
         self.report_spindle(&mut emit);
+        if d.coolant.iter().any(Option::is_some) {
+            if d.coolant[2].is_some() {
+                self.coolant = (false, false);
+            }
+            self.coolant.0 |= d.coolant[0].is_some();
+            self.coolant.1 |= d.coolant[1].is_some();
+            emit(CanonKind::Coolant {
+                mist: self.coolant.0,
+                flood: self.coolant.1,
+            });
+        }
+        if d.set_tool.is_some() {
+            self.selected_tool = d.q.map_or(0, |q| q.value as u32);
+        }
+        if let Some((m, _)) = d.io {
+            emit(CanonKind::Io {
+                m,
+                p: d.p.map(|w| w.value),
+                e: d.e.map(|w| w.value),
+                l: d.l.map(|w| w.value),
+                q: d.q.map(|w| w.value),
+            });
+        }
         if let (Some((NonModal::Dwell, _)), Some(p)) = (d.non_modal, d.p) {
             emit(CanonKind::Dwell {
                 duration_s: p.value,
@@ -122,12 +189,50 @@ impl Interpreter {
         }
         self.plane = d.plane.unwrap_or(self.plane);
         self.units = d.units.unwrap_or(self.units);
+        match d.tool_length {
+            Some((ToolLength::Table, _)) => {
+                let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+                self.tool_offset_mm = self.tool_length_mm(tool).unwrap_or(0.0);
+            }
+            Some((ToolLength::Given, _)) => {
+                self.tool_offset_mm = d.axes[2].map_or(0.0, |z| z.value * self.scale());
+            }
+            Some((ToolLength::Off, _)) => self.tool_offset_mm = 0.0,
+            None => {}
+        }
         self.coord_index = d.coord_system.unwrap_or(self.coord_index);
         self.distance = d.distance.unwrap_or(self.distance);
         self.arc_distance = d.arc_distance.unwrap_or(self.arc_distance);
         match d.non_modal {
-            Some((NonModal::SetAxisOffsets, _)) => self.set_axis_offsets(&d),
-            Some((NonModal::ResetAxisOffsets, _)) => self.axis_offset_mm = [0.0; 3],
+            Some((NonModal::SetAxisOffsets, _)) => {
+                self.set_axis_offsets(&d);
+                self.axis_offset_saved_mm = self.axis_offset_mm;
+            }
+            Some((NonModal::ResetAxisOffsets, _)) => {
+                self.axis_offset_mm = [0.0; 3];
+                self.axis_offset_saved_mm = [0.0; 3];
+            }
+            Some((NonModal::SuspendAxisOffsets, _)) => self.axis_offset_mm = [0.0; 3],
+            Some((NonModal::RestoreAxisOffsets, _)) => {
+                self.axis_offset_mm = self.axis_offset_saved_mm;
+            }
+            Some((NonModal::SetHome(i), _)) => self.homes_mm[i] = self.pos_mm,
+            Some((NonModal::SetCoordData, _)) => self.set_coord_data(&d),
+            Some((NonModal::Home(i), _)) => {
+                // Through the intermediate point (current position where no axis is given),
+                // then to the stored position along the given axes (all if none is given).
+                let via = self.target_mm(&d, false);
+                emit(CanonKind::Traverse { end_mm: via });
+                let mut end_mm = via;
+                let all = !d.has_axis_words();
+                for ((end, home), word) in end_mm.iter_mut().zip(self.homes_mm[i]).zip(&d.axes) {
+                    if all || word.is_some() {
+                        *end = home;
+                    }
+                }
+                emit(CanonKind::Traverse { end_mm });
+                self.pos_mm = end_mm;
+            }
             _ => {}
         }
         if let Some((m, _)) = d.motion {
@@ -151,9 +256,15 @@ impl Interpreter {
                 emit(kind);
             }
         }
-        if d.stop.is_some() {
-            emit(CanonKind::ProgramEnd);
-            self.ended = true;
+        match d.stop {
+            Some((Stop::End, _)) => {
+                emit(CanonKind::ProgramEnd);
+                self.ended = true;
+            }
+            Some((Stop::Pause, _)) => emit(CanonKind::Pause(PauseKind::Program)),
+            Some((Stop::OptionalPause, _)) => emit(CanonKind::Pause(PauseKind::Optional)),
+            Some((Stop::PalletShuttle, _)) => emit(CanonKind::Pause(PauseKind::PalletShuttle)),
+            None => {}
         }
         Ok(())
     }
@@ -166,9 +277,32 @@ impl Interpreter {
         }
     }
 
-    /// Program-to-machine offset (G5x + G92) along `axis`, mm.
+    /// Program-to-machine offset (G5x + G92 + tool length) along `axis`, mm.
     fn offset_mm(&self, axis: usize) -> f64 {
-        self.cfg.work_offsets_mm[self.coord_index][axis] + self.axis_offset_mm[axis]
+        self.cfg.work_offsets_mm[self.coord_index][axis]
+            + self.axis_offset_mm[axis]
+            + self.tlo_mm(axis)
+    }
+
+    /// Tool length offset along `axis`, mm (Z only).
+    fn tlo_mm(&self, axis: usize) -> f64 {
+        if axis == 2 {
+            self.tool_offset_mm
+        } else {
+            0.0
+        }
+    }
+
+    /// Length of tool `tool` from the table; `Some(0)` for every tool when the table is empty.
+    fn tool_length_mm(&self, tool: u32) -> Option<f64> {
+        if self.cfg.tool_lengths_mm.is_empty() {
+            return Some(0.0);
+        }
+        self.cfg
+            .tool_lengths_mm
+            .iter()
+            .find(|t| t.0 == tool)
+            .map(|t| t.1)
     }
 
     fn report_spindle(&mut self, emit: &mut impl FnMut(CanonKind)) {
@@ -186,7 +320,26 @@ impl Interpreter {
         for (axis, word) in d.axes.iter().enumerate() {
             if let Some(w) = word {
                 let g5x = self.cfg.work_offsets_mm[self.coord_index][axis];
-                self.axis_offset_mm[axis] = self.pos_mm[axis] - g5x - w.value * self.scale();
+                self.axis_offset_mm[axis] =
+                    self.pos_mm[axis] - g5x - self.tlo_mm(axis) - w.value * self.scale();
+            }
+        }
+    }
+
+    /// G10 L2 (offsets given) / L20 (offsets such that the current point has the given
+    /// coordinates) for work offset P (0 = the active one). Values are absolute (G91 ignored).
+    fn set_coord_data(&mut self, d: &Decoded) {
+        let l20 = d.l.is_some_and(|l| l.value == 20.0);
+        let p = d.p.map_or(0, |p| p.value.round() as usize);
+        let index = if p == 0 { self.coord_index } else { p - 1 };
+        for (axis, word) in d.axes.iter().enumerate() {
+            if let Some(w) = word {
+                let v_mm = w.value * self.scale();
+                self.cfg.work_offsets_mm[index][axis] = if l20 {
+                    self.pos_mm[axis] - self.axis_offset_mm[axis] - self.tlo_mm(axis) - v_mm
+                } else {
+                    v_mm
+                };
             }
         }
     }
@@ -282,8 +435,35 @@ impl Interpreter {
     /// circle).
     fn motion_step(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
         let explicit = d.motion.map(|m| m.0);
-        if let Some((NonModal::SetAxisOffsets, col)) = d.non_modal {
-            if !d.has_axis_words() {
+        if let Some((ToolLength::Given, col)) = d.tool_length {
+            if let Some(w) = d.axes[0].or(d.axes[1]) {
+                let msg = format!(
+                    "G43.1 {} (tool offset across the spindle) is not supported",
+                    w.letter
+                );
+                return Err(GcodeError::unsupported(block.line, w.col, msg));
+            }
+            if d.motion.is_some_and(|m| m.0 != Motion::Cancel) || d.non_modal.is_some() {
+                return Err(GcodeError::invalid(
+                    block.line,
+                    col,
+                    "G43.1 and another code both use the axis words",
+                ));
+            }
+            return Ok(MotionStep::None);
+        }
+        if let Some((
+            nm @ (NonModal::SetAxisOffsets | NonModal::Home(_) | NonModal::SetCoordData),
+            col,
+        )) = d.non_modal
+        {
+            let name = match nm {
+                NonModal::SetAxisOffsets => "G92",
+                NonModal::Home(0) => "G28",
+                NonModal::Home(_) => "G30",
+                _ => "G10",
+            };
+            if !d.has_axis_words() && nm == NonModal::SetAxisOffsets {
                 return Err(GcodeError::invalid(
                     block.line,
                     col,
@@ -291,7 +471,7 @@ impl Interpreter {
                 ));
             }
             if let Some((m, mcol)) = d.motion.filter(|m| m.0 != Motion::Cancel) {
-                let msg = format!("G92 and {} both use the axis words", motion_name(m));
+                let msg = format!("{name} and {} both use the axis words", motion_name(m));
                 return Err(GcodeError::invalid(block.line, mcol, msg));
             }
             return Ok(MotionStep::None);
@@ -326,11 +506,69 @@ impl Interpreter {
         let line = block.line;
         let inv = |w: &Word, msg: &str| GcodeError::invalid(line, w.col, msg);
         let arc_move = matches!(step, MotionStep::Move(Motion::Arc { .. }));
-        if let Some(w) = d.first_arc_word().filter(|_| !arc_move) {
+        let g10 = d.non_modal.filter(|n| n.0 == NonModal::SetCoordData);
+        if let (Some(r), Some(_)) = (d.r, d.path_control.filter(|c| c.0 == 640)) {
+            return Err(GcodeError::unsupported(
+                line,
+                r.col,
+                "G64 R (planner option) is not supported",
+            ));
+        }
+        let g10_r = |w: &Word| g10.is_some() && w.letter == 'R';
+        if let Some(w) = d.first_arc_word().filter(|w| !arc_move && !g10_r(w)) {
             return Err(inv(
                 &w,
                 &format!("{} word without G2/G3 to use it", w.letter),
             ));
+        }
+        if let Some((m, col)) = d.io {
+            return check_io(line, col, m, d);
+        }
+        if let Some(e) = d.e {
+            return Err(inv(&e, "E word without M66, M67 or M68 to use it"));
+        }
+        if let Some(col) = d.set_tool {
+            return match d.q {
+                Some(q) if q.value >= 0.0 && q.value.fract() == 0.0 => Ok(()),
+                _ => Err(GcodeError::invalid(
+                    line,
+                    col,
+                    "M61 needs Q, a tool number >= 0",
+                )),
+            };
+        }
+        match (d.h, d.tool_length) {
+            (Some(h), Some((ToolLength::Table, _))) if h.value < 0.0 || h.value.fract() != 0.0 => {
+                return Err(inv(&h, "H word must be a non-negative integer"));
+            }
+            (Some(_), Some((ToolLength::Table, _))) | (None, _) => {}
+            (Some(h), _) => return Err(inv(&h, "H word without G43 to use it")),
+        }
+        if let Some((ToolLength::Table, col)) = d.tool_length {
+            let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+            if self.tool_length_mm(tool).is_none() {
+                let msg = format!("G43: tool {tool} is not in the tool table");
+                return Err(GcodeError::invalid(line, col, msg));
+            }
+        }
+        let g64 = d.path_control.filter(|c| c.0 == 640);
+        if let Some(l) = d.l.filter(|_| g10.is_none()) {
+            return Err(inv(&l, "L word without G10 to use it"));
+        }
+        if let Some(q) = d.q.filter(|_| g64.is_none()) {
+            return Err(inv(&q, "Q word without G64 to use it"));
+        }
+        if let Some((_, col)) = g10 {
+            return check_g10(line, col, d);
+        }
+        if let (Some(p), Some(_)) = (d.p, g64) {
+            if p.value < 0.0 {
+                return Err(inv(&p, "G64 P tolerance must not be negative"));
+            }
+            return Ok(());
+        }
+        if let Some(q) = d.q.filter(|q| q.value < 0.0) {
+            return Err(inv(&q, "G64 Q tolerance must not be negative"));
         }
         let dwell = d.non_modal.filter(|n| n.0 == NonModal::Dwell);
         match (d.p, dwell, arc_move) {
@@ -443,89 +681,5 @@ impl Interpreter {
             }
         }
         Ok(())
-    }
-}
-
-/// Largest magnitude accepted for any number (1e9 mm = 1000 km): keeps every later
-/// computation finite.
-const MAX_ABS_VALUE: f64 = 1e9;
-
-/// Sign, integrality and range of the values themselves.
-fn check_values(block: &Block, d: &Decoded) -> Result<(), GcodeError> {
-    let inv = |w: &Word, msg: String| GcodeError::invalid(block.line, w.col, msg);
-    if let Some(w) = block.words.iter().find(|w| w.value.abs() > MAX_ABS_VALUE) {
-        return Err(inv(
-            w,
-            format!(
-                "{} word value out of range (|value| > {MAX_ABS_VALUE:e})",
-                w.letter
-            ),
-        ));
-    }
-    if let Some(w) = [d.f, d.s].into_iter().flatten().find(|w| w.value < 0.0) {
-        return Err(inv(&w, format!("{} word must not be negative", w.letter)));
-    }
-    if let Some(t) = d.t.filter(|t| t.value < 0.0 || t.value.fract() != 0.0) {
-        return Err(inv(&t, "T word must be a non-negative integer".to_string()));
-    }
-    Ok(())
-}
-
-const AXES: [char; 3] = ['X', 'Y', 'Z'];
-const IJK: [char; 3] = ['I', 'J', 'K'];
-
-/// (first, second, normal) axis indices of a plane, LinuxCNC's ARC_FEED order.
-pub(super) fn plane_axes(plane: Plane) -> (usize, usize, usize) {
-    match plane {
-        Plane::Xy => (0, 1, 2),
-        Plane::Zx => (2, 0, 1),
-        Plane::Yz => (1, 2, 0),
-    }
-}
-
-fn plane_names(plane: Plane) -> (&'static str, &'static str) {
-    match plane {
-        Plane::Xy => ("XY", "I/J"),
-        Plane::Zx => ("ZX", "I/K"),
-        Plane::Yz => ("YZ", "J/K"),
-    }
-}
-
-fn motion_name(m: Motion) -> &'static str {
-    match m {
-        Motion::Rapid => "G0",
-        Motion::Linear => "G1",
-        Motion::Arc { clockwise: true } => "G2",
-        Motion::Arc { clockwise: false } => "G3",
-        Motion::Cancel => "G80",
-    }
-}
-
-/// Message for an arc error; lengths shown in program units (`k` mm per unit).
-fn arc_error_msg(e: &ArcError, k: f64) -> String {
-    match *e {
-        ArcError::ZeroRadius { r1_mm, r2_mm } => {
-            format!(
-                "zero-radius arc (radius to start {:.4}, to end {:.4})",
-                r1_mm / k,
-                r2_mm / k
-            )
-        }
-        ArcError::RadiusMismatch { r1_mm, r2_mm } => format!(
-            "radius to end of arc differs from radius to start (r1 = {:.4}, r2 = {:.4})",
-            r1_mm / k,
-            r2_mm / k
-        ),
-        ArcError::RadiusFormFullCircle => {
-            "R-form arc ends where it starts (use I/J/K for a full circle)".to_string()
-        }
-        ArcError::RadiusTooSmall {
-            r_mm,
-            half_chord_mm,
-        } => format!(
-            "arc radius R{:.4} too small to reach the end point (half chord {:.4})",
-            r_mm / k,
-            half_chord_mm / k
-        ),
     }
 }

@@ -12,30 +12,52 @@
 //! machine position). An F word is read in the units active when it is executed (RS274/NGC
 //! order: before this block's G20/G21) and stored in mm/min.
 //!
-//! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, G4, G17–G19,
-//! G20/G21, G54–G59, G90/G91, G90.1/G91.1, G92/G92.1, motion (G0–G3, G53), M2/M30.
+//! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, M7/M8/M9, G4,
+//! G17–G19, G20/G21, G54–G59, G61/G61.1/G64, G90/G91, G90.1/G91.1, G10/G28/G30/G28.1/G30.1/
+//! G92/G92.1/G92.2/G92.3, motion (G0–G3, G53), M0/M1/M60/M2/M30.
 //! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
 //! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
 //! |value| ≤ 1e9 so that all results stay finite.
+//!
+//! Parameters, expressions and O-word control flow: see `expr` and `flow`. Values are
+//! evaluated, and parameter settings applied, before the block executes.
 //!
 //! Spindle: one [`CanonKind::Spindle`] is emitted per block when the (direction, speed) pair
 //! differs from the one last emitted (an S word alone while stopped is reported with `Off`).
 //! M6 stops a running spindle first (a `Spindle { dir: Off, .. }` before the `ToolChange`); the
 //! program must restart it with M3/M4.
 //!
-//! Also accepted, because they only confirm the state we are always in: G40 (cutter
-//! compensation off), G49 (tool length offset off), G80 (cancel motion mode), G94 (feed per
-//! minute). Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
+//! Also accepted:
+//! - G28/G30: rapid to the intermediate point (the axis words, in the current modes), then to
+//!   the stored position (#5161… / #5181…, set by G28.1/G30.1, default 0) along the given
+//!   axes, all axes if none is given. G10 L2/L20 P0…P6 set work offsets (R0 only).
+//! - M7/M8/M9 ([`CanonKind::Coolant`]), M0/M1/M60 ([`CanonKind::Pause`]), M48–M53 and
+//!   M62–M68 ([`CanonKind::Io`]): no motion. M61 Q sets the current tool without a change.
+//! - G61, G61.1, G64 (P, Q): accepted; the planner stops exactly at the end of every move
+//!   whatever the mode, so they change nothing.
+//! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
+//!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
+//! - G40 (cutter compensation off), G80 (cancel motion mode),
+//!   G94 (feed per minute), because they only confirm the state we are always in.
+//!
+//! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
 
 mod arc;
+mod checks;
 mod decode;
 mod exec;
+mod expr;
+mod flow;
+#[cfg(test)]
+mod flow_tests;
 #[cfg(test)]
 mod tests;
 
 pub use crate::gcode::{GcodeError, GcodeErrorKind};
 pub use exec::Interpreter;
+pub use expr::NUM_PARAMS;
+pub use flow::{MAX_CALL_DEPTH, MAX_ITERATIONS};
 
 /// Largest P (turn count) accepted on G2/G3: guards against programs that would expand to
 /// absurd paths (and hangs downstream).
@@ -49,6 +71,12 @@ pub struct InterpConfig {
     pub start_mm: [f64; 3],
     /// Work offsets G54…G59 (index 0…5) in machine coordinates, mm (default: all zero).
     pub work_offsets_mm: [[f64; 3]; 6],
+    /// Tool lengths (tool number, length in mm) for G43 H. Empty (the default): every tool has
+    /// length 0, the machine's positions being those of its own tool's tip.
+    pub tool_lengths_mm: Vec<(u32, f64)>,
+    /// Block delete switch: when on, lines starting with `/` are skipped (default: off, as
+    /// LinuxCNC starts).
+    pub block_delete: bool,
 }
 
 impl Default for InterpConfig {
@@ -56,6 +84,8 @@ impl Default for InterpConfig {
         Self {
             start_mm: [0.0; 3],
             work_offsets_mm: [[0.0; 3]; 6],
+            tool_lengths_mm: Vec::new(),
+            block_delete: false,
         }
     }
 }
@@ -69,21 +99,13 @@ impl Default for InterpConfig {
 /// assert_eq!(moves[0].line, 2);
 /// assert_eq!(moves[0].kind, CanonKind::Feed { end_mm: [10.0, 0.0, 0.0], feed_mm_per_min: 600.0 });
 /// assert_eq!(moves[1].kind, CanonKind::ProgramEnd);
-/// let err = run_program("G1 X1 F100\nG43 Z5", &InterpConfig::default()).unwrap_err();
+/// let err = run_program("G1 X1 F100\nG41 X5", &InterpConfig::default()).unwrap_err();
 /// assert!(err.is_unsupported());
-/// assert_eq!(err.to_string(), "line 2, column 1: G43 (tool length offset) is not supported");
+/// assert_eq!(err.to_string(), "line 2, column 1: G41 (cutter radius compensation) is not supported");
 /// # Ok::<(), vmc_twin::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
-    let mut interp = Interpreter::new(cfg.clone());
-    let mut out = Vec::new();
-    for block in crate::gcode::parse_program(src) {
-        interp.execute_block(&block?, &mut out)?;
-        if interp.is_ended() {
-            break;
-        }
-    }
-    Ok(out)
+    flow::run(src, cfg)
 }
 
 /// Active plane for arcs (G17 / G18 / G19).
@@ -138,6 +160,37 @@ pub enum CanonKind {
     ToolChange { tool: u32 },
     /// M2 / M30.
     ProgramEnd,
+    /// `(MSG, text)`: shown to the operator; no motion.
+    Message(String),
+    /// M7 / M8 / M9: the coolant state after the command.
+    Coolant { mist: bool, flood: bool },
+    /// M0 / M1 / M60: the program waits for the operator (no motion, no machine time).
+    Pause(PauseKind),
+    /// M48–M53 (override switches), M62–M68 (digital/analog I/O, M66 waits on an input and
+    /// returns at once here): the M number and its P, E, L, Q values; no motion.
+    Io {
+        /// The M number (48…53, 62…68).
+        m: u32,
+        /// P, E, L, Q words, if given.
+        p: Option<f64>,
+        /// E word.
+        e: Option<f64>,
+        /// L word.
+        l: Option<f64>,
+        /// Q word.
+        q: Option<f64>,
+    },
+}
+
+/// Why a program pauses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PauseKind {
+    /// M0.
+    Program,
+    /// M1 (only if the optional-stop switch is on).
+    Optional,
+    /// M60: pallet shuttle, then pause.
+    PalletShuttle,
 }
 
 /// A canonical action with the source line (1-based) it came from.

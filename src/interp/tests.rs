@@ -318,7 +318,10 @@ fn preamble_codes_that_confirm_our_state_are_accepted() {
 fn a_failed_block_leaves_the_interpreter_unchanged() {
     let mut it = Interpreter::new(InterpConfig::default());
     let mut out = Vec::new();
-    let block = |s: &str| crate::gcode::parse_line(1, s).unwrap().unwrap();
+    let block = |s: &str| {
+        crate::gcode::Block::from_literal_line(&crate::gcode::parse_line(1, s).unwrap().unwrap())
+            .unwrap()
+    };
     it.execute_block(&block("G0 X1"), &mut out).unwrap();
     // S and G20 would execute before the arc geometry fails.
     assert!(it
@@ -459,23 +462,36 @@ const ERROR_CASES: &[(&str, usize, usize, GcodeErrorKind, &str)] = &[
     ("G1 X1 F-5", 1, 7, GcodeErrorKind::Invalid, "negative"),
     ("T1.5 M6", 1, 1, GcodeErrorKind::Invalid, "T word"),
     (
-        "G0 X1\n(ok)\nG43 H1 Z5",
+        "G0 X1\n(ok)\nG41 D1 X5",
         3,
         5,
         GcodeErrorKind::Unsupported,
-        "H word",
+        "D word",
     ),
     (
-        "G0 X1\nG43 Z5",
+        "G0 X1\nG41 X5",
         2,
         1,
         GcodeErrorKind::Unsupported,
-        "G43 (tool length offset)",
+        "G41 (cutter radius compensation)",
+    ),
+    (
+        "G0 X1 H1",
+        1,
+        7,
+        GcodeErrorKind::Invalid,
+        "H word without G43",
     ),
     ("G1 G0 X1", 1, 4, GcodeErrorKind::Invalid, "G1 and G0"),
-    ("M8", 1, 1, GcodeErrorKind::Unsupported, "M8 (coolant)"),
-    ("G64 P0.01", 1, 1, GcodeErrorKind::Unsupported, "G64"),
-    ("G0 X1e3", 1, 6, GcodeErrorKind::Unsupported, "E word"),
+    (
+        "M19",
+        1,
+        1,
+        GcodeErrorKind::Unsupported,
+        "M19 (spindle orientation)",
+    ),
+    ("G81 X1 Z-1 R1", 1, 1, GcodeErrorKind::Unsupported, "G81"),
+    ("G0 X1e3", 1, 6, GcodeErrorKind::Invalid, "E word"),
     (
         "G0 Y12345678901",
         1,

@@ -466,6 +466,11 @@ impl PlanBuilder<'_> {
                 self.spindle_dir = dir;
                 self.spindle_rpm = if dir == SpindleDir::Off { 0.0 } else { rpm };
             }
+            // Messages, coolant and operator pauses take no machine time here.
+            CanonKind::Message(_)
+            | CanonKind::Coolant { .. }
+            | CanonKind::Pause(_)
+            | CanonKind::Io { .. } => {}
             CanonKind::ProgramEnd => {
                 self.spindle_dir = SpindleDir::Off;
                 self.spindle_rpm = 0.0;

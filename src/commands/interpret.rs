@@ -1,0 +1,250 @@
+//! `vmc-twin interpret`: the canonical machine actions of a program, one per line, in the call
+//! syntax of LinuxCNC's `rs274` stand-alone interpreter, so that they can be compared with a
+//! controller's.
+//!
+//! Lengths are printed in mm with 4 decimals, as `rs274` prints a G21 program. Unlike `rs274`,
+//! coordinates are machine coordinates (work offsets and G92 included); they agree with
+//! `rs274`'s when no work offset or G92 offset is active. Only the motion, spindle, tool,
+//! coolant, pause, message and end calls are printed (no state-setting calls such as
+//! `SET_G5X_OFFSET`).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use crate::interp::{self, CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir};
+
+/// What to interpret, validated.
+pub struct InterpretConfig {
+    /// The G-code program.
+    pub program: PathBuf,
+    /// Start position and work offsets.
+    pub interp: InterpConfig,
+}
+
+/// One tool of a tool table file.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolEntry {
+    number: u32,
+    length_mm: f64,
+    diameter_mm: f64,
+}
+
+/// The tool table file: `[[tool]]` entries with `number`, `length_mm`, `diameter_mm`.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ToolTable {
+    tool: Vec<ToolEntry>,
+}
+
+/// Reads a tool table (TOML, see `docs/usage.md`) as (tool number, length in mm) pairs.
+///
+/// # Errors
+/// An unreadable file, bad TOML, a tool given twice, a length or diameter that is not finite
+/// (or a negative diameter).
+pub fn load_tool_lengths(path: &std::path::Path) -> Result<Vec<(u32, f64)>> {
+    let file = path.display().to_string();
+    let text = crate::files::read_text(path).with_context(|| file.clone())?;
+    let table: ToolTable = toml::from_str(&text).with_context(|| file.clone())?;
+    let mut out: Vec<(u32, f64)> = Vec::new();
+    for t in &table.tool {
+        if out.iter().any(|o| o.0 == t.number) {
+            anyhow::bail!("{file}: tool {} appears twice", t.number);
+        }
+        if !t.length_mm.is_finite() || t.length_mm.abs() > 1e4 {
+            anyhow::bail!(
+                "{file}: tool {}: length_mm must be finite within ±10000 mm",
+                t.number
+            );
+        }
+        if !(t.diameter_mm.is_finite() && t.diameter_mm >= 0.0) {
+            anyhow::bail!(
+                "{file}: tool {}: diameter_mm must be a finite number >= 0",
+                t.number
+            );
+        }
+        out.push((t.number, t.length_mm));
+    }
+    Ok(out)
+}
+
+/// Interprets the program and prints its canonical calls.
+///
+/// # Errors
+/// An unreadable or invalid program (with line and column).
+pub fn interpret(cfg: &InterpretConfig, out: &mut dyn Write) -> Result<()> {
+    let file = cfg.program.display().to_string();
+    let text = crate::files::read_text(&cfg.program)
+        .with_context(|| format!("{file}: cannot read program"))?;
+    let moves = interp::run_program(&text, &cfg.interp).with_context(|| file.clone())?;
+    write_calls(&moves, out)?;
+    Ok(())
+}
+
+/// Writes the canonical calls of `moves` (see the module documentation).
+///
+/// # Errors
+/// A failed write.
+pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<()> {
+    let mut n = 0usize;
+    let mut call = |out: &mut dyn Write, text: String| {
+        n += 1;
+        writeln!(out, "{n:5} N..... {text}")
+    };
+    call(out, "USE_LENGTH_UNITS(CANON_UNITS_MM)".to_string())?;
+    let (mut feed, mut plane, mut speed) = (None, Plane::Xy, None);
+    let mut coolant = (false, false);
+    for m in moves {
+        match &m.kind {
+            CanonKind::Traverse { end_mm } => {
+                call(out, format!("STRAIGHT_TRAVERSE({})", xyz(end_mm)))?;
+            }
+            CanonKind::Feed {
+                end_mm,
+                feed_mm_per_min,
+            } => {
+                if feed != Some(*feed_mm_per_min) {
+                    feed = Some(*feed_mm_per_min);
+                    call(out, format!("SET_FEED_RATE({feed_mm_per_min:.4})"))?;
+                }
+                call(out, format!("STRAIGHT_FEED({})", xyz(end_mm)))?;
+            }
+            CanonKind::Arc {
+                end_mm,
+                center_mm,
+                plane: p,
+                clockwise,
+                extra_turns,
+                feed_mm_per_min,
+            } => {
+                if feed != Some(*feed_mm_per_min) {
+                    feed = Some(*feed_mm_per_min);
+                    call(out, format!("SET_FEED_RATE({feed_mm_per_min:.4})"))?;
+                }
+                if *p != plane {
+                    plane = *p;
+                    let name = match p {
+                        Plane::Xy => "XY",
+                        Plane::Zx => "XZ",
+                        Plane::Yz => "YZ",
+                    };
+                    call(out, format!("SELECT_PLANE(CANON_PLANE_{name})"))?;
+                }
+                let (a1, a2, ax) = match p {
+                    Plane::Xy => (0, 1, 2),
+                    Plane::Zx => (2, 0, 1),
+                    Plane::Yz => (1, 2, 0),
+                };
+                let turns = 1 + i64::from(*extra_turns);
+                let rotation = if *clockwise { -turns } else { turns };
+                call(
+                    out,
+                    format!(
+                        "ARC_FEED({:.4}, {:.4}, {:.4}, {:.4}, {rotation}, {:.4}, 0.0000, 0.0000, 0.0000)",
+                        end_mm[a1], end_mm[a2], center_mm[a1], center_mm[a2], end_mm[ax]
+                    ),
+                )?;
+            }
+            CanonKind::Dwell { duration_s } => call(out, format!("DWELL({duration_s:.4})"))?,
+            CanonKind::Spindle { dir, rpm } => {
+                if speed != Some(*rpm) {
+                    speed = Some(*rpm);
+                    call(out, format!("SET_SPINDLE_SPEED(0, {rpm:.4})"))?;
+                }
+                let text = match dir {
+                    SpindleDir::Cw => "START_SPINDLE_CLOCKWISE(0)",
+                    SpindleDir::Ccw => "START_SPINDLE_COUNTERCLOCKWISE(0)",
+                    SpindleDir::Off => "STOP_SPINDLE_TURNING(0)",
+                };
+                call(out, text.to_string())?;
+            }
+            CanonKind::ToolChange { tool } => call(out, format!("CHANGE_TOOL({tool})"))?,
+            CanonKind::Coolant { mist, flood } => {
+                if !*mist && !*flood {
+                    call(out, "MIST_OFF()".to_string())?;
+                    call(out, "FLOOD_OFF()".to_string())?;
+                } else if *mist && !coolant.0 {
+                    call(out, "MIST_ON()".to_string())?;
+                } else if *flood && !coolant.1 {
+                    call(out, "FLOOD_ON()".to_string())?;
+                }
+                coolant = (*mist, *flood);
+            }
+            CanonKind::Pause(kind) => {
+                if *kind == PauseKind::PalletShuttle {
+                    call(out, "PALLET_SHUTTLE()".to_string())?;
+                }
+                let text = match kind {
+                    PauseKind::Optional => "OPTIONAL_PROGRAM_STOP()",
+                    _ => "PROGRAM_STOP()",
+                };
+                call(out, text.to_string())?;
+            }
+            CanonKind::Io { m, p, e, l, q } => {
+                let n = |v: &Option<f64>| v.map_or(0.0, |v| v);
+                let text = match m {
+                    62 => format!("SET_MOTION_OUTPUT_BIT({})", n(p)),
+                    63 => format!("CLEAR_MOTION_OUTPUT_BIT({})", n(p)),
+                    64 => format!("SET_AUX_OUTPUT_BIT({})", n(p)),
+                    65 => format!("CLEAR_AUX_OUTPUT_BIT({})", n(p)),
+                    66 => format!(
+                        "WAIT({}, {}, {}, {:.4})",
+                        n(p).max(n(e)),
+                        u8::from(e.is_some()),
+                        n(l),
+                        n(q)
+                    ),
+                    67 => format!("SET_MOTION_OUTPUT_VALUE({}, {:.4})", n(e), n(q)),
+                    68 => format!("SET_AUX_OUTPUT_VALUE({}, {:.4})", n(e), n(q)),
+                    _ => format!("M{m}(P {})", n(p)),
+                };
+                call(out, text)?;
+            }
+            CanonKind::Message(text) => call(out, format!("MESSAGE(\"{text}\")"))?,
+            CanonKind::ProgramEnd => call(out, "PROGRAM_END()".to_string())?,
+        }
+    }
+    Ok(())
+}
+
+fn xyz(p: &[f64; 3]) -> String {
+    format!(
+        "{:.4}, {:.4}, {:.4}, 0.0000, 0.0000, 0.0000",
+        p[0], p[1], p[2]
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn calls_read_like_rs274() {
+        let moves = interp::run_program(
+            "G0 X1 Y1\nS1000 M3\nG1 X2 F100\nG2 X3 Y2 I1 J0\nG4 P2\nM8\nM30",
+            &InterpConfig::default(),
+        )
+        .unwrap();
+        let mut out = Vec::new();
+        write_calls(&moves, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let calls: Vec<&str> = text.lines().map(|l| &l[13..]).collect();
+        assert_eq!(
+            calls,
+            vec![
+                "USE_LENGTH_UNITS(CANON_UNITS_MM)",
+                "STRAIGHT_TRAVERSE(1.0000, 1.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "SET_SPINDLE_SPEED(0, 1000.0000)",
+                "START_SPINDLE_CLOCKWISE(0)",
+                "SET_FEED_RATE(100.0000)",
+                "STRAIGHT_FEED(2.0000, 1.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "ARC_FEED(3.0000, 2.0000, 3.0000, 1.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "DWELL(2.0000)",
+                "FLOOD_ON()",
+                "PROGRAM_END()",
+            ]
+        );
+    }
+}
