@@ -15,6 +15,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of the output went away (`| head`): nothing left to say.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("vmc-twin: error: {}", error_text(&e));
             ExitCode::FAILURE
@@ -41,6 +43,14 @@ fn run(command: Command) -> Result<()> {
         Command::Interpret(args) => commands::interpret::interpret(&args.config()?, out),
         Command::Bench(args) => commands::bench::bench(&args.config()?, out),
     }
+}
+
+/// Whether the error comes from writing to a pipe whose reader has closed it.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// The error and its causes, `: `-joined (each error type prints its cause once: either in
