@@ -585,3 +585,17 @@ fn lobes_writes_the_csv_of_its_table_and_refuses_bad_input_in_one_line() {
         );
     }
 }
+
+#[test]
+fn a_recording_may_go_into_the_output_folder_the_command_creates() {
+    // The folder `o` does not exist before: `--out o/xy` creates it, then the recording's path
+    // is checked.
+    let tmp = TempDir::new("rrd-in-out");
+    let o = vmc(
+        tmp.path(),
+        &["run", &diag_xy(), "--out", "o/xy", "--rrd", "o/xy.rrd"],
+    );
+    assert_success(&o, "run");
+    assert!(tmp.path().join("o/xy.rrd").is_file());
+    assert!(tmp.path().join("o/xy/summary.json").is_file());
+}

@@ -120,8 +120,9 @@ pub struct RrdArgs {
 }
 
 impl RrdArgs {
-    /// Recording settings, checked; the output path checked before any simulation.
-    fn checked(&self, force: bool) -> Result<Option<RrdOutput>> {
+    /// Recording settings, checked. The path is checked by the command before any simulation,
+    /// once the output folder it may sit in exists.
+    fn checked(&self) -> Result<Option<RrdOutput>> {
         let Some(path) = &self.rrd else {
             return Ok(None);
         };
@@ -132,7 +133,6 @@ impl RrdArgs {
         settings
             .validate()
             .context("--magnify must be a positive number")?;
-        record::check_rrd_path(path, force)?;
         Ok(Some(RrdOutput {
             path: path.clone(),
             settings,
@@ -228,7 +228,7 @@ impl RunArgs {
             );
         }
         let force = self.force.force;
-        let rrd = self.rrd.checked(force)?;
+        let rrd = self.rrd.checked()?;
         Ok(commands::run::RunConfig {
             program: self.program,
             machine,
@@ -333,7 +333,7 @@ impl CampaignArgs {
             force,
             spindle_speed: self.spindle_speed,
             print_runs: self.runs,
-            rrd: self.rrd.checked(force)?,
+            rrd: self.rrd.checked()?,
         })
     }
 }

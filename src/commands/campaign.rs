@@ -50,6 +50,9 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
         }
         None => None,
     };
+    if let Some(rrd) = &cfg.rrd {
+        record::check_rrd_path(&rrd.path, cfg.force)?;
+    }
     let mut settings = Settings::for_machine(&cfg.machine);
     if cfg.spindle_speed {
         settings = settings.with_spindle_speed_input();

@@ -63,6 +63,9 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         }
         None => None,
     };
+    if let Some(rrd) = &cfg.rrd {
+        record::check_rrd_path(&rrd.path, cfg.force)?;
+    }
     let mut controller = match &cfg.model {
         Some(path) => Some(compensator(path, machine, out)?),
         None => None,
