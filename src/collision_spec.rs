@@ -289,7 +289,7 @@ impl FixtureSpec {
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, CollisionSpecError> {
         let spec: FixtureSpec = toml::from_str(text).map_err(|e| CollisionSpecError::Parse {
             path: path.to_string(),
-            msg: e.to_string().trim_end().replace('\n', " "),
+            msg: crate::files::one_line_toml_error(&e),
         })?;
         validate_bodies(&spec.bodies, "bodies").map_err(|(field, msg)| {
             CollisionSpecError::Invalid {

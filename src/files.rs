@@ -51,6 +51,11 @@ pub fn read_named(path: &Path, what: &'static str) -> Result<String, ReadError> 
     })
 }
 
+/// A TOML parser's message on one line (it spans several, with a caret under the column).
+pub fn one_line_toml_error(e: &toml::de::Error) -> String {
+    e.to_string().trim_end().replace('\n', " ")
+}
+
 /// A file could not be read.
 #[derive(Debug, Error)]
 #[error("{}: cannot read {what}: {err}", path.display())]

@@ -184,7 +184,7 @@ impl MachineSpec {
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, MachineError> {
         let spec: MachineSpec = toml::from_str(text).map_err(|e| MachineError::Parse {
             path: path.to_string(),
-            msg: e.to_string().trim_end().replace('\n', " "),
+            msg: crate::files::one_line_toml_error(&e),
         })?;
         spec.validate(path)?;
         Ok(spec)

@@ -148,7 +148,7 @@ impl ToolDynamics {
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ToolFileError> {
         let f: ToolFile = toml::from_str(text).map_err(|e| ToolFileError::Parse {
             path: path.to_string(),
-            msg: e.to_string().trim_end().replace('\n', " "),
+            msg: crate::files::one_line_toml_error(&e),
         })?;
         let t = f.tool;
         let tool = Tool {
@@ -273,7 +273,6 @@ mod tests {
     #[test]
     fn the_benchmark_tool_gives_the_closed_form_minimum_in_slotting() {
         let b = ToolDynamics::benchmark();
-        assert_eq!(b.tool.teeth, 2);
         // ZOA minimum in slotting: a_lim = 2kζ(1+ζ)/h̄, h̄ = N·K_n/4 (k from the modal mass).
         let m = b.modes.x[0];
         let h_bar = 2.0 * 2.0e8 / 4.0;

@@ -16,9 +16,14 @@ fn benchmark_mode() -> Mode {
 
 /// The SDM boundary at `rpm`, searched up to 20 mm to 1e-4 mm.
 fn limit_at(sdm: &MillingSdm, rpm: f64) -> LobePoint {
+    limit_below(sdm, rpm, 20.0)
+}
+
+/// The SDM boundary at `rpm`, searched up to `max_mm` to 1e-4 mm.
+fn limit_below(sdm: &MillingSdm, rpm: f64, max_mm: f64) -> LobePoint {
     sdm.at_speed(rpm)
         .unwrap()
-        .critical_depth(None, 20.0, 1e-4)
+        .critical_depth(None, max_mm, 1e-4)
         .unwrap()
         .unwrap()
 }
@@ -35,12 +40,7 @@ fn sdm_and_time_domain_agree_on_benchmark() {
     let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
     let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, TimeOptions::default()).unwrap();
     for n in [6000.0, 9000.0, 10000.0, 12000.0, 14500.0] {
-        let p = sdm
-            .at_speed(n)
-            .unwrap()
-            .critical_depth(None, 20.0, 1e-4)
-            .unwrap()
-            .unwrap();
+        let p = limit_below(&sdm, n, 20.0);
         let under = td.growth_ratio(n, 0.95 * p.critical_depth_mm).unwrap();
         let over = td.growth_ratio(n, 1.05 * p.critical_depth_mm).unwrap();
         assert!(
@@ -317,12 +317,7 @@ fn multi_mode_cantilever_sdm_and_time_domain_agree() {
     };
     let td = TimeDomain::new(&tool, &modes, 0.3, Milling::Up, opts).unwrap();
     for n in [9000.0, 14000.0] {
-        let p = sdm
-            .at_speed(n)
-            .unwrap()
-            .critical_depth(None, 50.0, 1e-4)
-            .unwrap()
-            .unwrap();
+        let p = limit_below(&sdm, n, 50.0);
         let under = td.growth_ratio(n, 0.95 * p.critical_depth_mm).unwrap();
         let over = td.growth_ratio(n, 1.05 * p.critical_depth_mm).unwrap();
         assert!(
