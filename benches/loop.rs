@@ -36,7 +36,7 @@ fn reference_calibration() -> (MachineSpec, Dataset) {
     let spec = MachineSpec::reference();
     let data = calibration::calibrate(
         &spec,
-        &ThermalCycle::calibration_set(),
+        &ThermalCycle::calibration_plan(&spec),
         &CampaignConfig::new(1),
     )
     .unwrap();

@@ -22,7 +22,7 @@ fn main() {
     let spec = MachineSpec::reference();
     let data = calibration::calibrate(
         &spec,
-        &ThermalCycle::calibration_set(),
+        &ThermalCycle::calibration_plan(&spec),
         &CampaignConfig::new(seed),
     )
     .unwrap();
@@ -38,7 +38,7 @@ fn main() {
     let mut twin = Twin::new(&spec, seed).unwrap();
     if let Some(&si) = a.get(2) {
         // Drive to the state, the predictor following the readings as the controller does.
-        let state = &calibration::evaluation_states(seed)[si as usize];
+        let state = &calibration::evaluation_states(&spec, seed)[si as usize];
         println!("state {}", state.name);
         h = follow_to_state(&mut twin, state, h).unwrap();
     }

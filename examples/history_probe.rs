@@ -13,7 +13,7 @@ fn main() {
     let geom = spec.geometry();
     let data = calibration::calibrate(
         &spec,
-        &ThermalCycle::calibration_set(),
+        &ThermalCycle::calibration_plan(&spec),
         &CampaignConfig::new(seed),
     )
     .unwrap();

@@ -66,7 +66,7 @@ fn main() {
     let plans = diagonal_plans(&spec).unwrap();
     let mut runs = Vec::new();
     for &seed in &seeds {
-        let data = calibration::calibrate(&spec, &ThermalCycle::calibration_set(), &{
+        let data = calibration::calibrate(&spec, &ThermalCycle::calibration_plan(&spec), &{
             let mut c = cfg_of(seed);
             if let Some(v) = every {
                 c.measure_every_s = v;
@@ -108,7 +108,7 @@ fn main() {
         let states = if dev {
             vmc_twin::placement::validation_states(seed)
         } else {
-            calibration::evaluation_states(seed)
+            calibration::evaluation_states(&spec, seed)
         };
         let r =
             study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &h, &states, &plans).unwrap();

@@ -47,7 +47,7 @@ fn main() {
     for seed in seeds {
         let data = calibration::calibrate(
             &spec,
-            &ThermalCycle::calibration_set(),
+            &ThermalCycle::calibration_plan(&spec),
             &CampaignConfig::new(seed),
         )
         .unwrap();
@@ -81,7 +81,7 @@ fn main() {
         let states = if dev {
             vmc_twin::placement::validation_states(seed)
         } else {
-            calibration::evaluation_states(seed)
+            calibration::evaluation_states(&spec, seed)
         };
         for (si, state) in states.iter().enumerate() {
             let mut twin =

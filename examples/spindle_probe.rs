@@ -130,7 +130,7 @@ fn main() {
             .flat_map(|(k, c)| samples(&spec, seed, base + k as u64, c))
             .collect::<Vec<_>>()
     };
-    let train = collect(&ThermalCycle::calibration_set(), 0);
+    let train = collect(&ThermalCycle::calibration_plan(&spec), 0);
     let mut test_cycles = ThermalCycle::evaluation_set(seed);
     test_cycles.extend(
         vmc_twin::placement::validation_states(seed)

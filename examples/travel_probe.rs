@@ -124,7 +124,7 @@ fn main() {
             .sum::<f64>()
             - 6.0
     };
-    let train: Vec<_> = collect(&ThermalCycle::calibration_set(), 0)
+    let train: Vec<_> = collect(&ThermalCycle::calibration_plan(&spec), 0)
         .into_iter()
         .step_by(every.max(1))
         .map(|(r, f, y)| (r, f, y.map(|v| v + noise * gauss())))

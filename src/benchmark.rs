@@ -51,7 +51,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> {
     let data = calibration::calibrate(
         spec,
-        &ThermalCycle::calibration_set(),
+        &ThermalCycle::calibration_plan(&spec),
         &CampaignConfig::new(1),
     )?;
     let settings = Settings {
@@ -119,7 +119,7 @@ pub fn workload_8h(
         spec,
         spec.axes.home_mm,
     )?;
-    let cycle = ThermalCycle::calibration_set()[2].clone();
+    let cycle = ThermalCycle::calibration_plan(&spec)[2].clone();
     let cfg = SimConfig::new(1.0, interp_ms * 1e-3)
         .map_err(SimError::from)?
         .sampling(SampleMode::EveryCycle);
@@ -185,8 +185,8 @@ pub fn campaign_with(
 
 /// The typical calibration cycles, `n` of them: the first `n` of the set, repeated (as the same
 /// duty on another day, renamed `<name>_day<k>`) when `n` exceeds it.
-pub fn calibration_cycles(n: usize) -> Vec<ThermalCycle> {
-    let base = ThermalCycle::calibration_set();
+pub fn calibration_cycles(spec: &MachineSpec, n: usize) -> Vec<ThermalCycle> {
+    let base = ThermalCycle::calibration_plan(spec);
     (0..n)
         .map(|i| {
             let mut c = base[i % base.len()].clone();
@@ -212,8 +212,8 @@ mod tests {
 
     #[test]
     fn more_calibration_cycles_than_the_set_repeat_it_under_new_names() {
-        let m = ThermalCycle::calibration_set().len();
-        let c = calibration_cycles(2 * m + 1);
+        let m = ThermalCycle::calibration_plan(&spec).len();
+        let c = calibration_cycles(&spec, 2 * m + 1);
         assert_eq!(c.len(), 2 * m + 1);
         let names: std::collections::HashSet<_> = c.iter().map(|c| c.name.clone()).collect();
         assert_eq!(

@@ -312,6 +312,36 @@ impl MachineSpec {
         Ok(())
     }
 
+    /// A fingerprint of the description without its ambient profile: FNV-1a (64 bit) of its
+    /// canonical JSON, in hex. Two descriptions with the same fingerprint build the same machine.
+    pub fn fingerprint(&self) -> String {
+        // The shop's air is not part of the machine: a model calibrated in one shop is the
+        // machine's model in another (its trained ranges say whether it knows that air).
+        let mut machine = self.clone();
+        machine.thermal.ambient = crate::thermal::AmbientProfile::Constant { temp_degc: 0.0 };
+        // A MachineSpec always serialises (plain data, finite numbers checked on load).
+        let text = serde_json::to_string(&machine).unwrap_or_default();
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in text.bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+
+    /// The machine's identity for a model: name, realisation (the seed of its random parts,
+    /// when known) and fingerprint.
+    pub fn identity(
+        &self,
+        realisation: Option<u64>,
+    ) -> crate::predict::provenance::MachineIdentity {
+        crate::predict::provenance::MachineIdentity {
+            name: self.machine.name.clone(),
+            realisation,
+            fingerprint: self.fingerprint(),
+        }
+    }
+
     /// Nominal geometry (chain + tool offset): public knowledge a predictor may use.
     pub fn geometry(&self) -> MachineGeometry {
         // validate() has parsed the chain already.

@@ -165,8 +165,8 @@ pub fn default_locations(spec: &MachineSpec) -> Vec<String> {
 
 /// Scenarios of the selection campaign: the typical calibration cycles (what the predictor is
 /// trained on) followed by the selection-validation cycles of [`validation_cycles`].
-pub fn selection_cycles(seed: u64) -> Vec<ThermalCycle> {
-    let mut v = ThermalCycle::calibration_set();
+pub fn selection_cycles(spec: &MachineSpec, seed: u64) -> Vec<ThermalCycle> {
+    let mut v = ThermalCycle::calibration_plan(spec);
     v.extend(validation_cycles(seed, VALIDATION_STREAM));
     v
 }
@@ -198,6 +198,8 @@ pub fn validation_cycles(seed: u64, stream: u64) -> Vec<ThermalCycle> {
     phases.push(phase(3.0, 0.0, 0.0));
     v.push(ThermalCycle {
         name: "sel_random_duty".into(),
+        purpose: "selection validation".into(),
+        soak_degc: None,
         ambient: AmbientProfile::Constant { temp_degc: 20.0 },
         phases,
     });
@@ -208,6 +210,8 @@ pub fn validation_cycles(seed: u64, stream: u64) -> Vec<ThermalCycle> {
     let d = 0.3 + 0.7 * next();
     v.push(ThermalCycle {
         name: "sel_ambient_steps".into(),
+        purpose: "selection validation".into(),
+        soak_degc: None,
         ambient: AmbientProfile::Table {
             points: vec![
                 [0.0, 20.0],
@@ -229,6 +233,8 @@ pub fn validation_cycles(seed: u64, stream: u64) -> Vec<ThermalCycle> {
     let hours_on = 3.0 + 2.0 * next();
     v.push(ThermalCycle {
         name: "sel_ambient_swing".into(),
+        purpose: "selection validation".into(),
+        soak_degc: None,
         ambient: AmbientProfile::Sinusoid {
             mean_degc: 19.5 + next(),
             amplitude_degc,
@@ -243,6 +249,8 @@ pub fn validation_cycles(seed: u64, stream: u64) -> Vec<ThermalCycle> {
     let (r2, d2, h3) = (rpm(next()), 0.3 + 0.7 * next(), 1.5 + next());
     v.push(ThermalCycle {
         name: "sel_restart".into(),
+        purpose: "selection validation".into(),
+        soak_degc: None,
         ambient: AmbientProfile::Constant { temp_degc: 20.0 },
         phases: vec![
             phase(h1, r1, d1),
@@ -338,11 +346,11 @@ pub fn study_among(
 ) -> Result<PlacementReport, PlacementError> {
     let candidates = candidates_among(spec, only)?;
     let cand_spec = with_sensors(spec, candidates.clone())?;
-    let scenarios = selection_cycles(cfg.seed);
+    let scenarios = selection_cycles(spec, cfg.seed);
     let data = calibration::calibrate(&cand_spec, &scenarios, &CampaignConfig::new(cfg.seed))
         .map_err(EvalError::from)?;
     let selection = selection::select_sensors(&data, &cfg.selection)?;
-    let typical = typical_part(&data);
+    let typical = typical_part(spec, &data);
     let plans = study::diagonal_plans(&cand_spec)?;
     let states = validation_states(cfg.seed);
     let mut validation: Vec<SetResult> = Vec::new();
@@ -426,8 +434,8 @@ pub fn study_among(
 }
 
 /// The typical (calibration) cycles of a selection dataset: what the predictor trains on.
-fn typical_part(data: &Dataset) -> Dataset {
-    let cal: Vec<String> = ThermalCycle::calibration_set()
+fn typical_part(spec: &MachineSpec, data: &Dataset) -> Dataset {
+    let cal: Vec<String> = ThermalCycle::calibration_plan(spec)
         .into_iter()
         .map(|c| c.name)
         .collect();
@@ -492,7 +500,7 @@ fn compare(
     cfg: &PlacementConfig,
     selection_typical: &Dataset,
 ) -> Result<Vec<SetResult>, PlacementError> {
-    let cal = ThermalCycle::calibration_set();
+    let cal = ThermalCycle::calibration_plan(cand_spec);
     let plans = study::diagonal_plans(cand_spec)?;
     // One calibration dataset per seed, with every candidate logged; each set trains on its
     // columns. The selection seed's typical cycles are part of the selection data.
@@ -512,7 +520,7 @@ fn compare(
     for (label, names) in sets {
         let mut runs: Vec<RunReport> = Vec::new();
         for (seed, data) in cfg.compare_seeds.iter().zip(&datasets) {
-            let states = calibration::evaluation_states(*seed);
+            let states = calibration::evaluation_states(cand_spec, *seed);
             runs.extend(evaluate_set(
                 cand_spec,
                 candidates,
@@ -609,15 +617,19 @@ mod tests {
 
     #[test]
     fn selection_scenarios_are_not_evaluation_states() {
-        let sel: Vec<String> = selection_cycles(1).iter().map(|c| c.name.clone()).collect();
-        for s in calibration::evaluation_states(1) {
+        let spec = MachineSpec::reference();
+        let sel: Vec<String> = selection_cycles(&spec, 1)
+            .iter()
+            .map(|c| c.name.clone())
+            .collect();
+        for s in calibration::evaluation_states(&spec, 1) {
             assert!(!sel.contains(&s.cycle.name), "{} is held out", s.cycle.name);
         }
     }
 
     #[test]
     fn validation_states_are_selection_only_and_the_lowest_score_is_chosen() {
-        let held_out: Vec<String> = calibration::evaluation_states(1)
+        let held_out: Vec<String> = calibration::evaluation_states(&spec, 1)
             .into_iter()
             .map(|s| s.cycle.name)
             .collect();

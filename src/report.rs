@@ -86,6 +86,8 @@ pub struct RunSummary {
     pub after: Option<ErrorStats>,
     /// 1 − RMS(|E| after)/RMS(|E| before), if compensation ran.
     pub reduction: Option<f64>,
+    /// Readings and commands outside the model's trained ranges, if compensation ran.
+    pub extrapolation: Option<crate::predict::provenance::Extrapolation>,
 }
 
 impl RunLog {
@@ -126,6 +128,7 @@ impl RunLog {
             thermal_part: error_stats(&thermal),
             after: a,
             reduction: a.map(|a| 1.0 - a.rms_um[3] / b.rms_um[3]),
+            extrapolation: None,
         })
     }
 
@@ -271,6 +274,28 @@ pub fn write_summary(s: &RunSummary, out: &mut dyn Write) -> std::io::Result<()>
     }
     if let Some(r) = s.reduction {
         writeln!(out, "  reduction of RMS |E|: {:.1} %", r * 100.0)?;
+    }
+    if let Some(e) = &s.extrapolation {
+        match e.first_time_s {
+            None => writeln!(
+                out,
+                "  model inputs: every reading and command inside the trained ranges"
+            )?,
+            Some(t) => {
+                writeln!(
+                    out,
+                    "  WARNING: the model extrapolated: {} of {} samples outside the trained ranges, the first at t = {t:.0} s:",
+                    e.count, e.samples
+                )?;
+                for o in &e.inputs {
+                    writeln!(
+                        out,
+                        "    {:<12} trained {:>9.2} … {:>9.2}, first {:>9.2} at t = {:.0} s, {} samples outside",
+                        o.input, o.range[0], o.range[1], o.first_value, o.first_time_s, o.count
+                    )?;
+                }
+            }
+        }
     }
     Ok(())
 }

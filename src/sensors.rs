@@ -240,6 +240,12 @@ impl SensorBank {
         &self.names
     }
 
+    /// Forgets the sensors' lag: the next [`Self::update`] reads its temperatures as settled
+    /// (as the first one does).
+    pub fn settle(&mut self) {
+        self.primed = false;
+    }
+
     /// Advances the sensors by `dt_s` with node temperatures and ambient (°C) held over the step,
     /// and takes a new reading (lag, then noise, then quantisation and range clamp).
     pub fn update(

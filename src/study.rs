@@ -22,6 +22,7 @@ use crate::predict::controller::Compensator;
 use crate::predict::predictor::{
     self, ErrorPredictor, ModelKind, PredictError, Settings, TrainSummary,
 };
+use crate::predict::provenance::{InputRanges, TrainedOn};
 use crate::program::{self, ProgramError};
 use crate::sim::SimError;
 use crate::twin::{sub_seed, Twin, TwinError};
@@ -282,8 +283,17 @@ fn campaign_for_seed(
     let (volumetric, vs) = predictor::train_volumetric(&data, &geometry, &s)?;
     progress.advance(units::TRAINING, &format!("seed {seed}: training"));
     let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
+    let trained_on = |sensors: &[String]| TrainedOn {
+        machine: data.origin.clone(),
+        inputs: InputRanges::of(&data, sensors),
+    };
+    let trained_on = [
+        trained_on(hybrid.sensor_names()),
+        trained_on(volumetric.sensor_names()),
+        trained_on(linear.sensor_names()),
+    ];
     progress.advance(units::TRAINING, &format!("seed {seed}: evaluation"));
-    let states = calibration::evaluation_states(seed);
+    let states = calibration::evaluation_states(spec, seed);
     let mut runs = evaluate_predictor_with_progress(
         spec,
         seed,
@@ -316,6 +326,7 @@ fn campaign_for_seed(
         runs,
         models: TrainedModels {
             seed,
+            trained_on,
             hybrid,
             volumetric,
             linear,
@@ -343,7 +354,7 @@ pub fn run_campaign_with_progress(
         spec,
         seeds,
         settings,
-        &ThermalCycle::calibration_set(),
+        &ThermalCycle::calibration_plan(&spec),
         progress,
     )
 }
@@ -359,7 +370,7 @@ pub fn run_campaign_with_cycles(
 ) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
     let cal_cycles = cal_cycles.to_vec();
     let plans = diagonal_plans(spec)?;
-    let n_runs = (calibration::evaluation_states(0).len() * plans.len()) as u64;
+    let n_runs = (calibration::evaluation_states(spec, 0).len() * plans.len()) as u64;
     progress.add_total(
         seeds.len() as u64 * (units::CALIBRATION + 3 * units::TRAINING + 3 * n_runs * units::RUN),
     );
@@ -386,7 +397,7 @@ pub fn run_campaign_with_cycles(
     report.evaluation_states = seeds
         .first()
         .map(|&s| {
-            calibration::evaluation_states(s)
+            calibration::evaluation_states(spec, s)
                 .iter()
                 .map(|s| s.name.clone())
                 .collect()
@@ -399,6 +410,8 @@ pub fn run_campaign_with_cycles(
 pub struct TrainedModels {
     /// Machine seed.
     pub seed: u64,
+    /// What each model was trained on, in [`PREDICTORS`] order.
+    pub trained_on: [TrainedOn; 3],
     /// The study's hybrid predictor.
     pub hybrid: predictor::HybridPredictor,
     /// Direct volumetric MLP.

@@ -196,6 +196,21 @@ impl Twin {
         Ok(())
     }
 
+    /// Soaks the machine at a uniform temperature, °C: every node at `temp_degc` and the sensors
+    /// settled on the new temperatures (as after a night in a shop held at it). Time does not
+    /// move.
+    ///
+    /// # Errors
+    /// A temperature that is not finite.
+    pub fn soak_degc(&mut self, temp_degc: f64) -> Result<(), TwinError> {
+        let n = self.thermal.temps_degc().len();
+        self.thermal.set_temps_degc(&vec![temp_degc; n])?;
+        self.sensors.settle();
+        self.sensors
+            .update(0.0, self.thermal.temps_degc(), self.thermal.ambient_degc())
+            .map_err(|e| TwinError::Sensors(e.to_string()))
+    }
+
     /// Truth, for tests and instruments: node names.
     pub fn node_names(&self) -> &[String] {
         self.thermal.node_names()

@@ -485,7 +485,10 @@ fn the_opt_in_spindle_speed_needs_a_hybrid_and_a_logged_speed() {
         &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
     );
     let text = std::fs::read_to_string(t.0.join("cal.csv")).unwrap();
-    assert!(text.lines().next().unwrap().contains(",dir,spindle_rpm,"));
+    // The first line names the machine the data was measured on.
+    assert!(text.starts_with("# machine: vmc-reference; realisation: 1; fingerprint: "));
+    let header = text.lines().nth(1).unwrap();
+    assert!(header.contains(",dir,spindle_rpm,"));
     assert_eq!(
         one_line_error(
             &t.0,
@@ -501,15 +504,10 @@ fn the_opt_in_spindle_speed_needs_a_hybrid_and_a_logged_speed() {
         "--spindle-speed applies to the hybrid model only (its spindle part), not to --kind linear"
     );
     // A dataset from a machine whose controller did not log the speed.
-    let col = text
-        .lines()
-        .next()
-        .unwrap()
-        .split(',')
-        .position(|c| c == "spindle_rpm")
-        .unwrap();
+    let col = header.split(',').position(|c| c == "spindle_rpm").unwrap();
     let stripped: String = text
         .lines()
+        .skip(1)
         .map(|l| {
             let mut c: Vec<&str> = l.split(',').collect();
             c.remove(col);

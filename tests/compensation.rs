@@ -18,7 +18,7 @@ const SEEDS: [u64; 3] = [1, 2, 3];
 fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
     let data = calibration::calibrate(
         spec,
-        &ThermalCycle::calibration_set(),
+        &ThermalCycle::calibration_plan(&spec),
         &CampaignConfig::new(seed),
     )
     .expect("campaign runs");
@@ -61,7 +61,7 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
     let mut runs = Vec::new();
     for seed in SEEDS {
         let model = trained(&spec, seed);
-        let states = calibration::evaluation_states(seed);
+        let states = calibration::evaluation_states(&spec, seed);
         runs.extend(
             study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans)
                 .unwrap(),
@@ -125,7 +125,7 @@ fn a_predictor_blind_to_temperature_does_not_reach_80_percent_on_warm_runs() {
         inner: model.clone(),
         cold_degc,
     };
-    let states = calibration::evaluation_states(seed);
+    let states = calibration::evaluation_states(&spec, seed);
     let blind = study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &frozen, &states, &plans)
         .unwrap();
     let full =

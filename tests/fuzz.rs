@@ -438,7 +438,7 @@ fn small_dataset_csv() -> String {
     let spec = MachineSpec::reference();
     let mut ds = calibration::calibrate(
         &spec,
-        &ThermalCycle::calibration_set(),
+        &ThermalCycle::calibration_plan(&spec),
         &CampaignConfig::new(1),
     )
     .unwrap();

@@ -196,6 +196,12 @@ pub struct RunArgs {
     /// Put the model in the control loop: each point is reported before and after compensation.
     #[arg(long, requires = "model")]
     pub compensate: bool,
+    /// Refuse the run when a reading or command leaves the range the model was trained on.
+    #[arg(long, requires = "model")]
+    pub strict: bool,
+    /// Use a model calibrated on another machine or realisation (a note says which).
+    #[arg(long, requires = "model")]
+    pub allow_other_machine: bool,
     #[command(flatten)]
     pub rrd: RrdArgs,
 }
@@ -240,6 +246,8 @@ impl RunArgs {
             sim,
             model: self.model,
             rrd,
+            strict: self.strict,
+            allow_other_machine: self.allow_other_machine,
         })
     }
 }

@@ -56,14 +56,14 @@ pub fn bench(cfg: &BenchConfig, out: &mut dyn Write) -> Result<()> {
             "campaign (seed 1: calibration, 3 trainings, 147 held-out runs) vs calibration cycles:"
         )?;
         writeln!(out, "  {:>8} {:>8} {:>10}", "cycles", "runs", "wall s")?;
-        let m = ThermalCycle::calibration_set().len();
+        let m = ThermalCycle::calibration_plan(&spec).len();
         for n in [2, 4, m, 2 * m] {
             let (s, runs) =
-                benchmark::campaign_with(&spec, &benchmark::calibration_cycles(n), &[1])?;
+                benchmark::campaign_with(&spec, &benchmark::calibration_cycles(&spec, n), &[1])?;
             writeln!(out, "  {n:>8} {runs:>8} {s:>10.2}")?;
         }
         let (s, runs) =
-            benchmark::campaign_with(&spec, &ThermalCycle::calibration_set(), &[1, 2, 3])?;
+            benchmark::campaign_with(&spec, &ThermalCycle::calibration_plan(&spec), &[1, 2, 3])?;
         writeln!(out, "default campaign, seeds 1,2,3 ({runs} runs): {s:.2} s")?;
     }
     if let Some(m) = benchmark::peak_rss_mib() {

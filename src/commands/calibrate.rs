@@ -29,7 +29,7 @@ pub struct CalibrateConfig {
 /// An output that may not be written, simulation errors.
 pub fn calibrate(cfg: &CalibrateConfig, out: &mut dyn Write) -> Result<()> {
     files::check_writable(&cfg.out, cfg.force)?;
-    let cycles = ThermalCycle::calibration_set();
+    let cycles = ThermalCycle::calibration_plan(&cfg.machine);
     let mut campaign = calibration::CampaignConfig::new(cfg.seed);
     campaign.measure_every_s = cfg.measure_every_s;
     let data = calibration::calibrate(&cfg.machine, &cycles, &campaign)?;

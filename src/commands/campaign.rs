@@ -74,9 +74,18 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
         files::write_atomic(&path, json.as_bytes(), cfg.force)?;
         for m in &models {
             for (k, text) in [
-                (PREDICTORS[0], m.hybrid.to_json_string()?),
-                (PREDICTORS[1], m.volumetric.to_json_string()?),
-                (PREDICTORS[2], m.linear.to_json_string()?),
+                (
+                    PREDICTORS[0],
+                    m.hybrid.to_json_string_with(Some(&m.trained_on[0]))?,
+                ),
+                (
+                    PREDICTORS[1],
+                    m.volumetric.to_json_string_with(Some(&m.trained_on[1]))?,
+                ),
+                (
+                    PREDICTORS[2],
+                    m.linear.to_json_string_with(Some(&m.trained_on[2]))?,
+                ),
             ] {
                 let file = dir.join(format!("model_{}_seed{}.json", k.name(), m.seed));
                 files::write_atomic(&file, text.as_bytes(), cfg.force)?;

@@ -11,7 +11,8 @@ use crate::files;
 use crate::machine::MachineSpec;
 use crate::motion::Plan;
 use crate::predict::controller::Compensator;
-use crate::predict::predictor::AnyPredictor;
+use crate::predict::predictor::{self as model_file, AnyPredictor};
+use crate::predict::provenance::{Guarded, InputRanges};
 use crate::program;
 use crate::progress::Progress;
 use crate::record;
@@ -41,10 +42,15 @@ pub struct RunConfig {
     pub model: Option<PathBuf>,
     /// A Rerun recording to write.
     pub rrd: Option<RrdOutput>,
+    /// Refuse a run in which a reading or command leaves the model's trained range.
+    pub strict: bool,
+    /// Accept a model calibrated on another machine or realisation (with a note).
+    pub allow_other_machine: bool,
 }
 
-/// The compensating controller of a run.
-type RunController = Compensator<AnyPredictor>;
+/// The compensating controller of a run: the model, its inputs checked against its trained
+/// ranges.
+type RunController = Guarded<Compensator<AnyPredictor>>;
 
 /// Runs the program and prints the report to `out`.
 ///
@@ -67,7 +73,7 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         record::check_rrd_path(&rrd.path, cfg.force)?;
     }
     let mut controller = match &cfg.model {
-        Some(path) => Some(compensator(path, machine, out)?),
+        Some(path) => Some(compensator(cfg, path, out)?),
         None => None,
     };
     let (log, recorder) = simulate(cfg, &warmups, &plan, controller.as_mut())?;
@@ -78,9 +84,29 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         .map(|p| p.display().to_string())
         .collect();
     let program_name = cfg.program.display().to_string();
-    let summary = log
+    let mut summary = log
         .summary(&program_name, &machine.machine.name, cfg.seed, &warmup_names)
         .with_context(|| format!("{program_name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion"))?;
+    summary.extrapolation = controller.as_ref().map(|c| c.extrapolation().clone());
+    if let (true, Some(e)) = (cfg.strict, &summary.extrapolation) {
+        if let Some(first) = e.inputs.first() {
+            anyhow::bail!(
+                "--strict: the model was used outside the range it was trained on: {} (first at \
+                 t = {:.0} s: {}, trained {:.2} … {:.2}); {} samples outside in all; no report \
+                 written",
+                e.inputs
+                    .iter()
+                    .map(|o| o.input.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                first.first_time_s,
+                first.first_value,
+                first.range[0],
+                first.range[1],
+                e.count
+            );
+        }
+    }
     // The report goes to `out` and, with --rrd, into the recording.
     let text = report_text(cfg, &log, &summary)?;
     out.write_all(text.as_bytes())?;
@@ -122,14 +148,45 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
     Ok((warmups, plan))
 }
 
-/// The model of `path` as a compensator for `machine` (retooled to the machine's tool offset
-/// when it is a hybrid model, which `out` is told).
-fn compensator(path: &Path, machine: &MachineSpec, out: &mut dyn Write) -> Result<RunController> {
+/// The model of `path` as a compensator for the run's machine (retooled to the machine's tool
+/// offset when it is a hybrid model, which `out` is told), guarded by its trained ranges. A model
+/// calibrated on another machine or realisation is refused unless `allow_other_machine`.
+fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunController> {
+    let machine = &cfg.machine;
     // A read error and a content error alike are named by the file, once.
-    let model = files::read_text(path)
+    let (model, trained_on) = files::read_text(path)
         .map_err(anyhow::Error::new)
-        .and_then(|text| AnyPredictor::from_json_str(&text).map_err(anyhow::Error::new))
+        .and_then(|text| {
+            let model = AnyPredictor::from_json_str(&text)?;
+            Ok((model, model_file::file::trained_on(&text)?))
+        })
         .with_context(|| path.display().to_string())?;
+    let here = machine.identity(Some(cfg.seed));
+    match trained_on.as_ref().and_then(|t| t.machine.as_ref()) {
+        Some(id) => {
+            if let Some(why) = id.difference(&here) {
+                if !cfg.allow_other_machine {
+                    anyhow::bail!(
+                        "{}: the model does not belong to this machine: {why}; retrain it on \
+                         this machine's calibration, or pass --allow-other-machine to use it \
+                         anyway",
+                        path.display()
+                    );
+                }
+                writeln!(
+                    out,
+                    "note: {}: {why} (--allow-other-machine)",
+                    path.display()
+                )?;
+            }
+        }
+        None => writeln!(
+            out,
+            "note: {} records no machine or trained ranges (a model file older than version \
+             8): neither is checked",
+            path.display()
+        )?,
+    }
     let does_not_fit = || {
         format!(
             "{}: model does not fit machine {}",
@@ -153,7 +210,13 @@ fn compensator(path: &Path, machine: &MachineSpec, out: &mut dyn Write) -> Resul
     }
     let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
     let ctrl = Compensator::for_machine(model, &names).with_context(does_not_fit)?;
-    Ok(ctrl)
+    let none = InputRanges {
+        sensors: Vec::new(),
+        sensor_degc: Vec::new(),
+        spindle_rpm: None,
+    };
+    let ranges = trained_on.as_ref().map(|t| &t.inputs).unwrap_or(&none);
+    Ok(Guarded::new(ctrl, ranges, &names))
 }
 
 /// Runs the warm-ups, then the program (measured), on a fresh twin; with a recording if asked.

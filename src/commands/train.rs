@@ -8,7 +8,8 @@ use anyhow::Result;
 use crate::files;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::Dataset;
-use crate::predict::predictor::{self, ModelKind, Settings, TrainSummary};
+use crate::predict::predictor::{self, ErrorPredictor, ModelKind, Settings, TrainSummary};
+use crate::predict::provenance::{InputRanges, TrainedOn};
 use crate::study::ForMachine;
 
 /// What to train, validated.
@@ -46,18 +47,36 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
         settings = settings.with_spindle_speed_input();
     }
     let geometry = cfg.machine.geometry();
+    // The machine the data names, else the one given (realisation unknown).
+    let machine = data
+        .origin
+        .clone()
+        .unwrap_or_else(|| cfg.machine.identity(None));
+    let trained_on = |sensors: &[String]| TrainedOn {
+        machine: Some(machine.clone()),
+        inputs: InputRanges::of(&data, sensors),
+    };
     let (json, summary) = match cfg.kind {
         ModelKind::Hybrid => {
             let (m, s) = predictor::train_hybrid(&data, &geometry, &settings)?;
-            (m.to_json_string()?, s)
+            (
+                m.to_json_string_with(Some(&trained_on(m.sensor_names())))?,
+                s,
+            )
         }
         ModelKind::Volumetric => {
             let (m, s) = predictor::train_volumetric(&data, &geometry, &settings)?;
-            (m.to_json_string()?, s)
+            (
+                m.to_json_string_with(Some(&trained_on(m.sensor_names())))?,
+                s,
+            )
         }
         ModelKind::Linear => {
             let (m, s) = predictor::train_linear(&data, &geometry, &settings)?;
-            (m.to_json_string()?, s)
+            (
+                m.to_json_string_with(Some(&trained_on(m.sensor_names())))?,
+                s,
+            )
         }
     };
     files::write_atomic(&cfg.out, json.as_bytes(), cfg.force)?;

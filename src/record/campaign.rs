@@ -153,7 +153,7 @@ pub fn record_campaign(
     // The representative run, replayed in full.
     let pick = pick_representative(rep)
         .ok_or_else(|| RecordError::Replay("the campaign has no hybrid runs".into()))?;
-    let states = evaluation_states(pick.seed);
+    let states = evaluation_states(spec, pick.seed);
     let si = states
         .iter()
         .position(|s| s.name == pick.state)

@@ -48,6 +48,13 @@ pub struct RunReport {
     pub max_before_xyz_um: [f64; 3],
     /// Max |Ex|, |Ey|, |Ez| after, µm.
     pub max_after_xyz_um: [f64; 3],
+    /// RMS of the thermal part of |E| (truth: the error minus the same point's error with the
+    /// machine at its reference temperature), µm; absent when the points do not carry it.
+    pub rms_thermal_um: Option<f64>,
+    /// RMS |E| after compensation as a share of [`Self::rms_thermal_um`] (fraction) for a warm
+    /// run (thermal part RMS ≥ [`WARM_RUN_MIN_THERMAL_UM`]); absent for a cold one. Above 1,
+    /// compensating left more error than a perfect cold-geometry model would.
+    pub residual_share_of_thermal: Option<f64>,
     /// Prediction: mean absolute deviation, µm.
     pub mad_um: f64,
     /// Prediction: mean|e| / mean|y| (fraction).
@@ -80,6 +87,11 @@ pub struct CampaignReport {
     pub hybrid_uses_spindle_speed: bool,
 }
 
+/// A run is warm when the RMS of its error's thermal part is at least this, µm: below it the
+/// residual is the cold geometry's and the noise's, and a share of the thermal part says
+/// nothing.
+pub const WARM_RUN_MIN_THERMAL_UM: f64 = 1.0;
+
 /// Summarises a compensated run.
 pub fn run_report(
     predictor: ModelKind,
@@ -102,6 +114,10 @@ pub fn run_report(
         }
     }
     let m = Metrics::of(&y, &yhat).ok()?;
+    let thermal: Vec<[f64; 3]> = points.iter().filter_map(|p| p.thermal_part_um).collect();
+    let rms_thermal_um = (thermal.len() == points.len())
+        .then(|| error_stats(&thermal).map(|s| s.rms_um[3]))
+        .flatten();
     Some(RunReport {
         predictor,
         diagonal: diagonal.into(),
@@ -118,6 +134,10 @@ pub fn run_report(
         rms_after_xyz_um: [a.rms_um[0], a.rms_um[1], a.rms_um[2]],
         max_before_xyz_um: [b.max_abs_um[0], b.max_abs_um[1], b.max_abs_um[2]],
         max_after_xyz_um: [a.max_abs_um[0], a.max_abs_um[1], a.max_abs_um[2]],
+        rms_thermal_um,
+        residual_share_of_thermal: rms_thermal_um
+            .filter(|t| *t >= WARM_RUN_MIN_THERMAL_UM)
+            .map(|t| a.rms_um[3] / t),
         mad_um: m.mad,
         mape: m.mape,
         rmse_um: m.rmse,

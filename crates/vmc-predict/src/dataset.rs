@@ -39,6 +39,8 @@ use std::fmt::Write as _;
 
 use thiserror::Error;
 
+use crate::provenance::MachineIdentity;
+
 /// Which instrument produced a record.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Instrument {
@@ -120,6 +122,8 @@ pub struct Dataset {
     pub sensor_names: Vec<String>,
     /// The records, in time order within each cycle.
     pub records: Vec<Record>,
+    /// The machine the data was measured on, when the file says (its `# machine:` line).
+    pub origin: Option<MachineIdentity>,
 }
 
 /// A dataset file that cannot be used.
@@ -213,7 +217,13 @@ impl Dataset {
     /// Writes the CSV text (shortest round-trip formatting of f64: reading it back gives the
     /// same bits).
     pub fn to_csv(&self) -> String {
-        let mut s = FIXED.join(",");
+        let mut s = String::new();
+        if let Some(id) = &self.origin {
+            s.push('#');
+            s.push_str(&origin_line(id));
+            s.push('\n');
+        }
+        s.push_str(&FIXED.join(","));
         s.push(',');
         s.push_str(DIR_COLUMN);
         let with_rpm = self.records.iter().any(|r| r.spindle_rpm.is_some());
@@ -257,10 +267,22 @@ impl Dataset {
             .lines()
             .enumerate()
             .filter(|(_, l)| !l.trim().is_empty());
-        let (_, header) = lines.next().ok_or_else(|| DatasetError::Empty {
-            source_name: source_name.into(),
-            msg: "empty file (no header line)".into(),
-        })?;
+        // Comment lines (`#`) before the header; `# machine: …` names the origin.
+        let mut origin = None;
+        let header = loop {
+            let (_, line) = lines.next().ok_or_else(|| DatasetError::Empty {
+                source_name: source_name.into(),
+                msg: "empty file (no header line)".into(),
+            })?;
+            match line.trim().strip_prefix('#') {
+                Some(comment) => {
+                    if let Some(id) = parse_origin(comment) {
+                        origin = Some(id);
+                    }
+                }
+                None => break line,
+            }
+        };
         let cols: Vec<&str> = header.split(',').map(|c| c.trim()).collect();
         for (j, c) in cols.iter().enumerate() {
             if let Some(i) = cols[..j].iter().position(|d| d == c) {
@@ -407,8 +429,39 @@ impl Dataset {
         Ok(Dataset {
             sensor_names: sensor_cols.into_iter().map(|(_, n)| n).collect(),
             records,
+            origin,
         })
     }
+}
+
+/// The comment line naming a dataset's machine (without its `#`).
+fn origin_line(id: &MachineIdentity) -> String {
+    let realisation = id
+        .realisation
+        .map(|r| r.to_string())
+        .unwrap_or_else(|| "unknown".into());
+    format!(
+        " machine: {}; realisation: {realisation}; fingerprint: {}",
+        id.name, id.fingerprint
+    )
+}
+
+/// Reads [`origin_line`]'s text back (None for any other comment).
+fn parse_origin(comment: &str) -> Option<MachineIdentity> {
+    let rest = comment.trim().strip_prefix("machine:")?;
+    let mut parts = rest.split(';').map(str::trim);
+    let name = parts.next()?.to_string();
+    let realisation = parts.next()?.strip_prefix("realisation:")?.trim();
+    let fingerprint = parts
+        .next()?
+        .strip_prefix("fingerprint:")?
+        .trim()
+        .to_string();
+    Some(MachineIdentity {
+        name,
+        realisation: realisation.parse().ok(),
+        fingerprint,
+    })
 }
 
 #[cfg(test)]
@@ -417,6 +470,7 @@ mod tests {
 
     fn sample() -> Dataset {
         Dataset {
+            origin: None,
             sensor_names: vec!["BXH".into(), "Amb".into()],
             records: vec![
                 Record {
@@ -454,6 +508,26 @@ mod tests {
         assert_eq!(back.records.len(), 2);
         assert_eq!(back.records[0], d.records[0]);
         assert!(back.records[1].values[5].is_nan());
+    }
+
+    #[test]
+    fn the_origin_line_round_trips_and_other_comments_are_skipped() {
+        let mut d = sample();
+        d.origin = Some(MachineIdentity {
+            name: "vmc-reference".into(),
+            realisation: Some(2),
+            fingerprint: "0123abcd".into(),
+        });
+        let text = format!("# a note\n{}", d.to_csv());
+        assert!(
+            text.contains("\n# machine: vmc-reference; realisation: 2; fingerprint: 0123abcd\n")
+        );
+        let back = Dataset::from_csv(&text, "d.csv").unwrap();
+        assert_eq!(back.origin, d.origin);
+        assert_eq!(back.records, d.records);
+        let unknown = text.replace("realisation: 2", "realisation: unknown");
+        let back = Dataset::from_csv(&unknown, "d.csv").unwrap();
+        assert_eq!(back.origin.unwrap().realisation, None);
     }
 
     #[test]

@@ -7,9 +7,15 @@
 //!   "kind": "hybrid" | "volumetric" | "linear",
 //!   "sensors": [{"name": "BXH", "unit": "degC"}, …],        // model input order
 //!   "geometry": {"chain": "w X Y b Z t", "tool_offset_mm": [0, 0, -150]},
-//!   "model": { … }                                          // kind-specific, below
+//!   "model": { … },                                         // kind-specific, below
+//!   "trained_on": {"machine": {"name", "realisation", "fingerprint"} | null,
+//!                  "inputs": {"sensors", "sensor_degc": [[min, max], …], "spindle_rpm"}}
 //! }
 //! ```
+//!
+//! `trained_on` (version 8, optional: older files and models trained without it have none)
+//! records the machine the model was calibrated on and the range of every input, see
+//! [`crate::provenance`]; read it with [`trained_on`].
 //!
 //! `model` of a `hybrid`: `axis_nets` (3 parts X, Y, Z: `[position mm, temps °C] →
 //! [dx, dy, dz µm, rx, ry, rz µrad]`), `spindle_net` (a part `temps → [dx, dy, dz µm, rx, ry
@@ -49,6 +55,7 @@
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
+use crate::provenance::TrainedOn;
 use crate::synthesis::MachineGeometry;
 
 use super::hybrid::{HybridParts, HybridPredictor};
@@ -61,7 +68,7 @@ pub use super::kind::ModelKind;
 /// Value of the `format` field.
 pub const FORMAT_NAME: &str = "vmc-twin-model";
 /// The model file version this build writes (and the newest it reads).
-pub const FORMAT_VERSION: u64 = 7;
+pub const FORMAT_VERSION: u64 = 8;
 /// The oldest model file version this build reads (version 2: no `reversal_um`, read as zero).
 pub const OLDEST_READ_VERSION: u64 = 2;
 /// The only temperature unit models use.
@@ -84,6 +91,8 @@ struct FileOut<'a, B> {
     sensors: Vec<SensorInfo>,
     geometry: &'a MachineGeometry,
     model: &'a B,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    trained_on: Option<&'a TrainedOn>,
 }
 
 #[derive(Deserialize)]
@@ -102,6 +111,7 @@ fn to_json<B: Serialize>(
     sensors: &[String],
     geometry: &MachineGeometry,
     model: &B,
+    trained_on: Option<&TrainedOn>,
 ) -> Result<String, PredictError> {
     let out = FileOut {
         format: FORMAT_NAME,
@@ -116,8 +126,24 @@ fn to_json<B: Serialize>(
             .collect(),
         geometry,
         model,
+        trained_on,
     };
     serde_json::to_string_pretty(&out).map_err(json_err)
+}
+
+/// What a model file records of its training (its `trained_on` object; None when it has none,
+/// as files before version 8).
+///
+/// # Errors
+/// Not JSON, not a model file, another version, or a `trained_on` that does not parse.
+pub fn trained_on(text: &str) -> Result<Option<TrainedOn>, PredictError> {
+    read_header(text)?;
+    #[derive(Deserialize)]
+    struct Only {
+        trained_on: Option<TrainedOn>,
+    }
+    let f: Only = serde_json::from_str(text).map_err(json_err)?;
+    Ok(f.trained_on)
 }
 
 /// Checks `format` and `version` and returns the `kind`.
@@ -206,7 +232,24 @@ macro_rules! json_methods {
             /// # Errors
             /// Only if serialisation fails (it does not for finite weights).
             pub fn to_json_string(&self) -> Result<String, PredictError> {
-                to_json($kind, self.sensor_names(), self.geometry(), &self.$body())
+                self.to_json_string_with(None)
+            }
+
+            /// The model file text with what the model was trained on.
+            ///
+            /// # Errors
+            /// Only if serialisation fails (it does not for finite weights).
+            pub fn to_json_string_with(
+                &self,
+                trained_on: Option<&TrainedOn>,
+            ) -> Result<String, PredictError> {
+                to_json(
+                    $kind,
+                    self.sensor_names(),
+                    self.geometry(),
+                    &self.$body(),
+                    trained_on,
+                )
             }
 
             /// Parses a model file text of this kind.
@@ -299,10 +342,21 @@ impl AnyPredictor {
     /// # Errors
     /// Only if serialisation fails.
     pub fn to_json_string(&self) -> Result<String, PredictError> {
+        self.to_json_string_with(None)
+    }
+
+    /// The model file text with what the model was trained on.
+    ///
+    /// # Errors
+    /// Only if serialisation fails.
+    pub fn to_json_string_with(
+        &self,
+        trained_on: Option<&TrainedOn>,
+    ) -> Result<String, PredictError> {
         match self {
-            AnyPredictor::Hybrid(p) => p.to_json_string(),
-            AnyPredictor::Volumetric(p) => p.to_json_string(),
-            AnyPredictor::Linear(p) => p.to_json_string(),
+            AnyPredictor::Hybrid(p) => p.to_json_string_with(trained_on),
+            AnyPredictor::Volumetric(p) => p.to_json_string_with(trained_on),
+            AnyPredictor::Linear(p) => p.to_json_string_with(trained_on),
         }
     }
 

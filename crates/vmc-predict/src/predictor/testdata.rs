@@ -193,6 +193,7 @@ pub fn dataset(amps_degc: &[f64], seed: u64) -> Dataset {
         }
     }
     Dataset {
+        origin: None,
         sensor_names: SENSORS.iter().map(|s| s.to_string()).collect(),
         records,
     }

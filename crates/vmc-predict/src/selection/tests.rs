@@ -24,6 +24,7 @@ fn toy() -> Dataset {
         }
     }
     Dataset {
+        origin: None,
         sensor_names: vec!["ambient".into(), "a".into(), "b".into(), "c".into()],
         records,
     }

@@ -18,199 +18,12 @@ use crate::instruments::Instruments;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::{Dataset, Record};
 use crate::sim::{self, Observer, RunStart};
-use crate::thermal::{Activity, AmbientProfile};
+use crate::thermal::Activity;
 use crate::twin::{sub_seed, Twin, TwinError};
 
-/// One duty phase of a thermal cycle.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Phase {
-    /// Duration, s.
-    pub duration_s: f64,
-    /// Spindle speed, rpm (0 = stopped).
-    pub spindle_rpm: f64,
-    /// Axis feed speeds while shuttling, mm/min (0 = parked).
-    pub axis_speed_mm_per_min: [f64; 3],
-}
+mod cycles;
 
-/// A thermal cycle: phases under an ambient profile (time from the cycle's start).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ThermalCycle {
-    /// Short name (used as the dataset's `cycle` column and in reports).
-    pub name: String,
-    /// Ambient temperature over the cycle.
-    pub ambient: AmbientProfile,
-    /// Duty phases in order.
-    pub phases: Vec<Phase>,
-}
-
-fn phase(hours: f64, rpm: f64, speeds: [f64; 3]) -> Phase {
-    Phase {
-        duration_s: hours * 3600.0,
-        spindle_rpm: rpm,
-        axis_speed_mm_per_min: speeds,
-    }
-}
-
-const AMBIENT_20: AmbientProfile = AmbientProfile::Constant { temp_degc: 20.0 };
-
-impl ThermalCycle {
-    /// Total duration, s.
-    pub fn duration_s(&self) -> f64 {
-        self.phases.iter().map(|p| p.duration_s).sum()
-    }
-
-    /// The phase in effect at cycle time `t_s` (the last one after the end).
-    pub fn phase_at(&self, t_s: f64) -> &Phase {
-        let mut acc = 0.0;
-        for p in &self.phases {
-            acc += p.duration_s;
-            if t_s < acc {
-                return p;
-            }
-        }
-        // Cycles are built with at least one phase.
-        &self.phases[self.phases.len() - 1]
-    }
-
-    /// Mean spindle speed over cycle time `[from_s, to_s]`, rpm (the speed at `from_s` for an
-    /// empty interval).
-    pub fn mean_rpm(&self, from_s: f64, to_s: f64) -> f64 {
-        if to_s <= from_s {
-            return self.phase_at(from_s).spindle_rpm;
-        }
-        let mut acc = 0.0;
-        let mut sum = 0.0;
-        for (k, p) in self.phases.iter().enumerate() {
-            let start = acc;
-            acc += p.duration_s;
-            // The last phase lasts beyond the end.
-            let end = if k + 1 == self.phases.len() {
-                f64::INFINITY
-            } else {
-                acc
-            };
-            let overlap = to_s.min(end) - from_s.max(start);
-            if overlap > 0.0 {
-                sum += overlap * p.spindle_rpm;
-            }
-        }
-        sum / (to_s - from_s)
-    }
-
-    /// Typical cycles for calibration: heating at constant duties (one with a speed change, one
-    /// axis-heavy), then cooling, over an ordinary workshop day (one with a slow ambient drift,
-    /// one with ambient steps as when the air conditioning changes its set point — steps and
-    /// ramps, not the held-out sinusoidal swing).
-    pub fn calibration_set() -> Vec<ThermalCycle> {
-        let cool = || phase(4.0, 0.0, [0.0; 3]);
-        let cycle = |name: &str, ambient: AmbientProfile, phases: Vec<Phase>| ThermalCycle {
-            name: name.into(),
-            ambient,
-            phases,
-        };
-        vec![
-            cycle(
-                "cal_3000rpm",
-                AMBIENT_20,
-                vec![phase(4.0, 3000.0, [2000.0, 1500.0, 800.0]), cool()],
-            ),
-            cycle(
-                "cal_6000rpm",
-                AMBIENT_20,
-                vec![phase(4.0, 6000.0, [2000.0, 4000.0, 1500.0]), cool()],
-            ),
-            cycle(
-                "cal_9000rpm",
-                AMBIENT_20,
-                vec![phase(4.0, 9000.0, [4000.0, 3000.0, 2000.0]), cool()],
-            ),
-            cycle(
-                "cal_4000_8000rpm",
-                AMBIENT_20,
-                vec![
-                    phase(2.0, 4000.0, [3000.0, 2000.0, 1000.0]),
-                    phase(2.0, 8000.0, [3000.0, 2000.0, 1000.0]),
-                    cool(),
-                ],
-            ),
-            cycle(
-                "cal_axes_2000rpm",
-                AMBIENT_20,
-                vec![phase(4.0, 2000.0, [6000.0, 5000.0, 3000.0]), cool()],
-            ),
-            cycle(
-                "cal_day_drift",
-                AmbientProfile::Table {
-                    points: vec![[0.0, 19.5], [8.0 * 3600.0, 21.5]],
-                },
-                vec![phase(4.0, 7000.0, [3000.0, 3000.0, 1500.0]), cool()],
-            ),
-            cycle(
-                "cal_ambient_steps",
-                AmbientProfile::Table {
-                    points: vec![
-                        [3600.0, 20.0],
-                        [4500.0, 22.5],
-                        [5.0 * 3600.0, 22.5],
-                        [5.25 * 3600.0, 19.0],
-                    ],
-                },
-                vec![
-                    phase(3.0, 5000.0, [2500.0, 2000.0, 1000.0]),
-                    phase(5.0, 0.0, [0.0; 3]),
-                ],
-            ),
-        ]
-    }
-
-    /// Atypical cycles held out for evaluation. `seed` draws the random speed steps.
-    pub fn evaluation_set(seed: u64) -> Vec<ThermalCycle> {
-        // Random speed steps every 30 min, drawn from a small deterministic generator.
-        let mut state = sub_seed(seed, 77);
-        let mut next = || {
-            state = sub_seed(state, 1);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let steps: Vec<Phase> = (0..12)
-            .map(|_| {
-                let rpm = (next() * 10.0).floor() * 1000.0;
-                let duty = next();
-                phase(0.5, rpm, [4000.0 * duty, 3000.0 * duty, 2000.0 * duty])
-            })
-            .chain(std::iter::once(phase(2.0, 0.0, [0.0; 3])))
-            .collect();
-        vec![
-            ThermalCycle {
-                name: "eval_random_steps".into(),
-                ambient: AMBIENT_20,
-                phases: steps,
-            },
-            ThermalCycle {
-                name: "eval_ambient_swing".into(),
-                ambient: AmbientProfile::Sinusoid {
-                    mean_degc: 20.5,
-                    amplitude_degc: 1.5,
-                    period_s: 8.0 * 3600.0,
-                    phase_rad: 0.0,
-                },
-                phases: vec![
-                    phase(4.0, 7000.0, [3500.0, 2500.0, 1500.0]),
-                    phase(4.0, 0.0, [0.0; 3]),
-                ],
-            },
-            ThermalCycle {
-                name: "eval_restart".into(),
-                ambient: AMBIENT_20,
-                phases: vec![
-                    phase(2.0, 9000.0, [4000.0, 3000.0, 2000.0]),
-                    phase(1.5, 0.0, [0.0; 3]),
-                    phase(2.5, 5000.0, [3000.0, 3000.0, 1000.0]),
-                    phase(2.0, 0.0, [0.0; 3]),
-                ],
-            },
-        ]
-    }
-}
+pub use cycles::{Phase, ThermalCycle};
 
 /// Drives a twin through a cycle's duty (cycle time `from_s` → `to_s`), the axes shuttling
 /// over 10–90 % of their travel at the phase speeds. `t0_s` is the twin time of the cycle start.
@@ -354,7 +167,7 @@ pub fn calibrate(
     for (k, cycle) in cycles.iter().enumerate() {
         let noise = sub_seed(cfg.machine_seed, 1000 + k as u64);
         let mut twin = Twin::with_noise_seed(spec, cfg.machine_seed, noise)?;
-        twin.set_ambient(cycle.ambient.clone())?;
+        cycle.prepare(&mut twin)?;
         let mut inst = Instruments::new(&twin, sub_seed(noise, 5));
         sensor_names = twin.sensor_readings().names.to_vec();
         let t0 = twin.time_s();
@@ -406,6 +219,7 @@ pub fn calibrate(
         }
     }
     Ok(Dataset {
+        origin: Some(spec.identity(Some(cfg.machine_seed))),
         sensor_names,
         records,
     })
@@ -422,16 +236,27 @@ pub struct EvalState {
     pub at_s: f64,
 }
 
-/// The held-out evaluation states: a cold machine, and each atypical cycle after 2 h and 4 h.
-pub fn evaluation_states(seed: u64) -> Vec<EvalState> {
+/// The held-out evaluation states of machine `spec`: a cold machine, each atypical cycle after
+/// 2 h and 4 h, and the stress cycles ([`ThermalCycle::stress_set`]): the Z strokes at their
+/// end (3 h), the top speed after 3 h and 6 h, the warm shop after 1 h and 4 h.
+pub fn evaluation_states(spec: &MachineSpec, seed: u64) -> Vec<EvalState> {
     let cycles = ThermalCycle::evaluation_set(seed);
     let mut v = vec![EvalState {
         name: "cold".into(),
         cycle: cycles[0].clone(),
         at_s: 0.0,
     }];
-    for c in cycles {
-        for h in [2.0, 4.0] {
+    let stress = ThermalCycle::stress_set(spec);
+    let hours = [
+        [2.0, 4.0].as_slice(),
+        &[2.0, 4.0],
+        &[2.0, 4.0],
+        &[3.0],
+        &[3.0, 6.0],
+        &[1.0, 4.0],
+    ];
+    for (c, hours) in cycles.into_iter().chain(stress).zip(hours) {
+        for &h in hours {
             v.push(EvalState {
                 name: format!("{}@{h}h", c.name),
                 cycle: c.clone(),
@@ -483,7 +308,7 @@ pub fn run_at_state_observed(
     history_every_s: Option<f64>,
 ) -> Result<(), crate::sim::SimError> {
     let mut twin = Twin::with_noise_seed(spec, machine_seed, noise_seed)?;
-    twin.set_ambient(state.cycle.ambient.clone())?;
+    state.cycle.prepare(&mut twin)?;
     // The controller follows the readings through the thermal history, as it would on the
     // machine (it compensates nothing then).
     match history_every_s.filter(|dt| *dt > 0.0 && dt.is_finite()) {
@@ -531,7 +356,7 @@ pub fn run_at_state_observed(
     crate::sim::execute(
         &mut twin,
         plan,
-        &crate::sim::SimConfig::default(),
+        &crate::sim::SimConfig::default().with_thermal_part(true),
         compensator,
         observer,
     )
@@ -541,11 +366,14 @@ pub fn run_at_state_observed(
 mod tests {
     use super::*;
     use crate::predict::dataset::Instrument;
+    use cycles::phase;
 
     fn short_cycle() -> ThermalCycle {
         ThermalCycle {
             name: "short".into(),
-            ambient: AMBIENT_20,
+            purpose: String::new(),
+            ambient: cycles::AMBIENT_20,
+            soak_degc: None,
             phases: vec![
                 phase(0.25, 3000.0, [2000.0, 1000.0, 500.0]),
                 phase(0.25, 6000.0, [2000.0, 1000.0, 500.0]),
