@@ -4,13 +4,67 @@
 //! Keys: `states=dev` (selection-only states), `seeds=`, predictor settings (`taus=`, `hist=`,
 //! `staus=`, `shist=`, `bil=0|1`, `ridge=`, `hidden=`, `restarts=`, `gain=`, `members=`,
 //! `seedoff=`, and the opt-in commanded spindle speed: `rpmexp=` heat-input exponents, `rpmtaus=`
-//! their filters' time constants, s) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
+//! their filters' time constants, s; `feedtaus=` the axis feeds' filters, s; `val=` validation
+//! cycles) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
 //! Prints per seed the kept nets, then the headline figures and the eight worst runs.
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, ModelKind, Settings};
 use vmc_twin::study::ForMachine;
 use vmc_twin::study::{self, diagonal_plans};
+
+/// Selection-only stress states (never the held-out ones): Z strokes at another feed and
+/// length, a high speed below the maximum, a shop at 24.5 °C.
+fn dev_stress_states() -> Vec<calibration::EvalState> {
+    use vmc_twin::calibration::Phase;
+    use vmc_twin::thermal::AmbientProfile;
+    let ph = |h: f64, rpm: f64, f: [f64; 3]| Phase {
+        duration_s: h * 3600.0,
+        spindle_rpm: rpm,
+        axis_speed_mm_per_min: f,
+    };
+    let cyc = |name: &str, t: f64, soak: Option<f64>, phases| ThermalCycle {
+        name: name.into(),
+        purpose: String::new(),
+        ambient: AmbientProfile::Constant { temp_degc: t },
+        soak_degc: soak,
+        phases,
+    };
+    let st = |c: ThermalCycle, h: f64| calibration::EvalState {
+        name: format!("{}@{h}h", c.name),
+        cycle: c,
+        at_s: h * 3600.0,
+    };
+    vec![
+        st(
+            cyc(
+                "dev_z_strokes",
+                20.0,
+                None,
+                vec![ph(2.5, 0.0, [800.0, 200.0, 5000.0])],
+            ),
+            2.5,
+        ),
+        st(
+            cyc(
+                "dev_high_speed",
+                20.0,
+                None,
+                vec![ph(5.0, 11000.0, [2000.0, 2500.0, 1500.0])],
+            ),
+            4.0,
+        ),
+        st(
+            cyc(
+                "dev_warm_shop",
+                24.5,
+                Some(24.5),
+                vec![ph(3.0, 5000.0, [2500.0, 2500.0, 1000.0])],
+            ),
+            2.0,
+        ),
+    ]
+}
 
 fn main() {
     let spec = MachineSpec::reference();
@@ -59,6 +113,8 @@ fn main() {
             "hist" => settings.history_sensors = v.split(',').map(String::from).collect(),
             "rpmexp" => settings.spindle_speed_exponents = list(),
             "rpmtaus" => settings.spindle_speed_taus_s = list(),
+            "feedtaus" => settings.axis_feed_taus_s = list(),
+            "val" => settings.val_cycles = v.split(',').map(String::from).collect(),
             _ => panic!("unknown {k}"),
         }
     }
@@ -86,10 +142,13 @@ fn main() {
         let mut hs = Vec::new();
         let mut sum = None;
         for m in 0..members {
-            let s = Settings {
-                seed: seed + seed_off + 100 * m,
-                ..settings.clone()
-            };
+            let s = study::with_plan_validation(
+                Settings {
+                    seed: seed + seed_off + 100 * m,
+                    ..settings.clone()
+                },
+                &data,
+            );
             let (h, su) = predictor::train_hybrid(&data, &geom, &s).unwrap();
             hs.push(h);
             sum = Some(su);
@@ -106,7 +165,9 @@ fn main() {
             })
             .collect();
         let states = if dev {
-            vmc_twin::placement::validation_states(seed)
+            let mut v = vmc_twin::placement::validation_states(seed);
+            v.extend(dev_stress_states());
+            v
         } else {
             calibration::evaluation_states(&spec, seed)
         };

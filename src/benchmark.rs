@@ -54,10 +54,13 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
         &ThermalCycle::calibration_plan(&spec),
         &CampaignConfig::new(1),
     )?;
-    let settings = Settings {
-        seed: 1,
-        ..Settings::for_machine(spec)
-    };
+    let settings = study::with_plan_validation(
+        Settings {
+            seed: 1,
+            ..Settings::for_machine(spec)
+        },
+        &data,
+    );
     let (model, _) = predictor::train_hybrid(&data, &spec.geometry(), &settings)?;
     let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
     let temps: Vec<f64> = (0..names.len()).map(|i| 22.0 + 0.25 * i as f64).collect();

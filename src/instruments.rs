@@ -126,6 +126,7 @@ impl Instruments {
             temps_degc: twin.sensor_readings().values_degc,
             dir,
             spindle_rpm: None,
+            axis_feed_mm_per_min: None,
         }
     }
 

@@ -471,13 +471,16 @@ fn evaluate_set(
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
         .collect();
     let set_spec = with_sensors(cand_spec, sensors)?;
-    let settings = study::with_history_features(
-        Settings {
-            seed,
-            sensors: names.to_vec(),
-            ..settings.clone()
-        },
-        &set_spec,
+    let settings = study::with_plan_validation(
+        study::with_history_features(
+            Settings {
+                seed,
+                sensors: names.to_vec(),
+                ..settings.clone()
+            },
+            &set_spec,
+        ),
+        data,
     );
     let (hybrid, _) =
         predictor::train_hybrid(data, &set_spec.geometry(), &settings).map_err(EvalError::from)?;

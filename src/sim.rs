@@ -411,7 +411,7 @@ pub fn reborrow<'s>(c: &'s mut Option<&mut dyn Controller>) -> Option<&'s mut dy
 }
 
 /// The twin's present readings, given to `controller` (if any) as it takes over: the readings,
-/// and the spindle at rest up to now (a no-op for a controller that already followed the
+/// and the spindle and axes at rest up to now (a no-op for a controller that already followed the
 /// machine up to now). With [`step`], the only path by which readings leave the twin for the
 /// controller.
 pub fn hand_over(twin: &Twin, controller: Option<&mut dyn Controller>) -> SensorReadings {
@@ -419,12 +419,13 @@ pub fn hand_over(twin: &Twin, controller: Option<&mut dyn Controller>) -> Sensor
     if let Some(c) = controller {
         c.on_readings(readings.time_s, &readings.values_degc);
         c.on_spindle_speed(twin.time_s(), 0.0);
+        c.on_axis_feeds(twin.time_s(), [0.0; 3]);
     }
     readings
 }
 
-/// Advances the twin by `dt_s` under `activity` and gives the new readings and the commanded
-/// spindle speed of the step to `controller` (if any), as a controller logging its sensors sees
+/// Advances the twin by `dt_s` under `activity` and gives the new readings, the commanded
+/// spindle speed and the axes' commanded mean speeds of the step to `controller` (if any), as a controller logging its sensors sees
 /// them; returns the readings.
 ///
 /// # Errors
@@ -440,6 +441,7 @@ pub fn step(
     if let Some(c) = controller {
         c.on_readings(readings.time_s, &readings.values_degc);
         c.on_spindle_speed(twin.time_s(), activity.spindle_rpm);
+        c.on_axis_feeds(twin.time_s(), activity.axis_speed_mm_per_min.map(f64::abs));
     }
     Ok(readings)
 }

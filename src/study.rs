@@ -19,6 +19,7 @@ use crate::calibration::{self, CampaignConfig, EvalState, ThermalCycle};
 use crate::machine::MachineSpec;
 use crate::motion::Plan;
 use crate::predict::controller::Compensator;
+use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{
     self, ErrorPredictor, ModelKind, PredictError, Settings, TrainSummary,
 };
@@ -30,7 +31,7 @@ use crate::twin::{sub_seed, Twin, TwinError};
 pub use crate::program::DIAGONALS;
 pub use report::{
     headline, median, run_report, write_campaign_summary, write_run_table, CampaignReport,
-    Headline, RunReport, PREDICTORS,
+    Headline, PlannedCycle, RunReport, PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
 };
 
 mod report;
@@ -255,6 +256,28 @@ pub fn with_history_features(settings: Settings, spec: &MachineSpec) -> Settings
     with_spindle_nose_rate(with_ambient_history(settings, spec), spec)
 }
 
+/// The calibration plan's validation cycles: two combined duties, one with a speed change and
+/// one under an ambient ramp. Every cycle that isolates a heat source (an axis alone, the
+/// spindle sweep, the cold and warm shops) stays in the training data: held out, what it alone
+/// shows would be missing from the model. Chosen on selection-only states (never the held-out
+/// ones): docs/decisions/2026-11-24-calibration-plan.md.
+pub const PLAN_VALIDATION_CYCLES: [&str; 2] = ["cal_4000_8000rpm", "cal_day_drift"];
+
+/// `settings` with [`PLAN_VALIDATION_CYCLES`] as validation cycles when it names none and
+/// `data` has them all (a dataset of the calibration plan); otherwise unchanged (the automatic
+/// choice of [`Settings::val_fraction`]).
+pub fn with_plan_validation(settings: Settings, data: &Dataset) -> Settings {
+    let has = |name: &str| data.records.iter().any(|r| r.cycle == name);
+    if settings.val_cycles.is_empty() && PLAN_VALIDATION_CYCLES.iter().all(|c| has(c)) {
+        Settings {
+            val_cycles: PLAN_VALIDATION_CYCLES.map(String::from).to_vec(),
+            ..settings
+        }
+    } else {
+        settings
+    }
+}
+
 /// Calibration, training and evaluation for one machine seed.
 struct SeedResult {
     training: Vec<(u64, TrainSummary)>,
@@ -273,10 +296,13 @@ fn campaign_for_seed(
     let geometry = spec.geometry();
     progress.advance(0, &format!("seed {seed}: calibration campaign"));
     let data = calibration::calibrate(spec, cal_cycles, &CampaignConfig::new(seed))?;
-    let s = Settings {
-        seed,
-        ..settings.clone()
-    };
+    let s = with_plan_validation(
+        Settings {
+            seed,
+            ..settings.clone()
+        },
+        &data,
+    );
     progress.advance(units::CALIBRATION, &format!("seed {seed}: training"));
     let (hybrid, hs) = predictor::train_hybrid(&data, &geometry, &s)?;
     progress.advance(units::TRAINING, &format!("seed {seed}: training"));
@@ -377,6 +403,14 @@ pub fn run_campaign_with_cycles(
     let mut report = CampaignReport {
         machine: spec.machine.name.clone(),
         calibration_cycles: cal_cycles.iter().map(|c| c.name.clone()).collect(),
+        calibration_plan: cal_cycles
+            .iter()
+            .map(|c| PlannedCycle {
+                name: c.name.clone(),
+                hours: c.duration_s() / 3600.0,
+                purpose: c.purpose.clone(),
+            })
+            .collect(),
         evaluation_states: Vec::new(),
         training: Vec::new(),
         runs: Vec::new(),

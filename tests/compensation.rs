@@ -1,7 +1,10 @@
 //! End-to-end acceptance of the compensation: the twin is calibrated with virtual
 //! instruments, the hybrid predictor is trained on that dataset only, and every face and body
-//! diagonal is run under held-out thermal states (atypical cycles never used in calibration,
-//! other noise seeds) with the predictor in the loop. Three machine realisations.
+//! diagonal is run under held-out thermal states (atypical cycles and stress cycles never used
+//! in calibration, other noise seeds) with the predictor in the loop. Three machine
+//! realisations. Every run must remove ≥ 80 % of RMS |E|, and every warm run must leave at most
+//! 25 % of its error's thermal part — except the Z-stroke stress state, which does not reach it
+//! (docs/results.md says why) and is held to its measured figure so that it cannot slide back.
 //!
 //! The second test shows the first can fail: the same trained predictor with its temperature
 //! inputs frozen at a cold reading (so it knows only the cold geometry) does not reach 80 % on
@@ -22,10 +25,13 @@ fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
         &CampaignConfig::new(seed),
     )
     .expect("campaign runs");
-    let settings = Settings {
-        seed,
-        ..Settings::for_machine(spec)
-    };
+    let settings = study::with_plan_validation(
+        Settings {
+            seed,
+            ..Settings::for_machine(spec)
+        },
+        &data,
+    );
     predictor::train_hybrid(&data, &spec.geometry(), &settings)
         .expect("training succeeds")
         .0
@@ -54,6 +60,9 @@ fn is_warm(r: &RunReport) -> bool {
     r.thermal_state != "cold"
 }
 
+/// The stress state whose residual share of the thermal part is not within 25 %.
+const Z_STROKES: &str = "stress_z_strokes@3h";
+
 #[test]
 fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_state_and_seed() {
     let spec = MachineSpec::reference();
@@ -67,12 +76,14 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
                 .unwrap(),
         );
     }
-    // 7 diagonals × 7 states × 3 seeds.
-    assert_eq!(runs.len(), 7 * 7 * SEEDS.len());
+    // 7 diagonals × 12 states × 3 seeds.
+    let n_states = calibration::evaluation_states(&spec, 1).len();
+    assert_eq!(n_states, 12);
+    assert_eq!(runs.len(), 7 * n_states * SEEDS.len());
     let mut worst: Vec<(f64, String)> = Vec::new();
     for diag in ["XY", "YZ", "XZ", "PPP", "NPP", "PNP", "PPN"] {
         let of_diag: Vec<&RunReport> = runs.iter().filter(|r| r.diagonal == diag).collect();
-        assert_eq!(of_diag.len(), 7 * SEEDS.len(), "{diag}");
+        assert_eq!(of_diag.len(), n_states * SEEDS.len(), "{diag}");
         for r in of_diag {
             worst.push((
                 r.reduction,
@@ -91,27 +102,55 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
     }
     worst.sort_by(|a, b| a.0.total_cmp(&b.0));
     println!("worst runs: {:?}", &worst[..3]);
-    // Regression guard on the largest compensated error over all 147 runs: measured 2.48 µm
-    // (docs/results.md); the aim of 2 µm is not reached, so
-    // this only stops the figure from sliding back (2.06 µm before the bilinear axis parts,
-    // chosen on development states, which raised it here; 2.31 µm without the ambient history
-    // feature, 7 µm in the first version). The guard stays at 2.5 µm: the runs are
-    // deterministic (same seeds, same bits), so it is not widened for the new figure.
-    let (max_after, at) = runs
+    // The residual as a share of the thermal part, on every warm run.
+    let mut shares: Vec<(f64, String)> = runs
         .iter()
-        .map(|r| {
-            (
-                r.max_after_um,
-                format!("{} {} seed {}", r.diagonal, r.thermal_state, r.seed),
-            )
+        .filter_map(|r| {
+            r.residual_share_of_thermal.map(|s| {
+                (
+                    s,
+                    format!("{} {} seed {}", r.diagonal, r.thermal_state, r.seed),
+                )
+            })
         })
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .unwrap();
-    println!("max residual |E| {max_after:.2} µm ({at})");
-    assert!(
-        max_after <= 2.5,
-        "max residual |E| {max_after:.2} µm at {at} > 2.5 µm"
+        .collect();
+    shares.sort_by(|a, b| b.0.total_cmp(&a.0));
+    println!(
+        "largest residual shares of the thermal part: {:?}",
+        &shares[..3]
     );
+    // Every warm state but the cold one has thermal parts well above the 1 µm threshold.
+    assert!(shares.len() >= 7 * 10 * SEEDS.len());
+    for (s, at) in &shares {
+        let limit = if at.contains(Z_STROKES) { 1.35 } else { 0.25 };
+        assert!(
+            *s <= limit,
+            "{at}: residual {:.0} % of the thermal part",
+            s * 100.0
+        );
+    }
+    // Regression guards on the largest compensated error: measured 2.35 µm on the atypical
+    // states (2.48 µm with the earlier seven-cycle plan; the aim of 2 µm is not reached) and
+    // 3.74 µm on the stress states (docs/results.md). The runs are deterministic (same seeds,
+    // same bits), so the guards only stop the figures from sliding back.
+    for (stress, guard) in [(false, 2.4), (true, 3.8)] {
+        let (max_after, at) = runs
+            .iter()
+            .filter(|r| r.thermal_state.starts_with("stress_") == stress)
+            .map(|r| {
+                (
+                    r.max_after_um,
+                    format!("{} {} seed {}", r.diagonal, r.thermal_state, r.seed),
+                )
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap();
+        println!("max residual |E| {max_after:.2} µm ({at})");
+        assert!(
+            max_after <= guard,
+            "max residual |E| {max_after:.2} µm at {at} > {guard} µm"
+        );
+    }
 }
 
 #[test]

@@ -104,8 +104,20 @@ impl ThermalCycle {
     /// Mean spindle speed over cycle time `[from_s, to_s]`, rpm (the speed at `from_s` for an
     /// empty interval).
     pub fn mean_rpm(&self, from_s: f64, to_s: f64) -> f64 {
+        self.mean_of(from_s, to_s, |p| p.spindle_rpm)
+    }
+
+    /// Mean |speed| of each axis over cycle time `[from_s, to_s]`, mm/min (the speeds at
+    /// `from_s` for an empty interval).
+    pub fn mean_axis_feed(&self, from_s: f64, to_s: f64) -> [f64; 3] {
+        [0, 1, 2].map(|a| self.mean_of(from_s, to_s, |p| p.axis_speed_mm_per_min[a].abs()))
+    }
+
+    /// Time mean of a phase quantity over cycle time `[from_s, to_s]` (its value at `from_s`
+    /// for an empty interval).
+    fn mean_of(&self, from_s: f64, to_s: f64, value: impl Fn(&Phase) -> f64) -> f64 {
         if to_s <= from_s {
-            return self.phase_at(from_s).spindle_rpm;
+            return value(self.phase_at(from_s));
         }
         let mut acc = 0.0;
         let mut sum = 0.0;
@@ -120,7 +132,7 @@ impl ThermalCycle {
             };
             let overlap = to_s.min(end) - from_s.max(start);
             if overlap > 0.0 {
-                sum += overlap * p.spindle_rpm;
+                sum += overlap * value(p);
             }
         }
         sum / (to_s - from_s)

@@ -173,12 +173,15 @@ pub fn calibrate(
         let t0 = twin.time_s();
         let end = cycle.duration_s();
         let mut next_block = 0.0;
-        // The commanded speed since the previous record (the dataset's `spindle_rpm`): the
-        // spindle runs while the duty is driven and stands still during a block.
-        let mut driven_rpm = 0.0;
-        let log_rpm = |records: &mut Vec<Record>, from: usize, rpm: f64| {
+        // The commanded spindle speed and axis feeds since the previous record (the dataset's
+        // `spindle_rpm` and axis-feed columns): the spindle runs and the axes shuttle while the
+        // duty is driven; during a block the spindle stands still and the axes' moves between
+        // measurement points are short (logged as parked).
+        let mut driven = (0.0, [0.0; 3]);
+        let log_rpm = |records: &mut Vec<Record>, from: usize, (rpm, feed): (f64, [f64; 3])| {
             for r in &mut records[from..] {
                 r.spindle_rpm = Some(rpm);
+                r.axis_feed_mm_per_min = Some(feed);
             }
         };
         loop {
@@ -186,7 +189,7 @@ pub fn calibrate(
             if t >= next_block - 1e-9 {
                 let first = records.len();
                 inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
-                log_rpm(&mut records, first, driven_rpm);
+                log_rpm(&mut records, first, driven);
                 let first = records.len();
                 inst.spindle_stop_log(
                     &mut twin,
@@ -198,7 +201,7 @@ pub fn calibrate(
                     &mut records,
                 )?;
                 measurement_block(&mut twin, &mut inst, &grid, &cycle.name, t0, &mut records)?;
-                log_rpm(&mut records, first, 0.0);
+                log_rpm(&mut records, first, (0.0, [0.0; 3]));
                 next_block += cfg.measure_every_s;
                 continue;
             }
@@ -211,10 +214,11 @@ pub fn calibrate(
                 let t = twin.time_s() - t0;
                 let next_probe = ((t / cfg.spindle_every_s).floor() + 1.0) * cfg.spindle_every_s;
                 drive(&mut twin, cycle, t0, next_probe.min(target), cfg.step_s)?;
-                driven_rpm = cycle.mean_rpm(t, twin.time_s() - t0);
+                let now = twin.time_s() - t0;
+                driven = (cycle.mean_rpm(t, now), cycle.mean_axis_feed(t, now));
                 let first = records.len();
                 inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
-                log_rpm(&mut records, first, driven_rpm);
+                log_rpm(&mut records, first, driven);
             }
         }
     }

@@ -10,7 +10,7 @@ use crate::machine::MachineSpec;
 use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{self, ErrorPredictor, ModelKind, Settings, TrainSummary};
 use crate::predict::provenance::{InputRanges, TrainedOn};
-use crate::study::ForMachine;
+use crate::study::{self, ForMachine};
 
 /// What to train, validated.
 pub struct TrainConfig {
@@ -46,6 +46,7 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
     if cfg.spindle_speed {
         settings = settings.with_spindle_speed_input();
     }
+    let settings = study::with_plan_validation(settings, &data);
     let geometry = cfg.machine.geometry();
     // The machine the data names, else the one given (realisation unknown).
     let machine = data

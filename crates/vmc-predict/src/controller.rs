@@ -70,6 +70,12 @@ pub trait Controller {
     /// ignored.
     fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
 
+    /// The axes ran at the commanded mean speeds `feeds_mm_per_min` (|v| of X, Y, Z, mm/min)
+    /// since the previous call, up to `time_s`: what the controller commanded, the heat its
+    /// screws and motors take in. Called at every sensor sample, after
+    /// [`Self::on_spindle_speed`]. Default: ignored.
+    fn on_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
+
     /// The commanded tool path ran one motion segment from `start_mm` to `end_mm` (mm), in
     /// program order, after any points taken on it. Lets a controller follow the commanded
     /// trajectory between the points it compensates (e.g. each axis's direction of motion, for
@@ -218,6 +224,10 @@ impl<P: ErrorPredictor> Controller for Compensator<P> {
 
     fn on_spindle_speed(&mut self, time_s: f64, rpm: f64) {
         self.predictor.observe_spindle_speed(time_s, rpm);
+    }
+
+    fn on_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        self.predictor.observe_axis_feeds(time_s, feeds_mm_per_min);
     }
 
     fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {

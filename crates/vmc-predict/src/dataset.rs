@@ -30,6 +30,11 @@
 //! where they were. It is optional (an empty cell or a missing column reads as "not logged");
 //! only models that use the commanded speed need it (`Settings::spindle_speed_exponents`).
 //!
+//! `x_feed_mm_per_min`, `y_feed_mm_per_min`, `z_feed_mm_per_min` (optional, the three together)
+//! are, the same way, each axis's commanded mean speed |v| since the cycle's previous record
+//! (mm/min, 0 when parked): the heat its screw and motor take in. Only models with axis-feed
+//! features need them (`Settings::axis_feed_taus_s`).
+//!
 //! Plausibility: a measurement beyond ±1e6 µm or µrad (a metre, a radian), a position beyond
 //! ±1e6 mm or a temperature below absolute zero is refused with its line and column: such a
 //! value is a corrupt cell or a unit mistake, and training on it would give absurd models
@@ -113,6 +118,9 @@ pub struct Record {
     /// Commanded spindle speed since the cycle's previous record, rpm (see the module doc);
     /// `None` when not logged.
     pub spindle_rpm: Option<f64>,
+    /// Commanded mean |speed| of X, Y, Z since the cycle's previous record, mm/min (see the
+    /// module doc); `None` when not logged.
+    pub axis_feed_mm_per_min: Option<[f64; 3]>,
 }
 
 /// A calibration dataset.
@@ -176,6 +184,12 @@ const DIR_COLUMN: &str = "dir";
 
 /// The optional commanded-spindle-speed column.
 pub const SPINDLE_RPM_COLUMN: &str = "spindle_rpm";
+/// Names of the optional axis-feed columns (X, Y, Z).
+pub const AXIS_FEED_COLUMNS: [&str; 3] = [
+    "x_feed_mm_per_min",
+    "y_feed_mm_per_min",
+    "z_feed_mm_per_min",
+];
 
 const FIXED: [&str; 12] = [
     "cycle",
@@ -231,6 +245,16 @@ impl Dataset {
             s.push(',');
             s.push_str(SPINDLE_RPM_COLUMN);
         }
+        let with_feed = self
+            .records
+            .iter()
+            .any(|r| r.axis_feed_mm_per_min.is_some());
+        if with_feed {
+            for c in AXIS_FEED_COLUMNS {
+                s.push(',');
+                s.push_str(c);
+            }
+        }
         for n in &self.sensor_names {
             let _ = write!(s, ",{n}_degc");
         }
@@ -252,6 +276,14 @@ impl Dataset {
             let _ = write!(s, ",{}", r.dir);
             if with_rpm {
                 let _ = write!(s, ",{}", r.spindle_rpm.map(cell).unwrap_or_default());
+            }
+            if with_feed {
+                match r.axis_feed_mm_per_min {
+                    Some(f) => {
+                        let _ = write!(s, ",{},{},{}", cell(f[0]), cell(f[1]), cell(f[2]));
+                    }
+                    None => s.push_str(",,,"),
+                }
             }
             for t in &r.temps_degc {
                 let _ = write!(s, ",{t}");
@@ -306,6 +338,23 @@ impl Dataset {
         }
         let dir_col = cols.iter().position(|c| *c == DIR_COLUMN);
         let rpm_col = cols.iter().position(|c| *c == SPINDLE_RPM_COLUMN);
+        let feed_cols = AXIS_FEED_COLUMNS.map(|n| cols.iter().position(|c| *c == n));
+        let feed_cols = match feed_cols {
+            [None, None, None] => None,
+            [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+            _ => {
+                let missing = AXIS_FEED_COLUMNS
+                    .iter()
+                    .zip(feed_cols)
+                    .find(|(_, c)| c.is_none())
+                    .map(|(n, _)| *n)
+                    .unwrap_or_default();
+                return Err(DatasetError::MissingColumn {
+                    source_name: source_name.into(),
+                    column: format!("{missing} (the axis-feed columns go together)"),
+                });
+            }
+        };
         let sensor_cols: Vec<(usize, String)> = cols
             .iter()
             .enumerate()
@@ -409,6 +458,33 @@ impl Dataset {
                     Some(v)
                 }
             };
+            let axis_feed_mm_per_min = match feed_cols {
+                None => None,
+                Some(c) => {
+                    let cells = c.map(|i| cells[i]);
+                    if cells.iter().all(|c| c.is_empty()) {
+                        None
+                    } else {
+                        let mut f = [0.0_f64; 3];
+                        for (k, cell) in cells.into_iter().enumerate() {
+                            let col = AXIS_FEED_COLUMNS[k];
+                            let v: f64 = cell
+                                .parse()
+                                .map_err(|_| bad(col, format!("not a number: \"{cell}\"")))?;
+                            f[k] = v;
+                            if !(v.is_finite() && (0.0..=PLAUSIBLE_MAX).contains(&v)) {
+                                return Err(bad(
+                                    col,
+                                    format!(
+                                        "axis feed must lie in [0, 1e6] mm/min, got \"{cell}\""
+                                    ),
+                                ));
+                            }
+                        }
+                        Some(f)
+                    }
+                }
+            };
             records.push(Record {
                 cycle: cells[idx[0]].to_string(),
                 time_s: num(1, true)?,
@@ -418,6 +494,7 @@ impl Dataset {
                 temps_degc: temps,
                 dir,
                 spindle_rpm,
+                axis_feed_mm_per_min,
             });
         }
         if records.is_empty() {
@@ -482,6 +559,7 @@ mod tests {
                     temps_degc: vec![20.0625, 20.0],
                     dir: -1,
                     spindle_rpm: None,
+                    axis_feed_mm_per_min: None,
                 },
                 Record {
                     cycle: "c1".into(),
@@ -492,6 +570,7 @@ mod tests {
                     temps_degc: vec![25.125, 20.1],
                     dir: 1,
                     spindle_rpm: None,
+                    axis_feed_mm_per_min: None,
                 },
             ],
         }

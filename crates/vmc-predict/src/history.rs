@@ -253,9 +253,83 @@ impl SpeedHistory {
     }
 }
 
+/// Heat-input features of the axes' commanded feeds: per axis X, Y, Z, the first-order filters
+/// (each time constant) of the mean |speed| in m/min (the heat a screw's nut and bearings and
+/// the motor take in grows about in proportion to it), the way [`SpeedHistory`] treats the
+/// spindle speed (exponent 1: `v / 1000 mm/min`). The present speed itself is not a feature:
+/// a test's own short moves would weigh like hours of duty.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FeedHistory {
+    axes: [SpeedHistory; 3],
+}
+
+impl FeedHistory {
+    /// Features through filters of `taus_s` (each > 0 s); none with no time constant.
+    pub fn new(taus_s: &[f64]) -> Self {
+        let exponents: &[f64] = if taus_s.is_empty() { &[] } else { &[1.0] };
+        let axis = || SpeedHistory::new(exponents, taus_s);
+        Self {
+            axes: [axis(), axis(), axis()],
+        }
+    }
+
+    /// Number of features for `n_taus` time constants: 3 × n_taus.
+    pub fn n_features(n_taus: usize) -> usize {
+        3 * n_taus
+    }
+
+    /// Features of this history.
+    pub fn len(&self) -> usize {
+        self.axes.iter().map(|a| a.len().saturating_sub(1)).sum()
+    }
+
+    /// Whether there are no features.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The axes ran at mean speeds `feeds_mm_per_min` since the previous log, up to `t_s`.
+    pub fn observe(&mut self, t_s: f64, feeds_mm_per_min: [f64; 3]) {
+        for (h, f) in self.axes.iter_mut().zip(feeds_mm_per_min) {
+            h.observe(t_s, f);
+        }
+    }
+
+    /// Writes the features into `out` ([`Self::len`] values): X's, then Y's, then Z's.
+    pub fn features_into(&self, out: &mut [f64]) {
+        let n = self.axes[0].len();
+        if n == 0 {
+            return;
+        }
+        let mut all = [0.0; 16];
+        for (h, o) in self.axes.iter().zip(out.chunks_exact_mut(n - 1)) {
+            // With the present input first (at most 15 filters: `MAX_FEED_TAUS`).
+            h.features_into(&mut all[..n]);
+            o.copy_from_slice(&all[1..n]);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn feed_features_are_per_axis_inputs_and_their_filters() {
+        let mut h = FeedHistory::new(&[600.0]);
+        assert_eq!(h.len(), 3);
+        h.observe(0.0, [0.0; 3]);
+        for k in 1..=10_000 {
+            h.observe(f64::from(k), [0.0, 2000.0, 6000.0]);
+        }
+        let mut f = [9.0; 3];
+        h.features_into(&mut f);
+        // Settled after many τ: each filter equals its input (m/min).
+        assert_eq!(f[0], 0.0);
+        assert!((f[1] - 2.0).abs() < 1e-9 && (f[2] - 6.0).abs() < 1e-9);
+        assert!(FeedHistory::new(&[]).is_empty());
+        assert_eq!(FeedHistory::n_features(0), 0);
+    }
 
     #[test]
     fn a_constant_reading_gives_zero_history_features() {

@@ -243,6 +243,10 @@ impl<C: Controller> Controller for Guarded<C> {
         self.inner.on_spindle_speed(time_s, rpm);
     }
 
+    fn on_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        self.inner.on_axis_feeds(time_s, feeds_mm_per_min);
+    }
+
     fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
         self.inner.on_commanded_motion(start_mm, end_mm);
     }

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use crate::dataset::{Dataset, Instrument, Record};
-use crate::history::{ReadingHistory, SpeedHistory};
+use crate::history::{FeedHistory, ReadingHistory, SpeedHistory};
 use crate::linreg::LinearModel;
 use crate::nn::{Regressor, Samples, TrainConfig};
 
@@ -39,6 +39,10 @@ pub(crate) struct SensorSelection {
     pub speed_taus_s: Vec<f64>,
     /// Spindle-speed features ([`SpeedHistory`]) of each (cycle, time) instant.
     speed: HashMap<String, HashMap<u64, Vec<f64>>>,
+    /// Time constants of the axis-feed filters (s; empty: not used).
+    pub feed_taus_s: Vec<f64>,
+    /// Axis-feed features ([`FeedHistory`]) of each (cycle, time) instant.
+    feed: HashMap<String, HashMap<u64, Vec<f64>>>,
 }
 
 impl SensorSelection {
@@ -85,6 +89,8 @@ impl SensorSelection {
             speed_exponents: Vec::new(),
             speed_taus_s: Vec::new(),
             speed: HashMap::new(),
+            feed_taus_s: Vec::new(),
+            feed: HashMap::new(),
         })
     }
 
@@ -195,6 +201,50 @@ impl SensorSelection {
         Ok(self)
     }
 
+    /// Adds the axes' commanded-feed features (see [`FeedHistory`]) for every part: each
+    /// cycle's axis-feed log (every record, in time order) runs through the filters from the
+    /// cycle's first record on (axes at rest before it). Nothing with no time constants; every
+    /// record must carry the feeds otherwise.
+    pub fn with_axis_feeds(mut self, ds: &Dataset, taus_s: &[f64]) -> Result<Self, PredictError> {
+        if taus_s.is_empty() {
+            return Ok(self);
+        }
+        check_taus("axis_feed_taus_s", taus_s)?;
+        self.feed_taus_s = taus_s.to_vec();
+        if let Some((index, r)) = ds
+            .records
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.axis_feed_mm_per_min.is_none())
+        {
+            return Err(PredictError::MissingAxisFeeds {
+                index,
+                cycle: r.cycle.clone(),
+                time_s: r.time_s,
+            });
+        }
+        for (cycle, recs) in records_by_cycle(ds) {
+            let mut h = FeedHistory::new(taus_s);
+            let at = self.feed.entry(cycle.to_string()).or_default();
+            for r in recs {
+                let key = r.time_s.to_bits();
+                if at.contains_key(&key) {
+                    continue;
+                }
+                h.observe(r.time_s, r.axis_feed_mm_per_min.unwrap_or([0.0; 3]));
+                let mut f = vec![0.0; h.len()];
+                h.features_into(&mut f);
+                at.insert(key, f);
+            }
+        }
+        Ok(self)
+    }
+
+    /// Axis-feed features (every part sees them).
+    pub fn n_feed(&self) -> usize {
+        FeedHistory::n_features(self.feed_taus_s.len())
+    }
+
     /// Spindle-speed features of the spindle part.
     fn n_speed(&self) -> usize {
         SpeedHistory::n_features(self.speed_exponents.len(), self.speed_taus_s.len())
@@ -229,13 +279,13 @@ impl SensorSelection {
     }
 
     /// Model inputs of the axis parts and the squareness: the readings, then the history
-    /// features.
+    /// features, then the axis-feed features.
     pub fn n_inputs(&self) -> usize {
-        self.cols.len() + self.n_shared_history()
+        self.cols.len() + self.n_shared_history() + self.n_feed()
     }
 
-    /// Model inputs of the spindle part: [`Self::n_inputs`], then the spindle-only history
-    /// features, then the spindle-speed features.
+    /// Model inputs of the spindle part: [`Self::n_inputs`] (readings, shared history, axis
+    /// feeds), then the spindle-only history features, then the spindle-speed features.
     pub fn n_spindle_inputs(&self) -> usize {
         self.n_inputs() + self.spindle_idx.len() * self.spindle_taus_s.len() + self.n_speed()
     }
@@ -244,22 +294,36 @@ impl SensorSelection {
     /// with `spindle`, also the spindle-only history features.
     pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>, spindle: bool) {
         row.extend(self.cols.iter().map(|&c| r.temps_degc[c]));
-        let n = if spindle {
-            self.n_spindle_inputs() - self.n_speed()
+        let n_shared = self.n_shared_history();
+        let n_own = if spindle {
+            self.spindle_idx.len() * self.spindle_taus_s.len()
         } else {
-            self.n_inputs()
-        } - self.cols.len();
-        if n > 0 {
-            // Every record's instant was filled in `with_history`.
-            match self
-                .history
-                .get(r.cycle.as_str())
+            0
+        };
+        // Every record's instant was filled in `with_history` and `with_axis_feeds`.
+        let at = |map: &HashMap<String, HashMap<u64, Vec<f64>>>| {
+            map.get(r.cycle.as_str())
                 .and_then(|at| at.get(&r.time_s.to_bits()))
-            {
-                Some(f) => row.extend_from_slice(&f[..n]),
-                None => row.extend(std::iter::repeat_n(0.0, n)),
+                .cloned()
+        };
+        let history = if n_shared + n_own > 0 {
+            at(&self.history)
+        } else {
+            None
+        };
+        let mut push = |from: usize, n: usize, f: &Option<Vec<f64>>| {
+            if n > 0 {
+                match f {
+                    Some(f) => row.extend_from_slice(&f[from..from + n]),
+                    None => row.extend(std::iter::repeat_n(0.0, n)),
+                }
             }
-        }
+        };
+        push(0, n_shared, &history);
+        let nf = self.n_feed();
+        let feed = if nf > 0 { at(&self.feed) } else { None };
+        push(0, nf, &feed);
+        push(n_shared, n_own, &history);
         let ns = self.n_speed();
         if spindle && ns > 0 {
             // Every record's instant was filled in `with_spindle_speed`.

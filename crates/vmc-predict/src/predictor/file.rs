@@ -36,7 +36,9 @@
 //! shared ones) — version 5 added them, older files read as none — and
 //! `spindle_speed_exponents` with `spindle_speed_taus_s` (the commanded spindle speed's
 //! heat-input features of the spindle part, opt-in, see `crate::history::SpeedHistory`;
-//! version 7, absent = not used). Of a
+//! version 7, absent = not used) — and `axis_feed_taus_s` (the axes' commanded-feed filters
+//! every part sees after the shared history features, see `crate::history::FeedHistory`;
+//! version 8, absent = not used). Of a
 //! `volumetric`: `net` (`[X, Y, Z mm, temps] → [Ex, Ey, Ez] µm`). Of a `linear`: `scaling` (`pos_centre_mm`,
 //! `pos_half_range_mm`, `temp_ref_degc`) and `regression` (features → E µm). A regressor is
 //! `{"input_norm": {"mean", "std"}, "output_norm": {…}, "mlp": {"sizes", "weights"}}`
@@ -460,6 +462,12 @@ impl ErrorPredictor for AnyPredictor {
     fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64) {
         if let AnyPredictor::Hybrid(p) = self {
             p.observe_spindle_speed(time_s, rpm);
+        }
+    }
+
+    fn observe_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        if let AnyPredictor::Hybrid(p) = self {
+            p.observe_axis_feeds(time_s, feeds_mm_per_min);
         }
     }
 }

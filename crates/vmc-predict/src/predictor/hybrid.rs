@@ -16,7 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::{Dataset, Instrument, Record};
-use crate::history::{ReadingHistory, SpeedHistory};
+use crate::history::{FeedHistory, ReadingHistory, SpeedHistory};
 use crate::linreg::LinearModel;
 use crate::synthesis::{first_order_error_mm, ElementaryErrors, MachineGeometry};
 
@@ -72,6 +72,11 @@ pub(crate) struct HybridParts {
     /// Time constants of the speed's heat-input filters, s.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub spindle_speed_taus_s: Vec<f64>,
+    /// Time constants of the axes' commanded-feed filters, s (version 8; empty: the feeds are
+    /// not used). Every part's inputs then hold the [`FeedHistory`] features after the shared
+    /// history features.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub axis_feed_taus_s: Vec<f64>,
 }
 
 /// Query-time state: the held readings, part evaluators with cached temperature-only results,
@@ -90,7 +95,13 @@ struct Runtime {
     /// Heat-input filters over the commanded spindle speed (no features unless the model
     /// uses the speed).
     speed: SpeedHistory,
-    /// Inputs of the axis parts and the squareness (a prefix of `inputs`).
+    /// Heat-input filters over the axes' commanded feeds (no features unless the model uses
+    /// them).
+    feed: FeedHistory,
+    /// Readings and shared history features (a prefix of `inputs`).
+    n_history: usize,
+    /// Inputs of the axis parts and the squareness (a prefix of `inputs`): the readings and
+    /// shared history features, then the feed features.
     n_shared: usize,
     /// Temperature inputs of the networks (readings, shared history features, then the
     /// spindle-only ones) of the cached results.
@@ -149,7 +160,14 @@ impl HybridPredictor {
                 ),
             });
         }
-        let k = history.len();
+        if let Some(t) = crate::history::invalid_tau(&parts.axis_feed_taus_s) {
+            return Err(PredictError::Inconsistent {
+                reason: format!("axis_feed_taus_s holds an unusable time constant ({t})"),
+            });
+        }
+        let feed = FeedHistory::new(&parts.axis_feed_taus_s);
+        let n_history = history.len();
+        let k = n_history + feed.len();
         let k_spindle = k + spindle_history.n_history() + speed.len();
         for (name, part) in AXIS_NETS.iter().zip(&parts.axis_nets) {
             part.check(name, 1, k, 6)?;
@@ -182,6 +200,8 @@ impl HybridPredictor {
             history,
             spindle_history,
             speed,
+            feed,
+            n_history,
             n_shared: k,
             inputs: vec![0.0; k_spindle],
             readings: vec![f64::NAN; sensors.len()],
@@ -267,7 +287,9 @@ impl HybridPredictor {
         let rt = &mut self.rt;
         rt.stale = false;
         let (shared, own) = rt.inputs.split_at_mut(rt.n_shared);
-        rt.history.features_into(&rt.readings, shared);
+        let (readings, feeds) = shared.split_at_mut(rt.n_history);
+        rt.history.features_into(&rt.readings, readings);
+        rt.feed.features_into(feeds);
         let (own, speed) = own.split_at_mut(rt.spindle_history.n_history());
         rt.spindle_history.history_into(&rt.readings, own);
         rt.speed.features_into(speed);
@@ -320,6 +342,13 @@ impl ErrorPredictor for HybridPredictor {
             self.rt.stale = true;
         }
     }
+
+    fn observe_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        if !self.rt.feed.is_empty() {
+            self.rt.feed.observe(time_s, feeds_mm_per_min);
+            self.rt.stale = true;
+        }
+    }
 }
 
 /// Trains the hybrid predictor on the `laser_x/y/z`, `spindle` and `squareness` records.
@@ -346,7 +375,8 @@ pub fn train_hybrid(
             ds,
             &settings.spindle_speed_exponents,
             &settings.spindle_speed_taus_s,
-        )?;
+        )?
+        .with_axis_feeds(ds, &settings.axis_feed_taus_s)?;
     let split = CycleSplit::new(ds, settings)?;
     // Build every table before training anything, so data errors surface at once.
     const NEEDED_FOR: [&str; 3] = [
@@ -467,6 +497,7 @@ pub fn train_hybrid(
         },
         spindle_speed_exponents: sel.speed_exponents.clone(),
         spindle_speed_taus_s: sel.speed_taus_s.clone(),
+        axis_feed_taus_s: sel.feed_taus_s.clone(),
     };
     let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
     let summary = TrainSummary {

@@ -107,6 +107,11 @@ pub trait ErrorPredictor {
     /// (the same clock as [`Self::observe_readings`]). A model with spindle-speed features
     /// ([`Settings::spindle_speed_exponents`]) filters it; the default ignores it.
     fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+
+    /// The axes ran at the commanded mean speeds `feeds_mm_per_min` (|v| of X, Y, Z, mm/min)
+    /// since the previous call, up to `time_s`. A model with axis-feed features
+    /// ([`Settings::axis_feed_taus_s`]) filters them; the default ignores them.
+    fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
 }
 
 /// A mutable borrow predicts like the predictor itself (e.g. `Compensator::new(&mut model)`).
@@ -131,6 +136,10 @@ impl<P: ErrorPredictor + ?Sized> ErrorPredictor for &mut P {
     fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64) {
         (**self).observe_spindle_speed(time_s, rpm);
     }
+
+    fn observe_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        (**self).observe_axis_feeds(time_s, feeds_mm_per_min);
+    }
 }
 
 /// Errors of training, loading and checking predictors.
@@ -153,6 +162,20 @@ pub enum PredictError {
         found: usize,
         /// Minimum required.
         needed: usize,
+    },
+    /// The settings use the axes' commanded feeds, and a record does not carry them.
+    #[error(
+        "the axis-feed features need the `x_feed_mm_per_min`, `y_feed_mm_per_min` and \
+         `z_feed_mm_per_min` columns on every record; record {index} (cycle `{cycle}`, t = \
+         {time_s} s) has none"
+    )]
+    MissingAxisFeeds {
+        /// 0-based record index in the dataset.
+        index: usize,
+        /// Its cycle.
+        cycle: String,
+        /// Its time, s.
+        time_s: f64,
     },
     /// The settings use the commanded spindle speed, and a record does not carry it.
     #[error(
@@ -366,6 +389,12 @@ pub struct Settings {
     /// Time constants (s) of the spindle speed's heat-input filters (used with
     /// [`Self::spindle_speed_exponents`]).
     pub spindle_speed_taus_s: Vec<f64>,
+    /// Time constants (s) of the axes' commanded-feed heat-input filters (default: empty = the
+    /// feeds are not used). With them, the axis parts, the squareness and the spindle part also
+    /// see per axis the mean |speed| since the previous sample and its low-pass filters
+    /// ([`crate::history::FeedHistory`]): the heat of the screws and motors, which no sensor
+    /// may touch. The dataset needs the axis-feed columns.
+    pub axis_feed_taus_s: Vec<f64>,
 }
 
 impl Default for Settings {
@@ -388,6 +417,7 @@ impl Default for Settings {
             history_sensors: Vec::new(),
             spindle_history_taus_s: Vec::new(),
             spindle_history_sensors: Vec::new(),
+            axis_feed_taus_s: Vec::new(),
             axis_bilinear: true,
             spindle_speed_exponents: Vec::new(),
             spindle_speed_taus_s: Vec::new(),

@@ -156,6 +156,7 @@ pub fn dataset(amps_degc: &[f64], seed: u64) -> Dataset {
                     temps_degc: temps,
                     dir: 1,
                     spindle_rpm: None,
+                    axis_feed_mm_per_min: None,
                 });
             };
             for k in 0..3 {

@@ -20,6 +20,7 @@ fn toy() -> Dataset {
                 temps_degc: vec![20.0, a, b, c],
                 dir: 1,
                 spindle_rpm: None,
+                axis_feed_mm_per_min: None,
             });
         }
     }
