@@ -23,18 +23,22 @@
 //! Units: whatever the column names say (`_degc`, `_um`, `_rpm`); the time column is converted to
 //! seconds. Nothing here touches files; [`read_csv`] parses text.
 
+mod common;
+mod cv;
 mod features;
 mod fit;
 mod model;
+mod settings;
 mod split;
 mod table;
 
 pub use features::FeatureSpec;
-pub use fit::{fit, FitSettings};
+pub use fit::fit;
 pub use model::{
-    Architecture, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel, FORMAT_NAME,
-    FORMAT_VERSION,
+    Architecture, Channel, ChannelScore, Evaluation, FoldScore, OutputModel, ThermalModel,
+    FORMAT_NAME, FORMAT_VERSION,
 };
+pub use settings::FitSettings;
 pub use split::Split;
 pub use table::{read_csv, Table, TableRequest};
 
