@@ -13,7 +13,8 @@
 //! 2. per output, the form among those the [`Architecture`] allows: plain least squares on the
 //!    raw inputs, the filter-bank linear form, linear + residual net, net. A fold's nets
 //!    early-stop on its last fitting cycle (or on the last rows of its fitting part when it has
-//!    a single cycle to fit) and train on the rest. Ties keep the simpler form.
+//!    a single cycle to fit) and train on the rest. Ties (within a millionth) keep the simpler
+//!    form, in the order plain least squares, linear, linear + residual net, net.
 //!
 //! The features are causal, computed once over the whole series: a held-out cycle's features
 //! carry the history of the cycles before it, as they would when the model runs on a machine.
@@ -116,6 +117,10 @@ pub(super) struct CvChoice {
     /// The folds' scores of the chosen forms and of plain least squares.
     pub folds: Vec<FoldScore>,
 }
+
+/// Relative margin by which a form must lower the mean fold ratio to replace a simpler one
+/// (round-off ties keep the simpler form).
+const TIE: f64 = 1e-6;
 
 /// Per output, RMSE on `rows` / RMS of the measured values there.
 fn ratios(y: &[Vec<f64>], pred: &[Vec<f64>], rows: &[usize]) -> Vec<f64> {
@@ -254,7 +259,7 @@ pub(super) fn cross_validate(
         let mut pick: Option<(usize, f64)> = None;
         for (i, form) in order.iter().enumerate() {
             if let (true, Some(s)) = (allowed(*form), &form_scores[i]) {
-                if pick.is_none_or(|p| s[k] < p.1) {
+                if pick.is_none_or(|p| s[k] < p.1 * (1.0 - TIE)) {
                     pick = Some((i, s[k]));
                 }
             }

@@ -353,6 +353,7 @@ mod tests {
                 relative_to_mean: false,
             },
             ridge_candidates: vec![1e-9],
+            tau_scales: vec![1.0],
             hidden_candidates: vec![2],
             ..FitSettings::default()
         };
@@ -397,7 +398,7 @@ mod tests {
                 .to_string()
         };
         assert!(err("{\"kind\": \"hybrid\"}").contains("not a thermal-drift model"));
-        assert!(err(&json.replacen("\"version\": 1", "\"version\": 7", 1)).contains("version"));
+        assert!(err(&json.replacen("\"version\": 2", "\"version\": 7", 1)).contains("version"));
         let inconsistent = json.replacen(
             "\"time_constants_s\": [\n      3600.0\n    ]",
             "\"time_constants_s\": []",
@@ -466,5 +467,70 @@ mod tests {
         assert!(e1.channels[0]
             .plain_ls_rmse
             .is_some_and(|p| p.is_finite() && p > 0.0));
+    }
+
+    #[test]
+    fn each_cycle_is_held_out_once_and_each_output_gets_the_simplest_form_that_generalises() {
+        // ch1 lags the temperature by 1 h (the filter bank is needed); ch2 is a static function
+        // of it plus a wobble no input explains: the filter bank gains nothing there, and the
+        // simpler form, plain least squares, is kept.
+        let base = lagged_table();
+        let t1 = base.column("t1_degc").unwrap();
+        let mut text = String::from("time_s,spindle_rpm,t1_degc,ch1_um,ch2_um\n");
+        let rpm = base.column("spindle_rpm").unwrap();
+        let ch1 = base.column("ch1_um").unwrap();
+        for r in 0..base.len() {
+            let wobble = 0.5 * (1.7 * r as f64).sin();
+            let ch2 = 1.5 * t1[r] + 0.3 + wobble;
+            text.push_str(&format!(
+                "{},{},{},{},{ch2}\n",
+                base.time_s[r], rpm[r], t1[r], ch1[r]
+            ));
+        }
+        let req = TableRequest {
+            time: None,
+            required: vec![("spindle_rpm".into(), "cycle")],
+            optional: vec!["t1_degc".into(), "ch1_um".into(), "ch2_um".into()],
+            min_rows: 2,
+        };
+        let table = read_csv(&text, "two.csv", &req).unwrap();
+        let split = cycle_split(&table);
+        assert_eq!(split.cycles(&table.time_s).len(), 3);
+        let settings = FitSettings {
+            architecture: Architecture::Linear,
+            features: FeatureSpec {
+                time_constants_s: vec![3600.0],
+                speed_exponents: Vec::new(),
+                relative_to_mean: false,
+            },
+            ridge_candidates: vec![1e-9, 1e-3],
+            tau_scales: vec![0.5, 1.0],
+            ..FitSettings::default()
+        };
+        let outputs = ["ch1_um".to_string(), "ch2_um".to_string()];
+        let m = fit(&table, &["t1_degc".into()], &outputs, &split, &settings).unwrap();
+        let ev = m.evaluation.as_ref().unwrap();
+        assert_eq!(ev.folds.len(), 3);
+        assert!(ev.folds.iter().all(|f| f.rows == 480), "{:?}", ev.folds);
+        assert_eq!(ev.tau_scale, 1.0);
+        assert_eq!(m.features.time_constants_s, [3600.0]);
+        assert_eq!(m.output_models, [OutputModel::Linear, OutputModel::PlainLs]);
+        let c = &ev.channels;
+        assert!(c[0].cv_model_ratio < 1e-6, "{:?}", c[0]);
+        assert!(c[0].cv_plain_ls_ratio.is_some_and(|p| p > 0.1), "{:?}", c[0]);
+        assert!(c[1].cv_plain_ls_ratio == Some(c[1].cv_model_ratio), "{:?}", c[1]);
+        assert!(
+            c[1].cv_model_ratio <= c[1].cv_linear_ratio * (1.0 + 1e-6),
+            "{:?}",
+            c[1]
+        );
+        // The file keeps the plain part and predicts with it after a round trip.
+        let back = ThermalModel::from_json(&m.to_json(), "m.json").unwrap();
+        assert!(back.plain.is_some());
+        let x = [table.column("t1_degc").unwrap()];
+        assert_eq!(
+            m.predict(&table.time_s, &x).unwrap(),
+            back.predict(&table.time_s, &x).unwrap()
+        );
     }
 }

@@ -28,8 +28,8 @@ pub struct Split {
     pub holdout_from_s: f64,
     /// How `holdout_from_s` was chosen (for the report).
     pub rule: String,
-    /// Times where the cycle column rises from 0 (or less) to a positive value: the cycle
-    /// starts (empty without a cycle column).
+    /// Times where the cycle column rises from 0 (or less) to a positive value, and the first
+    /// time if it is positive there: the cycle starts (empty without a cycle column).
     #[serde(default)]
     pub cycle_starts_s: Vec<f64>,
 }
@@ -143,7 +143,13 @@ impl Split {
             val_from_s: time_s[n_fit - n_val],
             holdout_from_s,
             rule,
-            cycle_starts_s: starts.iter().map(|&s| time_s[s]).collect(),
+            // A series that starts heating starts a cycle on its first row.
+            cycle_starts_s: cycle
+                .filter(|(_, c)| c.first().is_some_and(|v| *v > 0.0))
+                .map(|_| first)
+                .into_iter()
+                .chain(starts.iter().map(|&s| time_s[s]))
+                .collect(),
         })
     }
 
@@ -202,6 +208,12 @@ mod tests {
         let s = Split::resolve(&t, Some(90.0), None, 0.25).unwrap();
         assert_eq!(s.val_from_s, 70.0);
         assert!(s.cycles(&t).is_empty());
+        // A series that starts heating: its first row starts a cycle.
+        let mut hot = rpm;
+        hot[0] = 500.0;
+        let s = Split::resolve(&t, None, Some(("spindle_rpm", &hot)), 0.25).unwrap();
+        assert_eq!(s.cycle_starts_s, [0.0, 50.0, 90.0]);
+        assert_eq!(s.cycles(&t).len(), 3);
         assert_eq!(s.part(90.0), Part::Holdout);
     }
 
