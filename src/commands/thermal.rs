@@ -127,7 +127,8 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
         .iter()
         .map(|t| format!("{t}"))
         .collect();
-    let _ = writeln!(
+    let _ =
+        writeln!(
         s,
         "fit-thermal: {source}, {} rows, {} inputs → {} features, {} outputs; architecture {}; \
          filter bank ×{} (τ = {} s); residual net {}, direct net {}",
@@ -155,7 +156,12 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
     let ratio = |e: Option<f64>, raw: f64| e.filter(|_| raw > 0.0).map(|e| e / raw);
     let mut head = format!("  {:<5} {:>17} {:>5} ", "fold", "held out (s)", "rows");
     for c in &model.outputs {
-        let _ = write!(head, " {:>16}", format!("{} model|LS", c.name.trim_end_matches("_um")));
+        let stem = c
+            .name
+            .strip_suffix(&format!("_{}", c.unit))
+            .filter(|_| !c.unit.is_empty())
+            .unwrap_or(&c.name);
+        let _ = write!(head, " {:>16}", format!("{stem} model|LS"));
     }
     let _ = writeln!(s, "{head}");
     let n_out = model.outputs.len();
@@ -179,7 +185,11 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
         let _ = write!(
             line,
             " {:>16}",
-            format!("{}|{}", pct(Some(c.cv_model_ratio)), pct(c.cv_plain_ls_ratio))
+            format!(
+                "{}|{}",
+                pct(Some(c.cv_model_ratio)),
+                pct(c.cv_plain_ls_ratio)
+            )
         );
     }
     let _ = writeln!(s, "{line}");

@@ -36,7 +36,12 @@ pub(super) fn rmse(truth: &[Vec<f64>], pred: &[Vec<f64>], rows: &[usize]) -> Vec
 
 /// Mean over outputs of validation RMSE / the output's standard deviation on the fitting rows
 /// (a unit-free score to compare candidates).
-pub(super) fn val_score(y: &[Vec<f64>], pred: &[Vec<f64>], fit_rows: &[usize], val_rows: &[usize]) -> f64 {
+pub(super) fn val_score(
+    y: &[Vec<f64>],
+    pred: &[Vec<f64>],
+    fit_rows: &[usize],
+    val_rows: &[usize],
+) -> f64 {
     let errs = rmse(y, pred, val_rows);
     let n = fit_rows.len().max(1) as f64;
     errs.iter()
@@ -83,14 +88,24 @@ pub(super) fn predict_rows(
     out
 }
 
-pub(super) fn predict_linear(m: &LinearModel, feats: &[f64], width: usize, n_out: usize) -> Vec<Vec<f64>> {
+pub(super) fn predict_linear(
+    m: &LinearModel,
+    feats: &[f64],
+    width: usize,
+    n_out: usize,
+) -> Vec<Vec<f64>> {
     // Widths match by construction, so predict_into cannot fail here.
     predict_rows(feats, width, n_out, |x, o| {
         let _ = m.predict_into(x, o);
     })
 }
 
-pub(super) fn predict_net(m: &Regressor, feats: &[f64], width: usize, n_out: usize) -> Vec<Vec<f64>> {
+pub(super) fn predict_net(
+    m: &Regressor,
+    feats: &[f64],
+    width: usize,
+    n_out: usize,
+) -> Vec<Vec<f64>> {
     let mut scratch = vec![0.0; m.scratch_len()];
     predict_rows(feats, width, n_out, |x, o| {
         let _ = m.predict_into(x, &mut scratch, o);
@@ -225,7 +240,6 @@ pub(super) fn plain_least_squares(
     let pred = predict_linear(&m, raw, width, y.len());
     Ok((m, pred))
 }
-
 
 /// A linear model on `rows` with its own ridge λ per output (`ridges[k]`): one fit per distinct
 /// λ, each output's coefficients taken from the fit with its λ (ridge regression treats the

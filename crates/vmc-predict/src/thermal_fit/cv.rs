@@ -178,7 +178,10 @@ pub(super) fn cross_validate(
             let (i, v) = per_lambda
                 .iter()
                 .enumerate()
-                .fold((0, f64::INFINITY), |b, (i, r)| if r[k] < b.1 { (i, r[k]) } else { b });
+                .fold(
+                    (0, f64::INFINITY),
+                    |b, (i, r)| if r[k] < b.1 { (i, r[k]) } else { b },
+                );
             ridges.push(lambdas[i]);
             scores.push(v);
         }

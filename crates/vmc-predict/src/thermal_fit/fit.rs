@@ -18,8 +18,8 @@ use super::common::{
 };
 use super::cv::{self, CvData};
 use super::model::{
-    raw_rows, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel,
-    FORMAT_NAME, FORMAT_VERSION,
+    raw_rows, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel, FORMAT_NAME,
+    FORMAT_VERSION,
 };
 use super::settings::FitSettings;
 use super::split::{Part, Split};
@@ -517,8 +517,16 @@ mod tests {
         assert_eq!(m.output_models, [OutputModel::Linear, OutputModel::PlainLs]);
         let c = &ev.channels;
         assert!(c[0].cv_model_ratio < 1e-6, "{:?}", c[0]);
-        assert!(c[0].cv_plain_ls_ratio.is_some_and(|p| p > 0.1), "{:?}", c[0]);
-        assert!(c[1].cv_plain_ls_ratio == Some(c[1].cv_model_ratio), "{:?}", c[1]);
+        assert!(
+            c[0].cv_plain_ls_ratio.is_some_and(|p| p > 0.1),
+            "{:?}",
+            c[0]
+        );
+        assert!(
+            c[1].cv_plain_ls_ratio == Some(c[1].cv_model_ratio),
+            "{:?}",
+            c[1]
+        );
         assert!(
             c[1].cv_model_ratio <= c[1].cv_linear_ratio * (1.0 + 1e-6),
             "{:?}",

@@ -74,10 +74,15 @@ impl FitSettings {
         if self.features.time_constants_s.is_empty() {
             return Ok(vec![1.0]);
         }
-        if self.tau_scales.is_empty() || self.tau_scales.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        if self.tau_scales.is_empty()
+            || self.tau_scales.iter().any(|s| !(s.is_finite() && *s > 0.0))
+        {
             return Err(ThermalFitError::BadSettings {
                 field: "tau_scales",
-                reason: format!("need at least one finite positive scale, got {:?}", self.tau_scales),
+                reason: format!(
+                    "need at least one finite positive scale, got {:?}",
+                    self.tau_scales
+                ),
             });
         }
         Ok(self.tau_scales.clone())
