@@ -360,7 +360,10 @@ fn a_model_and_a_data_file_that_do_not_fit_are_errors() {
             "p.csv",
         ],
     );
-    assert_error(&o, &["v3.json", "version Some(3)", "reads version 2"]);
+    assert_error(
+        &o,
+        &["v3.json", "version Some(3)", "reads versions 1 and 2"],
+    );
 
     // The matching file works, and without the measured column the predictions still come.
     let o = vmc(

@@ -399,6 +399,15 @@ mod tests {
         };
         assert!(err("{\"kind\": \"hybrid\"}").contains("not a thermal-drift model"));
         assert!(err(&json.replacen("\"version\": 2", "\"version\": 7", 1)).contains("version"));
+        // A version 1 file predicts with the same parts; its evaluation is not kept.
+        let v1 =
+            ThermalModel::from_json(&json.replacen("\"version\": 2", "\"version\": 1", 1), "v1")
+                .unwrap();
+        assert!(v1.evaluation.is_none());
+        assert_eq!(
+            m.predict(&table.time_s, &x).unwrap(),
+            v1.predict(&table.time_s, &x).unwrap()
+        );
         let inconsistent = json.replacen(
             "\"time_constants_s\": [\n      3600.0\n    ]",
             "\"time_constants_s\": []",

@@ -21,7 +21,9 @@
 //!
 //! File: JSON with `format` = [`FORMAT_NAME`] and `version` = [`FORMAT_VERSION`], the input and
 //! output names and units, the feature spec, the parts with their normalisations and weights,
-//! the per-output choice and the held-out evaluation. Reading checks all of it.
+//! the per-output choice and the evaluation. Reading checks all of it. Version 1 files (before
+//! plain least squares and the cross-validation) read without their evaluation and predict as
+//! they did.
 
 use serde::{Deserialize, Serialize};
 
@@ -358,11 +360,20 @@ impl ThermalModel {
                 )))
             }
         }
+        let mut value = value;
         match value.get("version").and_then(|v| v.as_u64()) {
             Some(v) if v == u64::from(FORMAT_VERSION) => {}
+            // Version 1 predicts with the same parts; its evaluation (a single validation
+            // cycle) has other fields and is not kept.
+            Some(1) => {
+                if let Some(o) = value.as_object_mut() {
+                    o.insert("evaluation".into(), serde_json::Value::Null);
+                    o.insert("version".into(), FORMAT_VERSION.into());
+                }
+            }
             v => {
                 return Err(bad(format!(
-                    "model file version {v:?}, this build reads version {FORMAT_VERSION}"
+                    "model file version {v:?}, this build reads versions 1 and {FORMAT_VERSION}"
                 )))
             }
         }
