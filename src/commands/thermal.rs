@@ -193,17 +193,29 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
         );
     }
     let _ = writeln!(s, "{line}");
+    let loco = ev.split.cycle_starts_s.len() >= 2;
+    let nets = if ev.residual_net.is_some() || ev.direct_net.is_some() {
+        format!(
+            "; the nets early-stop on the validation part ({} rows) after training on {} rows",
+            ev.n_val, ev.n_train
+        )
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         s,
-        "split (time-ordered): {}; the nets early-stop on the validation part ({} rows) after \
-         training on {} rows; last cycle: held out from {} s, {} rows, scored with the chosen \
-         forms fitted on the {} rows before it (their selection saw every cycle)",
+        "split (time-ordered): {}{nets}; {}: held out from {} s, {} rows, scored with the chosen \
+         forms fitted on the {} rows before it{}",
         ev.split.rule,
-        ev.n_val,
-        ev.n_train,
+        if loco { "last cycle" } else { "held-out part" },
         ev.split.holdout_from_s,
         ev.n_holdout,
-        ev.n_train + ev.n_val
+        ev.n_train + ev.n_val,
+        if loco {
+            " (the selection saw every cycle, this one as a fold)"
+        } else {
+            " (the selection did not see it)"
+        }
     );
     let _ = writeln!(
         s,
@@ -213,7 +225,7 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
         s,
         "  {:<10} {:<10} {:>7} | {:>16} {:>7} {:>7} {:<7} | {:>12} {:>8} {:>8} {:>7} {:>7} {:>7} {:<7}",
         "output", "form", "ridge", "folds (mean):", "model", "plainLS", "aim",
-        "last cycle:", "raw_rms", "constant", "linear", "plainLS", "model", "aim"
+        if loco { "last cycle:" } else { "held out:" }, "raw_rms", "constant", "linear", "plainLS", "model", "aim"
     );
     let aim = |m: Option<f64>, p: Option<f64>| {
         if m.is_some_and(|m| m <= 0.25 && p.is_none_or(|p| m <= p)) {
