@@ -11,6 +11,7 @@ pub mod linreg;
 pub mod metrics;
 pub mod nn;
 pub mod predictor;
+pub mod rc_identify;
 pub mod selection;
 pub mod synthesis;
 pub mod thermal_fit;
