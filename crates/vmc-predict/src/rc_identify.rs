@@ -226,7 +226,11 @@ pub fn identify(
             rows.len()
         )));
     }
-    if data.time_s.windows(2).any(|w| !(w[1] > w[0])) {
+    if data
+        .time_s
+        .windows(2)
+        .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+    {
         return Err(RcError::BadData("time must increase strictly".into()));
     }
     let scales: Vec<f64> = data
