@@ -40,14 +40,18 @@ pub struct FitThermalArgs {
     /// Fraction of the rows before the held-out part (the last ones) that validate.
     #[arg(long, default_value_t = 0.25)]
     pub val_fraction: f64,
-    /// Forms allowed: linear-mlp (linear regression + MLP on its residual where that helps on
-    /// validation), auto (per output, the best on validation of linear, linear-mlp and mlp),
-    /// mlp, or linear.
+    /// Forms allowed, per output the best by leave-one-cycle-out cross-validation: linear-mlp
+    /// (plain least squares, filter-bank linear or linear + MLP on its residual), auto (the same
+    /// and an MLP), mlp (MLP only), or linear (plain least squares or filter-bank linear).
     #[arg(long, default_value = "linear-mlp")]
     pub arch: String,
     /// Time constants of the low-pass filter bank, s (comma-separated).
     #[arg(long, value_delimiter = ',', default_values_t = [900.0, 3600.0, 10800.0])]
     pub tau_s: Vec<f64>,
+    /// Scales of the filter bank's time constants tried (comma-separated); the best by
+    /// leave-one-cycle-out cross-validation is kept.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.5, 1.0, 2.0])]
+    pub tau_scales: Vec<f64>,
     /// Exponents k of the heat-input features (|speed|/1000 rpm)^k of speed inputs (columns
     /// whose unit is rpm, e.g. spindle_rpm): each as is and through the low-pass bank
     /// (comma-separated; "none": speed inputs are filtered like temperatures).
@@ -60,8 +64,8 @@ pub struct FitThermalArgs {
     /// Hidden widths tried (comma-separated); the best on validation is kept.
     #[arg(long, value_delimiter = ',', default_values_t = [4usize, 8])]
     pub hidden: Vec<usize>,
-    /// Ridge λ candidates of the linear part (on normalised slopes; comma-separated); the
-    /// best on validation is kept.
+    /// Ridge λ candidates of the linear part (on normalised slopes; comma-separated); per
+    /// output the best by leave-one-cycle-out cross-validation is kept.
     #[arg(long, value_delimiter = ',', default_values_t = [0.01, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4])]
     pub ridge: Vec<f64>,
     /// Members of each MLP ensemble (their predictions are averaged).
@@ -116,6 +120,7 @@ impl FitThermalArgs {
             architecture,
             hidden_candidates: self.hidden,
             ridge_candidates: self.ridge,
+            tau_scales: self.tau_scales,
             val_fraction: self.val_fraction,
             seed: self.seed,
             ensemble: self.ensemble,

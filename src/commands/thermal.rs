@@ -121,83 +121,158 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
             .map(|(h, e)| format!("{} × hidden {h} (LM epochs {e:?})", e.len()))
             .unwrap_or_else(|| "not used".into())
     };
-    let _ = writeln!(
+    let taus: Vec<String> = model
+        .features
+        .time_constants_s
+        .iter()
+        .map(|t| format!("{t}"))
+        .collect();
+    let _ =
+        writeln!(
         s,
-        "fit-thermal: {source}, {} rows, {} inputs → {} features, {} outputs; architecture {}: \
-         linear ridge {}, residual net {}, direct net {}",
+        "fit-thermal: {source}, {} rows, {} inputs → {} features, {} outputs; architecture {}; \
+         filter bank ×{} (τ = {} s); residual net {}, direct net {}",
         table.len(),
         model.inputs.len(),
         model.features.width(&model.input_names()),
         model.outputs.len(),
         model.architecture.name(),
-        ev.ridge,
+        ev.tau_scale,
+        if taus.is_empty() { "none".into() } else { taus.join(", ") },
         net(&ev.residual_net),
         net(&ev.direct_net),
     );
     let _ = writeln!(
         s,
-        "split (time-ordered): {}; selection: train {} rows (t < {} s), validation {} rows; \
-         final fit on both ({} rows for the nets); held out {} rows",
-        ev.split.rule, ev.n_train, ev.split.val_from_s, ev.n_val, ev.n_fit_net, ev.n_holdout
-    );
-    let _ = writeln!(
-        s,
-        "held-out evaluation (RMS in each output's unit; ratio = residual RMS / raw drift RMS; \
-         form chosen on validation; plainLS = least squares on the raw inputs):"
-    );
-    let _ = writeln!(
-        s,
-        "  {:<10} {:>8} {:>8} {:>8} {:>7} {:>8} {:>7} {:<10} {:>8} {:>7}  {:<8} | validation: linear  model",
-        "output", "raw_rms", "constant", "plainLS", "ratio", "linear", "ratio", "form", "model", "ratio", "aim"
+        "selection: {}; per output the form and ridge λ with the lowest mean ratio over the \
+         folds (ratio = residual RMS / raw drift RMS of the held-out rows; plainLS = least \
+         squares on the raw inputs, intercept, no filters, every fitting row)",
+        ev.selection
     );
     let pct = |r: Option<f64>| {
         r.map(|v| format!("{:.1}%", 100.0 * v))
             .unwrap_or_else(|| "-".into())
     };
+    let ratio = |e: Option<f64>, raw: f64| e.filter(|_| raw > 0.0).map(|e| e / raw);
+    let mut head = format!("  {:<5} {:>17} {:>5} ", "fold", "held out (s)", "rows");
+    for c in &model.outputs {
+        let stem = c
+            .name
+            .strip_suffix(&format!("_{}", c.unit))
+            .filter(|_| !c.unit.is_empty())
+            .unwrap_or(&c.name);
+        let _ = write!(head, " {:>16}", format!("{stem} model|LS"));
+    }
+    let _ = writeln!(s, "{head}");
+    let n_out = model.outputs.len();
+    for (i, f) in ev.folds.iter().enumerate() {
+        let mut line = format!(
+            "  {:<5} {:>17} {:>5} ",
+            i + 1,
+            format!("{:.0}–{:.0}", f.from_s, f.to_s),
+            f.rows
+        );
+        for k in 0..n_out {
+            let raw = f.raw_rms.get(k).copied().unwrap_or(0.0);
+            let m = ratio(f.model_rmse.get(k).copied(), raw);
+            let p = ratio(f.plain_ls_rmse.get(k).copied().flatten(), raw);
+            let _ = write!(line, " {:>16}", format!("{}|{}", pct(m), pct(p)));
+        }
+        let _ = writeln!(s, "{line}");
+    }
+    let mut line = format!("  {:<5} {:>17} {:>5} ", "mean", "", "");
     for c in &ev.channels {
-        // The aim: at most a quarter of the raw drift, and no worse than plain least squares
-        // (the linear baseline where plain least squares could not be fitted).
-        let baseline = c.plain_ls_rmse.unwrap_or(c.linear_rmse);
-        let met = c.model_ratio.is_some_and(|r| r <= 0.25) && c.model_rmse <= baseline;
-        let plain_ratio = c
-            .plain_ls_rmse
-            .filter(|_| c.raw_rms > 0.0)
-            .map(|p| p / c.raw_rms);
-        let _ = writeln!(
-            s,
-            "  {:<10} {:>8.3} {:>8.3} {:>8} {:>7} {:>8.3} {:>7} {:<10} {:>8.3} {:>7}  {:<8} | {:>17.3} {:>6.3}",
-            c.output.name,
-            c.raw_rms,
-            c.constant_rmse,
-            c.plain_ls_rmse
-                .map(|p| format!("{p:.3}"))
-                .unwrap_or_else(|| "-".into()),
-            pct(plain_ratio),
-            c.linear_rmse,
-            pct(c.linear_ratio),
-            c.form.name(),
-            c.model_rmse,
-            pct(c.model_ratio),
-            if met { "met" } else { "NOT met" },
-            c.val_linear_rmse,
-            c.val_model_rmse
+        let _ = write!(
+            line,
+            " {:>16}",
+            format!(
+                "{}|{}",
+                pct(Some(c.cv_model_ratio)),
+                pct(c.cv_plain_ls_ratio)
+            )
         );
     }
+    let _ = writeln!(s, "{line}");
+    let loco = ev.split.cycle_starts_s.len() >= 2;
+    let nets = if ev.residual_net.is_some() || ev.direct_net.is_some() {
+        format!(
+            "; the nets early-stop on the validation part ({} rows) after training on {} rows",
+            ev.n_val, ev.n_train
+        )
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         s,
-        "aim: residual RMS ≤ 25 % of the raw drift RMS and no worse than plain least squares"
+        "split (time-ordered): {}{nets}; {}: held out from {} s, {} rows, scored with the chosen \
+         forms fitted on the {} rows before it{}",
+        ev.split.rule,
+        if loco { "last cycle" } else { "held-out part" },
+        ev.split.holdout_from_s,
+        ev.n_holdout,
+        ev.n_train + ev.n_val,
+        if loco {
+            " (the selection saw every cycle, this one as a fold)"
+        } else {
+            " (the selection did not see it)"
+        }
     );
+    let _ = writeln!(
+        s,
+        "per output (ratio = residual RMS / raw drift RMS; aim: ≤ 25 % and no worse than plainLS):"
+    );
+    let _ = writeln!(
+        s,
+        "  {:<10} {:<10} {:>7} | {:>16} {:>7} {:>7} {:<7} | {:>12} {:>8} {:>8} {:>7} {:>7} {:>7} {:<7}",
+        "output", "form", "ridge", "folds (mean):", "model", "plainLS", "aim",
+        if loco { "last cycle:" } else { "held out:" }, "raw_rms", "constant", "linear", "plainLS", "model", "aim"
+    );
+    let aim = |m: Option<f64>, p: Option<f64>| {
+        if m.is_some_and(|m| m <= 0.25 && p.is_none_or(|p| m <= p)) {
+            "met"
+        } else {
+            "NOT met"
+        }
+    };
+    for (k, c) in ev.channels.iter().enumerate() {
+        let plain_ratio = ratio(c.plain_ls_rmse, c.raw_rms);
+        let _ = writeln!(
+            s,
+            "  {:<10} {:<10} {:>7} | {:>16} {:>7} {:>7} {:<7} | {:>12} {:>8.3} {:>8.3} {:>7} {:>7} {:>7} {:<7}",
+            c.output.name,
+            c.form.name(),
+            if c.form == thermal_fit::OutputModel::PlainLs {
+                "-".to_string()
+            } else {
+                format!("{}", ev.ridges.get(k).copied().unwrap_or(f64::NAN))
+            },
+            "",
+            pct(Some(c.cv_model_ratio)),
+            pct(c.cv_plain_ls_ratio),
+            aim(Some(c.cv_model_ratio), c.cv_plain_ls_ratio),
+            "",
+            c.raw_rms,
+            c.constant_rmse,
+            pct(c.linear_ratio),
+            pct(plain_ratio),
+            pct(c.model_ratio),
+            aim(c.model_ratio, plain_ratio),
+        );
+    }
     match ev.refit_rows {
         Some(n) => {
             let _ = writeln!(
                 s,
-                "the model written was fitted again on all {n} rows (held-out part included) \
-                 with the chosen form; the figures above are those of the model before that \
-                 refit (--no-refit writes that one)"
+                "the model written was fitted again on all {n} rows (held-out cycle included) \
+                 with the chosen forms; the evaluation above is the pre-refit one (the folds' \
+                 models and the model fitted before the last cycle; --no-refit writes that one)"
             );
         }
         None => {
-            let _ = writeln!(s, "the model written is the one evaluated above");
+            let _ = writeln!(
+                s,
+                "the model written is the one scored on the last cycle above (fitted before it)"
+            );
         }
     }
     s

@@ -12,6 +12,7 @@ pub mod metrics;
 pub mod nn;
 pub mod predictor;
 pub mod provenance;
+pub mod rc_identify;
 pub mod selection;
 pub mod synthesis;
 pub mod thermal_fit;

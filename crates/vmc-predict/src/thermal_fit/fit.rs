@@ -1,361 +1,43 @@
-//! Fitting a [`ThermalModel`] on a time-ordered split, and its held-out evaluation.
+//! Fitting a [`ThermalModel`] on a time-ordered split, and its evaluation.
 //!
-//! Two stages; the held-out rows enter neither.
-//! 1. Selection, on the training rows, scored on the validation rows (the cycle before the
-//!    held-out one): the ridge λ of the linear part; for each net (residual `R`, direct `N`) the
-//!    hidden width and the number of LM epochs (early stopping); then, per output, the form
-//!    ([`OutputModel`]) the [`Architecture`] allows with the lowest validation RMSE.
-//! 2. Final: the same choices refitted on training + validation rows (the most recent cycle
-//!    matters most for a drifting machine), each ensemble member trained for exactly its
-//!    early-stopping epoch count from its own seed.
-//!
-//! The evaluation compares, per output, the model with the linear baseline (the final linear
-//! part: same features, same rows) and with a constant (the mean of the fitting rows).
+//! 1. Selection by leave-one-cycle-out cross-validation (`cv.rs`): the width of the filter bank,
+//!    the ridge λ of each output and each output's form (plain least squares on the raw inputs,
+//!    filter-bank linear, linear + residual net, net) among those the [`Architecture`] allows.
+//!    The nets' hidden width and epoch count are chosen by early stopping: training rows fit,
+//!    the validation part (the cycle before the held-out one) stops.
+//! 2. The evaluated model: the chosen forms fitted on training + validation rows (everything
+//!    before the held-out part), each ensemble member trained for exactly its early-stopping
+//!    epoch count from its own seed, scored on the held-out part (the last cycle) against the
+//!    filter-bank linear form, plain least squares on the raw inputs and a constant (the mean of
+//!    the fitting rows), all fitted on the same rows.
+//! 3. Unless told otherwise, the kept model: the same choices fitted again on every row.
 
-use serde::{Deserialize, Serialize};
-
-use super::features::FeatureSpec;
+use super::common::{
+    fit_linear_per_output, fit_net, minus, plain_least_squares, predict_linear, rmse, thin_rows,
+    Net,
+};
+use super::cv::{self, CvData};
 use super::model::{
-    Architecture, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel, FORMAT_NAME,
+    raw_rows, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel, FORMAT_NAME,
     FORMAT_VERSION,
 };
+use super::settings::FitSettings;
 use super::split::{Part, Split};
 use super::table::Table;
 use super::ThermalFitError;
 use crate::linreg::LinearModel;
-use crate::nn::{Regressor, Samples, TrainConfig};
 
-/// Settings of [`fit`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FitSettings {
-    /// Feature construction (default: [`FeatureSpec::default`]).
-    pub features: FeatureSpec,
-    /// Forms allowed (default: [`Architecture::LinearMlp`]: linear, plus the residual net on
-    /// the outputs where it lowers the validation error).
-    pub architecture: Architecture,
-    /// Hidden widths tried per net; the best on validation is kept (default: 4, 8).
-    pub hidden_candidates: Vec<usize>,
-    /// Ridge λ candidates of the linear part, on normalised slopes; the best on validation is
-    /// kept (default: 0.01, 0.1, …, 10⁴ by decades: the thermometers of a machine are strongly
-    /// correlated and a few cycles cannot pin dozens of slopes; how much to shrink them is a
-    /// question for the validation cycle).
-    pub ridge_candidates: Vec<f64>,
-    /// Fraction of the pre-held-out rows (the last ones) that validate when no cycle column
-    /// gives the cycle before the held-out one (default: 0.25).
-    pub val_fraction: f64,
-    /// The nets train on rows at least this far apart, s (default: 60 s; neighbouring 15 s
-    /// rows are near copies and only cost Jacobian rows). The linear part uses every row.
-    pub min_train_step_s: f64,
-    /// Seed of the network initialisation (default: 0).
-    pub seed: u64,
-    /// Members of each net ensemble, each from its own seeded initialisation (default: 5).
-    pub ensemble: usize,
-    /// Maximum LM iterations (default: 100).
-    pub max_epochs: usize,
-    /// Epochs without validation improvement before stopping (default: 8).
-    pub patience: usize,
-    /// Once the form is chosen and evaluated, fit the kept model again on every row, the
-    /// held-out part included (default: true): a user's model should learn from all the cycles
-    /// measured. The evaluation stays that of the model before the refit.
-    pub refit_all: bool,
+/// The parts of a model fitted on some rows, with the linear part's predictions.
+struct FinalParts {
+    linear: LinearModel,
+    lin_pred: Vec<Vec<f64>>,
+    plain: Option<(LinearModel, Vec<Vec<f64>>)>,
+    residual: Option<Net>,
+    direct: Option<Net>,
 }
 
-impl Default for FitSettings {
-    fn default() -> Self {
-        Self {
-            features: FeatureSpec::default(),
-            architecture: Architecture::LinearMlp,
-            hidden_candidates: vec![4, 8],
-            ridge_candidates: vec![0.01, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4],
-            val_fraction: 0.25,
-            min_train_step_s: 60.0,
-            seed: 0,
-            ensemble: 5,
-            max_epochs: 100,
-            patience: 8,
-            refit_all: true,
-        }
-    }
-}
-
-/// Feature rows and per-output target columns restricted to `rows`, as training samples.
-fn samples(
-    feats: &[f64],
-    width: usize,
-    targets: &[Vec<f64>],
-    rows: &[usize],
-) -> Result<Samples, ThermalFitError> {
-    let mut x = Vec::with_capacity(rows.len() * width);
-    let mut y = Vec::with_capacity(rows.len() * targets.len());
-    for &r in rows {
-        x.extend_from_slice(&feats[r * width..(r + 1) * width]);
-        y.extend(targets.iter().map(|c| c[r]));
-    }
-    Ok(Samples::new(width, targets.len(), x, y).map_err(crate::nn::NnError::from)?)
-}
-
-/// Per-output RMSE of `pred` (output-major) against `truth` over `rows`.
-fn rmse(truth: &[Vec<f64>], pred: &[Vec<f64>], rows: &[usize]) -> Vec<f64> {
-    truth
-        .iter()
-        .zip(pred)
-        .map(|(y, p)| {
-            let ss: f64 = rows.iter().map(|&r| (y[r] - p[r]).powi(2)).sum();
-            (ss / rows.len().max(1) as f64).sqrt()
-        })
-        .collect()
-}
-
-/// Mean over outputs of validation RMSE / the output's standard deviation on the fitting rows
-/// (a unit-free score to compare candidates).
-fn val_score(y: &[Vec<f64>], pred: &[Vec<f64>], fit_rows: &[usize], val_rows: &[usize]) -> f64 {
-    let errs = rmse(y, pred, val_rows);
-    let n = fit_rows.len().max(1) as f64;
-    errs.iter()
-        .zip(y)
-        .map(|(e, c)| {
-            let m = fit_rows.iter().map(|&r| c[r]).sum::<f64>() / n;
-            let sd = (fit_rows.iter().map(|&r| (c[r] - m).powi(2)).sum::<f64>() / n).sqrt();
-            e / sd.max(f64::MIN_POSITIVE)
-        })
-        .sum::<f64>()
-        / errs.len().max(1) as f64
-}
-
-/// Rows at least `min_step_s` apart (the first row always kept).
-fn thin_rows(rows: &[usize], time_s: &[f64], min_step_s: f64) -> Vec<usize> {
-    let mut thin: Vec<usize> = Vec::new();
-    for &r in rows {
-        if thin
-            .last()
-            .is_none_or(|&l| time_s[r] - time_s[l] >= min_step_s)
-        {
-            thin.push(r);
-        }
-    }
-    thin
-}
-
-/// Predictions of every row (output-major) by `f(x, out)`.
-fn predict_rows(
-    feats: &[f64],
-    width: usize,
-    n_out: usize,
-    mut f: impl FnMut(&[f64], &mut [f64]),
-) -> Vec<Vec<f64>> {
-    let n = feats.len() / width;
-    let mut out = vec![vec![0.0; n]; n_out];
-    let mut o = vec![0.0; n_out];
-    for r in 0..n {
-        f(&feats[r * width..(r + 1) * width], &mut o);
-        for (c, v) in out.iter_mut().zip(&o) {
-            c[r] = *v;
-        }
-    }
-    out
-}
-
-fn predict_linear(m: &LinearModel, feats: &[f64], width: usize, n_out: usize) -> Vec<Vec<f64>> {
-    // Widths match by construction, so predict_into cannot fail here.
-    predict_rows(feats, width, n_out, |x, o| {
-        let _ = m.predict_into(x, o);
-    })
-}
-
-fn predict_net(m: &Regressor, feats: &[f64], width: usize, n_out: usize) -> Vec<Vec<f64>> {
-    let mut scratch = vec![0.0; m.scratch_len()];
-    predict_rows(feats, width, n_out, |x, o| {
-        let _ = m.predict_into(x, &mut scratch, o);
-    })
-}
-
-/// `a − b` column by column.
-fn minus(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    a.iter()
-        .zip(b)
-        .map(|(u, v)| u.iter().zip(v).map(|(p, q)| p - q).collect())
-        .collect()
-}
-
-/// `a + b` column by column.
-fn plus(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    a.iter()
-        .zip(b)
-        .map(|(u, v)| u.iter().zip(v).map(|(p, q)| p + q).collect())
-        .collect()
-}
-
-/// The linear part on `fit_rows`, λ chosen on `val_rows` among the candidates.
-fn select_linear(
-    feats: &[f64],
-    width: usize,
-    y: &[Vec<f64>],
-    fit_rows: &[usize],
-    val_rows: &[usize],
-    candidates: &[f64],
-) -> Result<(LinearModel, f64), ThermalFitError> {
-    let data = samples(feats, width, y, fit_rows)?;
-    let mut best: Option<(LinearModel, f64, f64)> = None;
-    for &l in candidates {
-        let m = LinearModel::fit(&data, l)?;
-        let score = val_score(
-            y,
-            &predict_linear(&m, feats, width, y.len()),
-            fit_rows,
-            val_rows,
-        );
-        if best.as_ref().is_none_or(|b| score < b.2) {
-            best = Some((m, l, score));
-        }
-    }
-    best.map(|(m, l, _)| (m, l))
-        .ok_or_else(|| ThermalFitError::BadSettings {
-            field: "ridge_candidates",
-            reason: "need at least one ridge value".into(),
-        })
-}
-
-/// A net ensemble on `target` over `fit_rows` (thinned). With `val_rows`: for every candidate
-/// width, `ensemble` members each early-stopped there, the width whose averaged prediction
-/// scores best kept. With `fixed` = (width, epochs per member): exactly that.
-/// Returns the members, their width and the epochs each trained (its best epoch).
-#[allow(clippy::too_many_arguments)]
-fn fit_net(
-    feats: &[f64],
-    width: usize,
-    target: &[Vec<f64>],
-    time_s: &[f64],
-    fit_rows: &[usize],
-    val_rows: Option<&[usize]>,
-    fixed: Option<(usize, &[usize])>,
-    settings: &FitSettings,
-    salt: u64,
-) -> Result<Net, ThermalFitError> {
-    let thin = thin_rows(fit_rows, time_s, settings.min_train_step_s);
-    let tr = samples(feats, width, target, &thin)?;
-    let va = match val_rows {
-        Some(v) => Some(samples(feats, width, target, v)?),
-        None => None,
-    };
-    let widths: Vec<usize> = match fixed {
-        Some((h, _)) => vec![h],
-        None => settings.hidden_candidates.clone(),
-    };
-    if widths.is_empty() || widths.contains(&0) || settings.ensemble == 0 {
-        return Err(ThermalFitError::BadSettings {
-            field: "hidden_candidates / ensemble",
-            reason: format!(
-                "need widths ≥ 1 and at least one member, got {widths:?} and {}",
-                settings.ensemble
-            ),
-        });
-    }
-    let n_out = target.len();
-    let mut best: Option<(Net, f64)> = None;
-    for &h in &widths {
-        let mut members = Vec::new();
-        let mut epochs = Vec::new();
-        for m in 0..settings.ensemble {
-            let config = TrainConfig {
-                seed: settings.seed
-                    ^ (h as u64 + 64 * salt + 4096 * m as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-                restarts: 1,
-                max_epochs: fixed.map_or(settings.max_epochs, |f| {
-                    f.1.get(m).copied().unwrap_or(1).max(1)
-                }),
-                patience: settings.patience,
-                ..TrainConfig::default()
-            };
-            let (reg, report) = Regressor::fit(&tr, va.as_ref(), &[h], &config)?;
-            epochs.push(report.best_epoch.max(1));
-            members.push(reg);
-        }
-        let net = Net {
-            members,
-            hidden: h,
-            epochs,
-        };
-        let score = match val_rows {
-            Some(v) => val_score(target, &net.predict(feats, width, n_out), fit_rows, v),
-            None => 0.0,
-        };
-        if best.as_ref().is_none_or(|b| score < b.1) {
-            best = Some((net, score));
-        }
-    }
-    best.map(|b| b.0)
-        .ok_or_else(|| ThermalFitError::BadSettings {
-            field: "hidden_candidates",
-            reason: "no width tried".into(),
-        })
-}
-
-/// A fitted net ensemble.
-struct Net {
-    members: Vec<Regressor>,
-    hidden: usize,
-    epochs: Vec<usize>,
-}
-
-impl Net {
-    /// The members' mean prediction of every row.
-    fn predict(&self, feats: &[f64], width: usize, n_out: usize) -> Vec<Vec<f64>> {
-        let mut sum = vec![vec![0.0; feats.len() / width]; n_out];
-        for m in &self.members {
-            sum = plus(&sum, &predict_net(m, feats, width, n_out));
-        }
-        let w = 1.0 / self.members.len().max(1) as f64;
-        sum.iter()
-            .map(|c| c.iter().map(|v| v * w).collect())
-            .collect()
-    }
-}
-
-/// Per output, the allowed form with the lowest validation RMSE (`val[form]` per output;
-/// `None` for forms not fitted). Ties keep the simpler form (linear, then linear-mlp).
-fn choose_forms(arch: Architecture, val: &[(OutputModel, Option<Vec<f64>>)]) -> Vec<OutputModel> {
-    let n_out = val.first().and_then(|v| v.1.as_ref()).map_or(0, Vec::len);
-    (0..n_out)
-        .map(|k| {
-            let mut best = (OutputModel::Linear, f64::INFINITY);
-            for (form, errs) in val {
-                let allowed = match arch {
-                    Architecture::Linear => *form == OutputModel::Linear,
-                    Architecture::Mlp => *form == OutputModel::Mlp,
-                    Architecture::LinearMlp => *form != OutputModel::Mlp,
-                    Architecture::Auto => true,
-                };
-                if let (true, Some(e)) = (allowed, errs) {
-                    if e[k] < best.1 {
-                        best = (*form, e[k]);
-                    }
-                }
-            }
-            best.0
-        })
-        .collect()
-}
-
-/// Plain least squares on the raw inputs (intercept and one slope per input column as read: no
-/// filters, no ridge) fitted on `rows`: the baseline a user would try first. Predictions of every
-/// row, output-major.
-fn plain_least_squares(
-    x_cols: &[&[f64]],
-    y: &[Vec<f64>],
-    rows: &[usize],
-) -> Result<Vec<Vec<f64>>, ThermalFitError> {
-    let width = x_cols.len();
-    let n = y.first().map_or(0, Vec::len);
-    let mut raw = Vec::with_capacity(n * width);
-    for r in 0..n {
-        raw.extend(x_cols.iter().map(|c| c[r]));
-    }
-    let m = LinearModel::fit(&samples(&raw, width, y, rows)?, 0.0)?;
-    Ok(predict_linear(&m, &raw, width, y.len()))
-}
-
-/// Fits a model of `outputs` from `inputs` (columns of `table`) and evaluates it and the linear
-/// baseline on the `split`'s held-out rows (see the module doc).
+/// Fits a model of `outputs` from `inputs` (columns of `table`), chosen by cross-validation over
+/// the `split`'s cycles, and evaluates it on the held-out rows (see the module doc).
 pub fn fit(
     table: &Table,
     inputs: &[String],
@@ -404,9 +86,16 @@ pub fn fit(
         }
     }
     let width = settings.features.width(inputs);
-    let feats = settings
-        .features
-        .compute_checked(&table.time_s, inputs, &x_cols)?;
+    let scales = settings.scales()?;
+    let feats_by_scale = scales
+        .iter()
+        .map(|&s| {
+            let spec = settings.scaled_features(s);
+            spec.validate_inputs(inputs)?;
+            spec.compute_checked(&table.time_s, inputs, &x_cols)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let raw = raw_rows(&x_cols);
     let mut rows = [Vec::new(), Vec::new(), Vec::new()];
     for (i, t) in table.time_s.iter().enumerate() {
         let k = match split.part(*t) {
@@ -418,23 +107,27 @@ pub fn fit(
     }
     let [train_rows, val_rows, hold_rows] = rows;
     let (t, n_out, arch) = (&table.time_s, outputs.len(), settings.architecture);
-    let want_res = matches!(arch, Architecture::LinearMlp | Architecture::Auto);
-    let want_dir = matches!(arch, Architecture::Mlp | Architecture::Auto);
 
-    // 1. Selection.
-    let (lin_sel, ridge) = select_linear(
-        &feats,
+    // 1. Selection by cross-validation.
+    let cycles = split.cycles(t);
+    let folds = cv::folds(&cycles, &train_rows, &val_rows, settings.val_fraction);
+    let data = CvData {
+        feats: &feats_by_scale,
         width,
-        &y,
-        &train_rows,
-        &val_rows,
-        &settings.ridge_candidates,
-    )?;
-    let lin_pred = predict_linear(&lin_sel, &feats, width, n_out);
-    let residual = minus(&y, &lin_pred);
+        raw: &raw,
+        n_in: inputs.len(),
+        y: &y,
+        time_s: t,
+    };
+    let choice = cv::cross_validate(&data, &folds, settings)?;
+    let (forms, ridges) = (choice.forms.clone(), choice.ridges.clone());
+    let feats = &feats_by_scale[choice.scale];
+    // The nets' width and epochs: early stopping on the validation part.
+    let lin_sel = fit_linear_per_output(feats, width, &y, &train_rows, &ridges)?;
+    let residual = minus(&y, &predict_linear(&lin_sel, feats, width, n_out));
     let net = |target: &[Vec<f64>], salt| {
         fit_net(
-            &feats,
+            feats,
             width,
             target,
             t,
@@ -445,44 +138,25 @@ pub fn fit(
             salt,
         )
     };
-    let res_sel = if want_res {
+    let res_sel = if forms.contains(&OutputModel::LinearMlp) {
         Some(net(&residual, 1)?)
     } else {
         None
     };
-    let dir_sel = if want_dir { Some(net(&y, 2)?) } else { None };
-    let val_of = |pred: &[Vec<f64>]| rmse(&y, pred, &val_rows);
-    let val_lin = val_of(&lin_pred);
-    let val_res = res_sel
-        .as_ref()
-        .map(|r| val_of(&plus(&lin_pred, &r.predict(&feats, width, n_out))));
-    let val_dir = dir_sel
-        .as_ref()
-        .map(|r| val_of(&r.predict(&feats, width, n_out)));
-    let candidates = [
-        (OutputModel::Linear, Some(val_lin.clone())),
-        (OutputModel::LinearMlp, val_res.clone()),
-        (OutputModel::Mlp, val_dir.clone()),
-    ];
-    let forms = choose_forms(arch, &candidates);
-    let val_model: Vec<f64> = forms
-        .iter()
-        .enumerate()
-        .map(|(k, f)| match f {
-            OutputModel::Linear => val_lin[k],
-            OutputModel::LinearMlp => val_res.as_ref().map_or(f64::NAN, |v| v[k]),
-            OutputModel::Mlp => val_dir.as_ref().map_or(f64::NAN, |v| v[k]),
-        })
-        .collect();
+    let dir_sel = if forms.contains(&OutputModel::Mlp) {
+        Some(net(&y, 2)?)
+    } else {
+        None
+    };
 
-    // 2. Final fit on training + validation rows: the model the held-out part evaluates.
+    // 2. The evaluated model: fitted on training + validation rows.
     let fit_rows: Vec<usize> = train_rows.iter().chain(&val_rows).copied().collect();
     let parts = |rows: &[usize]| -> Result<FinalParts, ThermalFitError> {
-        let linear = LinearModel::fit(&samples(&feats, width, &y, rows)?, ridge)?;
-        let lin_fin = predict_linear(&linear, &feats, width, n_out);
-        let refit = |target: &[Vec<f64>], chosen: &Option<Net>, form, salt| match chosen {
-            Some(n) if forms.contains(&form) => fit_net(
-                &feats,
+        let linear = fit_linear_per_output(feats, width, &y, rows, &ridges)?;
+        let lin_pred = predict_linear(&linear, feats, width, n_out);
+        let refit = |target: &[Vec<f64>], chosen: &Option<Net>, salt| match chosen {
+            Some(n) => fit_net(
+                feats,
                 width,
                 target,
                 t,
@@ -493,23 +167,25 @@ pub fn fit(
                 salt,
             )
             .map(Some),
-            _ => Ok(None),
+            None => Ok(None),
         };
-        let residual = refit(&minus(&y, &lin_fin), &res_sel, OutputModel::LinearMlp, 1)?;
-        let direct = refit(&y, &dir_sel, OutputModel::Mlp, 2)?;
+        let residual = refit(&minus(&y, &lin_pred), &res_sel, 1)?;
+        let direct = refit(&y, &dir_sel, 2)?;
+        let plain = match plain_least_squares(&raw, inputs.len(), &y, rows) {
+            Ok(p) => Some(p),
+            Err(e) if forms.contains(&OutputModel::PlainLs) => return Err(e),
+            Err(_) => None,
+        };
         Ok(FinalParts {
             linear,
-            lin_pred: lin_fin,
+            lin_pred,
+            plain,
             residual,
             direct,
         })
     };
-    let FinalParts {
-        linear,
-        lin_pred: lin_fin,
-        residual: residual_fin,
-        direct: direct_fin,
-    } = parts(&fit_rows)?;
+    let fin = parts(&fit_rows)?;
+    let uses_plain = forms.contains(&OutputModel::PlainLs);
     let mut model = ThermalModel {
         format: FORMAT_NAME.into(),
         version: FORMAT_VERSION,
@@ -517,14 +193,21 @@ pub fn fit(
         time_column: table.time_name.clone(),
         inputs: inputs.iter().map(|s| Channel::from_name(s)).collect(),
         outputs: outputs.iter().map(|s| Channel::from_name(s)).collect(),
-        features: settings.features.clone(),
+        features: settings.scaled_features(scales[choice.scale]),
         output_models: forms.clone(),
-        linear,
-        residual_mlp: residual_fin
+        linear: fin.linear.clone(),
+        plain: fin
+            .plain
+            .as_ref()
+            .filter(|_| uses_plain)
+            .map(|p| p.0.clone()),
+        residual_mlp: fin
+            .residual
             .as_ref()
             .map(|n| n.members.clone())
             .unwrap_or_default(),
-        direct_mlp: direct_fin
+        direct_mlp: fin
+            .direct
             .as_ref()
             .map(|n| n.members.clone())
             .unwrap_or_default(),
@@ -532,18 +215,16 @@ pub fn fit(
     };
 
     // Held-out evaluation.
-    let pred = model.predict_features(&feats)?;
+    let pred = model.predict_features(feats, &raw)?;
     let hold_model = rmse(&y, &pred, &hold_rows);
-    let hold_lin = rmse(&y, &lin_fin, &hold_rows);
-    let hold_plain = plain_least_squares(&x_cols, &y, &fit_rows)
-        .map(|pred| rmse(&y, &pred, &hold_rows))
-        .ok();
+    let hold_lin = rmse(&y, &fin.lin_pred, &hold_rows);
+    let hold_plain = fin.plain.as_ref().map(|p| rmse(&y, &p.1, &hold_rows));
     let n = table.len();
-    let raw = rmse(&y, &vec![vec![0.0; n]; n_out], &hold_rows);
+    let raw_rms = rmse(&y, &vec![vec![0.0; n]; n_out], &hold_rows);
     let means: Vec<Vec<f64>> = y
         .iter()
         .map(|c| {
-            let m = fit_rows.iter().map(|&r| c[r]).sum::<f64>() / fit_rows.len() as f64;
+            let m = fit_rows.iter().map(|&r| c[r]).sum::<f64>() / fit_rows.len().max(1) as f64;
             vec![m; n]
         })
         .collect();
@@ -552,34 +233,48 @@ pub fn fit(
         .map(|k| ChannelScore {
             output: model.outputs[k].clone(),
             form: forms[k],
-            raw_rms: raw[k],
+            raw_rms: raw_rms[k],
             constant_rmse: constant[k],
             linear_rmse: hold_lin[k],
             model_rmse: hold_model[k],
             plain_ls_rmse: hold_plain.as_ref().map(|p| p[k]),
-            linear_ratio: (raw[k] > 0.0).then(|| hold_lin[k] / raw[k]),
-            model_ratio: (raw[k] > 0.0).then(|| hold_model[k] / raw[k]),
-            val_linear_rmse: val_lin[k],
-            val_model_rmse: val_model[k],
+            linear_ratio: (raw_rms[k] > 0.0).then(|| hold_lin[k] / raw_rms[k]),
+            model_ratio: (raw_rms[k] > 0.0).then(|| hold_model[k] / raw_rms[k]),
+            cv_model_ratio: choice.model[k],
+            cv_linear_ratio: choice.linear[k],
+            cv_plain_ls_ratio: choice.plain[k],
         })
         .collect();
+    let selection = if cycles.len() >= 2 {
+        format!(
+            "leave-one-cycle-out over the {} cycles (each held out once, every other row fitting)",
+            cycles.len()
+        )
+    } else {
+        "fewer than two cycles: one fold, the training part fitting, the validation part held out"
+            .to_string()
+    };
     model.evaluation = Some(Evaluation {
         split: split.clone(),
         n_train: train_rows.len(),
         n_val: val_rows.len(),
         n_fit_net: thin_rows(&fit_rows, t, settings.min_train_step_s).len(),
         n_holdout: hold_rows.len(),
-        ridge,
-        residual_net: residual_fin.map(|n| (n.hidden, n.epochs)),
-        direct_net: direct_fin.map(|n| (n.hidden, n.epochs)),
+        selection,
+        tau_scale: scales[choice.scale],
+        ridges: ridges.clone(),
+        folds: choice.folds,
+        residual_net: fin.residual.map(|n| (n.hidden, n.epochs)),
+        direct_net: fin.direct.map(|n| (n.hidden, n.epochs)),
         channels,
         refit_rows: None,
     });
-    // 3. With the form chosen and evaluated, the model a user keeps learns from every row.
+    // 3. With the forms chosen and evaluated, the model a user keeps learns from every row.
     if settings.refit_all {
         let all: Vec<usize> = (0..table.len()).collect();
         let refitted = parts(&all)?;
         model.linear = refitted.linear;
+        model.plain = refitted.plain.filter(|_| uses_plain).map(|p| p.0);
         model.residual_mlp = refitted.residual.map(|n| n.members).unwrap_or_default();
         model.direct_mlp = refitted.direct.map(|n| n.members).unwrap_or_default();
         if let Some(e) = model.evaluation.as_mut() {
@@ -589,17 +284,11 @@ pub fn fit(
     Ok(model)
 }
 
-/// The final parts of a model fitted on some rows, with the linear part's predictions.
-struct FinalParts {
-    linear: LinearModel,
-    lin_pred: Vec<Vec<f64>>,
-    residual: Option<Net>,
-    direct: Option<Net>,
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::thermal_fit::features::FeatureSpec;
+    use crate::thermal_fit::model::Architecture;
     use crate::thermal_fit::{read_csv, TableRequest};
 
     /// A machine whose drift follows its temperature through a 1 h first-order lag, with the
@@ -664,6 +353,7 @@ mod tests {
                 relative_to_mean: false,
             },
             ridge_candidates: vec![1e-9],
+            tau_scales: vec![1.0],
             hidden_candidates: vec![2],
             ..FitSettings::default()
         };
@@ -708,7 +398,16 @@ mod tests {
                 .to_string()
         };
         assert!(err("{\"kind\": \"hybrid\"}").contains("not a thermal-drift model"));
-        assert!(err(&json.replacen("\"version\": 1", "\"version\": 7", 1)).contains("version"));
+        assert!(err(&json.replacen("\"version\": 2", "\"version\": 7", 1)).contains("version"));
+        // A version 1 file predicts with the same parts; its evaluation is not kept.
+        let v1 =
+            ThermalModel::from_json(&json.replacen("\"version\": 2", "\"version\": 1", 1), "v1")
+                .unwrap();
+        assert!(v1.evaluation.is_none());
+        assert_eq!(
+            m.predict(&table.time_s, &x).unwrap(),
+            v1.predict(&table.time_s, &x).unwrap()
+        );
         let inconsistent = json.replacen(
             "\"time_constants_s\": [\n      3600.0\n    ]",
             "\"time_constants_s\": []",
@@ -777,5 +476,78 @@ mod tests {
         assert!(e1.channels[0]
             .plain_ls_rmse
             .is_some_and(|p| p.is_finite() && p > 0.0));
+    }
+
+    #[test]
+    fn each_cycle_is_held_out_once_and_each_output_gets_the_simplest_form_that_generalises() {
+        // ch1 lags the temperature by 1 h (the filter bank is needed); ch2 is a static function
+        // of it plus a wobble no input explains: the filter bank gains nothing there, and the
+        // simpler form, plain least squares, is kept.
+        let base = lagged_table();
+        let t1 = base.column("t1_degc").unwrap();
+        let mut text = String::from("time_s,spindle_rpm,t1_degc,ch1_um,ch2_um\n");
+        let rpm = base.column("spindle_rpm").unwrap();
+        let ch1 = base.column("ch1_um").unwrap();
+        for r in 0..base.len() {
+            let wobble = 0.5 * (1.7 * r as f64).sin();
+            let ch2 = 1.5 * t1[r] + 0.3 + wobble;
+            text.push_str(&format!(
+                "{},{},{},{},{ch2}\n",
+                base.time_s[r], rpm[r], t1[r], ch1[r]
+            ));
+        }
+        let req = TableRequest {
+            time: None,
+            required: vec![("spindle_rpm".into(), "cycle")],
+            optional: vec!["t1_degc".into(), "ch1_um".into(), "ch2_um".into()],
+            min_rows: 2,
+        };
+        let table = read_csv(&text, "two.csv", &req).unwrap();
+        let split = cycle_split(&table);
+        assert_eq!(split.cycles(&table.time_s).len(), 3);
+        let settings = FitSettings {
+            architecture: Architecture::Linear,
+            features: FeatureSpec {
+                time_constants_s: vec![3600.0],
+                speed_exponents: Vec::new(),
+                relative_to_mean: false,
+            },
+            ridge_candidates: vec![1e-9, 1e-3],
+            tau_scales: vec![0.5, 1.0],
+            ..FitSettings::default()
+        };
+        let outputs = ["ch1_um".to_string(), "ch2_um".to_string()];
+        let m = fit(&table, &["t1_degc".into()], &outputs, &split, &settings).unwrap();
+        let ev = m.evaluation.as_ref().unwrap();
+        assert_eq!(ev.folds.len(), 3);
+        assert!(ev.folds.iter().all(|f| f.rows == 480), "{:?}", ev.folds);
+        assert_eq!(ev.tau_scale, 1.0);
+        assert_eq!(m.features.time_constants_s, [3600.0]);
+        assert_eq!(m.output_models, [OutputModel::Linear, OutputModel::PlainLs]);
+        let c = &ev.channels;
+        assert!(c[0].cv_model_ratio < 1e-6, "{:?}", c[0]);
+        assert!(
+            c[0].cv_plain_ls_ratio.is_some_and(|p| p > 0.1),
+            "{:?}",
+            c[0]
+        );
+        assert!(
+            c[1].cv_plain_ls_ratio == Some(c[1].cv_model_ratio),
+            "{:?}",
+            c[1]
+        );
+        assert!(
+            c[1].cv_model_ratio <= c[1].cv_linear_ratio * (1.0 + 1e-6),
+            "{:?}",
+            c[1]
+        );
+        // The file keeps the plain part and predicts with it after a round trip.
+        let back = ThermalModel::from_json(&m.to_json(), "m.json").unwrap();
+        assert!(back.plain.is_some());
+        let x = [table.column("t1_degc").unwrap()];
+        assert_eq!(
+            m.predict(&table.time_s, &x).unwrap(),
+            back.predict(&table.time_s, &x).unwrap()
+        );
     }
 }

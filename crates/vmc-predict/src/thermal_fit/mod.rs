@@ -9,32 +9,40 @@
 //!   causally (row n uses rows 0…n only) with the filter state set to the first reading; a speed
 //!   input (unit `rpm`) becomes a grey-box heat-input bank `(|n|/1000)^k`, as is and low-passed;
 //!   optionally temperatures relative to their mean (gradients);
-//! - model ([`ThermalModel`]): per output, a linear regression on the features, the same plus an
-//!   MLP fitted to its residual, or an MLP on the features (Levenberg–Marquardt, normalisation,
-//!   early stopping, seeded initialisation: the predictor's [`crate::nn`] machinery), chosen on
-//!   the validation cycle; the linear regression alone is the baseline;
-//! - split ([`Split`]): time-ordered. The held-out part (the last cycle) is never used for
-//!   fitting or model selection; early-stopping validation is the last part of the remaining
-//!   rows in time (never a shuffled subset of one time series);
-//! - evaluation ([`Evaluation`]): per output, RMSE of the model, of the linear baseline and of a
-//!   constant (the training mean) on the held-out part, and residual RMS / raw drift RMS, where
-//!   the raw drift RMS is the RMS of the measured values (what is left with no compensation).
+//! - model ([`ThermalModel`]): per output, plain least squares on the raw inputs, a ridge linear
+//!   regression on the features, the same plus an MLP fitted to its residual, or an MLP on the
+//!   features (Levenberg–Marquardt, normalisation, early stopping, seeded initialisation: the
+//!   predictor's [`crate::nn`] machinery);
+//! - selection (`cv.rs`): leave-one-cycle-out cross-validation chooses the filter-bank width,
+//!   each output's ridge λ and each output's form;
+//! - split ([`Split`]): time-ordered; its cycles are the folds. The held-out part (the last
+//!   cycle) scores the chosen forms fitted on the rows before it; the nets' early-stopping
+//!   validation is the cycle before it (never a shuffled subset of one time series);
+//! - evaluation ([`Evaluation`]): per fold and per output, residual RMS of the chosen form and of
+//!   plain least squares and the raw drift RMS of the held-out cycle; on the last cycle, RMSE of
+//!   the model, of the filter-bank linear form, of plain least squares and of a constant (the
+//!   training mean), and residual RMS / raw drift RMS, where the raw drift RMS is the RMS of the
+//!   measured values (what is left with no compensation).
 //!
 //! Units: whatever the column names say (`_degc`, `_um`, `_rpm`); the time column is converted to
 //! seconds. Nothing here touches files; [`read_csv`] parses text.
 
+mod common;
+mod cv;
 mod features;
 mod fit;
 mod model;
+mod settings;
 mod split;
 mod table;
 
 pub use features::FeatureSpec;
-pub use fit::{fit, FitSettings};
+pub use fit::fit;
 pub use model::{
-    Architecture, Channel, ChannelScore, Evaluation, OutputModel, ThermalModel, FORMAT_NAME,
-    FORMAT_VERSION,
+    Architecture, Channel, ChannelScore, Evaluation, FoldScore, OutputModel, ThermalModel,
+    FORMAT_NAME, FORMAT_VERSION,
 };
+pub use settings::FitSettings;
 pub use split::Split;
 pub use table::{read_csv, Table, TableRequest};
 

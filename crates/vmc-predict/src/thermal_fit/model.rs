@@ -1,8 +1,11 @@
 //! The thermal-drift model: its parts, its prediction and its file format.
 //!
-//! Each output k is predicted by one of three forms ([`OutputModel`]), on the causal features
-//! `φ(t)` ([`FeatureSpec`]):
-//! - `linear`: `y_k = L_k(φ)`, a ridge linear regression (the baseline);
+//! Each output k is predicted by one of four forms ([`OutputModel`]), on the causal features
+//! `φ(t)` ([`FeatureSpec`]) or the raw inputs `x(t)`:
+//! - `plain-ls`: `y_k = P_k(x)`, plain least squares on the raw inputs (intercept and one slope
+//!   per input column as read; no filters, no ridge);
+//! - `linear`: `y_k = L_k(φ)`, a ridge linear regression on the filter-bank features (its ridge
+//!   λ chosen per output);
 //! - `linear-mlp`: `y_k = L_k(φ) + R_k(φ)`, `R` an MLP fitted to the linear part's residual
 //!   (the linear part extrapolates sensibly to a hotter cycle than any seen, the net corrects
 //!   what is not linear);
@@ -12,12 +15,15 @@
 //! (tanh hidden layer, input and output normalisation inside, see [`Regressor`]; the members
 //! differ by their seeded initialisation and their predictions are averaged: with a few thermal
 //! cycles to learn from, one net's result depends on its initialisation by several µm, the
-//! average much less); which form serves which output is chosen on the validation cycle when
-//! fitting (see `fit.rs`).
+//! average much less); which form serves which output, the ridge λ of each output and the width
+//! of the filter bank are chosen by leave-one-cycle-out cross-validation when fitting (see
+//! `fit.rs` and `cv.rs`).
 //!
 //! File: JSON with `format` = [`FORMAT_NAME`] and `version` = [`FORMAT_VERSION`], the input and
 //! output names and units, the feature spec, the parts with their normalisations and weights,
-//! the per-output choice and the held-out evaluation. Reading checks all of it.
+//! the per-output choice and the evaluation. Reading checks all of it. Version 1 files (before
+//! plain least squares and the cross-validation) read without their evaluation and predict as
+//! they did.
 
 use serde::{Deserialize, Serialize};
 
@@ -30,7 +36,7 @@ use crate::nn::Regressor;
 /// The `format` field of every thermal-drift model file.
 pub const FORMAT_NAME: &str = "vmc-twin thermal-drift model";
 /// Version of the model file layout this build reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Which forms the fit may use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -74,6 +80,8 @@ impl Architecture {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OutputModel {
+    /// `P_k(x)`: plain least squares on the raw inputs.
+    PlainLs,
     /// `L_k(φ)`.
     Linear,
     /// `L_k(φ) + R_k(φ)`.
@@ -86,6 +94,7 @@ impl OutputModel {
     /// The name used in files and reports.
     pub fn name(self) -> &'static str {
         match self {
+            Self::PlainLs => "plain-ls",
             Self::Linear => "linear",
             Self::LinearMlp => "linear-mlp",
             Self::Mlp => "mlp",
@@ -141,10 +150,31 @@ pub struct ChannelScore {
     pub linear_ratio: Option<f64>,
     /// `model_rmse / raw_rms` (None when the held-out values are all zero).
     pub model_ratio: Option<f64>,
-    /// RMSE of the selection-stage linear baseline on the validation part.
-    pub val_linear_rmse: f64,
-    /// RMSE of the selection-stage model on the validation part.
-    pub val_model_rmse: f64,
+    /// Leave-one-cycle-out: mean over the folds of the chosen form's held-out RMSE / that
+    /// fold's raw drift RMS.
+    pub cv_model_ratio: f64,
+    /// The same for the filter-bank linear form.
+    pub cv_linear_ratio: f64,
+    /// The same for plain least squares on the raw inputs (None if singular in some fold).
+    pub cv_plain_ls_ratio: Option<f64>,
+}
+
+/// One leave-one-cycle-out fold: a cycle held out, every other row fitting (per output, in
+/// output order; RMS values in the output's unit).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FoldScore {
+    /// First time of the held-out cycle, s.
+    pub from_s: f64,
+    /// Last time of the held-out cycle, s.
+    pub to_s: f64,
+    /// Rows held out.
+    pub rows: usize,
+    /// RMS of the measured drift on the held-out cycle.
+    pub raw_rms: Vec<f64>,
+    /// RMSE of the chosen form (per output) on it.
+    pub model_rmse: Vec<f64>,
+    /// RMSE of plain least squares on the raw inputs on it (None if singular).
+    pub plain_ls_rmse: Vec<Option<f64>>,
 }
 
 /// The held-out evaluation written by [`super::fit`].
@@ -160,8 +190,16 @@ pub struct Evaluation {
     pub n_fit_net: usize,
     /// Held-out rows.
     pub n_holdout: usize,
-    /// Ridge λ of the linear part chosen on validation.
-    pub ridge: f64,
+    /// How the selection folds were formed (for the report).
+    pub selection: String,
+    /// Scale applied to the feature spec's time constants, chosen by cross-validation (the
+    /// model's `features` hold the scaled ones).
+    pub tau_scale: f64,
+    /// Ridge λ of the linear part, per output, chosen by cross-validation.
+    pub ridges: Vec<f64>,
+    /// The cross-validation folds (each cycle held out once; the validation part alone when the
+    /// file has fewer than two cycles).
+    pub folds: Vec<FoldScore>,
     /// Residual nets: hidden width and LM epochs of each member's final fit, if used.
     pub residual_net: Option<(usize, Vec<usize>)>,
     /// Direct nets: hidden width and LM epochs of each member's final fit, if used.
@@ -195,6 +233,10 @@ pub struct ThermalModel {
     pub output_models: Vec<OutputModel>,
     /// Linear part `L` (features → outputs), physical units.
     pub linear: LinearModel,
+    /// Plain least squares `P` (raw inputs → outputs), physical units; None when no output uses
+    /// it.
+    #[serde(default)]
+    pub plain: Option<LinearModel>,
     /// Residual net `R` (features → outputs − L): an ensemble whose members' predictions are
     /// averaged, each with its normalisations; empty when no output uses it.
     pub residual_mlp: Vec<Regressor>,
@@ -215,11 +257,18 @@ impl ThermalModel {
         self.inputs.iter().map(|c| c.name.as_str()).collect()
     }
 
-    /// Predictions (output-major: one column per output) from row-major feature rows.
-    pub(crate) fn predict_features(&self, feats: &[f64]) -> Result<Vec<Vec<f64>>, ThermalFitError> {
+    /// Predictions (output-major: one column per output) from row-major feature rows and the
+    /// row-major raw input rows they were computed from.
+    pub(crate) fn predict_features(
+        &self,
+        feats: &[f64],
+        raw: &[f64],
+    ) -> Result<Vec<Vec<f64>>, ThermalFitError> {
         let width = self.feature_width();
+        let n_in = self.inputs.len();
         let n = feats.len() / width.max(1);
         let n_out = self.outputs.len();
+        let mut plain = vec![0.0; n_out];
         let mut out = vec![vec![0.0; n]; n_out];
         let mut lin = vec![0.0; n_out];
         let mut res = vec![0.0; n_out];
@@ -236,6 +285,9 @@ impl ThermalModel {
         for r in 0..n {
             let x = &feats[r * width..(r + 1) * width];
             self.linear.predict_into(x, &mut lin)?;
+            if let Some(p) = &self.plain {
+                p.predict_into(&raw[r * n_in..(r + 1) * n_in], &mut plain)?;
+            }
             for (nets, out) in [(&self.residual_mlp, &mut res), (&self.direct_mlp, &mut dir)] {
                 out.iter_mut().for_each(|v| *v = 0.0);
                 for m in nets.iter() {
@@ -246,6 +298,7 @@ impl ThermalModel {
             }
             for (k, c) in out.iter_mut().enumerate() {
                 c[r] = match self.output_models[k] {
+                    OutputModel::PlainLs => plain[k],
                     OutputModel::Linear => lin[k],
                     OutputModel::LinearMlp => lin[k] + res[k],
                     OutputModel::Mlp => dir[k],
@@ -275,7 +328,7 @@ impl ThermalModel {
         let feats = self
             .features
             .compute_checked(time_s, &self.input_names(), inputs)?;
-        self.predict_features(&feats)
+        self.predict_features(&feats, &raw_rows(inputs))
     }
 
     /// Serialises the model (pretty JSON).
@@ -307,11 +360,20 @@ impl ThermalModel {
                 )))
             }
         }
+        let mut value = value;
         match value.get("version").and_then(|v| v.as_u64()) {
             Some(v) if v == u64::from(FORMAT_VERSION) => {}
+            // Version 1 predicts with the same parts; its evaluation (a single validation
+            // cycle) has other fields and is not kept.
+            Some(1) => {
+                if let Some(o) = value.as_object_mut() {
+                    o.insert("evaluation".into(), serde_json::Value::Null);
+                    o.insert("version".into(), FORMAT_VERSION.into());
+                }
+            }
             v => {
                 return Err(bad(format!(
-                    "model file version {v:?}, this build reads version {FORMAT_VERSION}"
+                    "model file version {v:?}, this build reads versions 1 and {FORMAT_VERSION}"
                 )))
             }
         }
@@ -331,13 +393,32 @@ impl ThermalModel {
             || m.linear.n_out() != n_out
             || !net_ok(&m.residual_mlp, OutputModel::LinearMlp)
             || !net_ok(&m.direct_mlp, OutputModel::Mlp)
+            || !plain_ok(&m)
         {
             return Err(bad(format!(
                 "inconsistent model: {} inputs ({width} features) and {n_out} outputs do not \
-                 match its linear part, nets or per-output forms",
+                 match its linear part, plain least squares, nets or per-output forms",
                 m.inputs.len(),
             )));
         }
         Ok(m)
     }
+}
+
+/// The plain least-squares part fits the inputs and outputs, and is there if an output uses it.
+fn plain_ok(m: &ThermalModel) -> bool {
+    match &m.plain {
+        Some(p) => p.n_in() == m.inputs.len() && p.n_out() == m.outputs.len(),
+        None => !m.output_models.contains(&OutputModel::PlainLs),
+    }
+}
+
+/// Input columns as row-major rows.
+pub(crate) fn raw_rows(cols: &[&[f64]]) -> Vec<f64> {
+    let n = cols.first().map_or(0, |c| c.len());
+    let mut raw = Vec::with_capacity(n * cols.len());
+    for r in 0..n {
+        raw.extend(cols.iter().map(|c| c[r]));
+    }
+    raw
 }

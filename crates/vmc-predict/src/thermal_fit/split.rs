@@ -28,6 +28,10 @@ pub struct Split {
     pub holdout_from_s: f64,
     /// How `holdout_from_s` was chosen (for the report).
     pub rule: String,
+    /// Times where the cycle column rises from 0 (or less) to a positive value, and the first
+    /// time if it is positive there: the cycle starts (empty without a cycle column).
+    #[serde(default)]
+    pub cycle_starts_s: Vec<f64>,
 }
 
 /// Which part a row belongs to.
@@ -139,7 +143,32 @@ impl Split {
             val_from_s: time_s[n_fit - n_val],
             holdout_from_s,
             rule,
+            // A series that starts heating starts a cycle on its first row.
+            cycle_starts_s: cycle
+                .filter(|(_, c)| c.first().is_some_and(|v| *v > 0.0))
+                .map(|_| first)
+                .into_iter()
+                .chain(starts.iter().map(|&s| time_s[s]))
+                .collect(),
         })
+    }
+
+    /// The rows of each cycle, in time order, when there are at least two cycle starts: a cycle
+    /// runs from its start to the next one; the rows before the first start belong to the first
+    /// cycle. Empty otherwise.
+    pub fn cycles(&self, time_s: &[f64]) -> Vec<Vec<usize>> {
+        if self.cycle_starts_s.len() < 2 {
+            return Vec::new();
+        }
+        let mut cycles = vec![Vec::new(); self.cycle_starts_s.len()];
+        for (r, t) in time_s.iter().enumerate() {
+            let k = self.cycle_starts_s[1..]
+                .iter()
+                .take_while(|s| **s <= *t)
+                .count();
+            cycles[k].push(r);
+        }
+        cycles
     }
 
     /// The part a row at `time_s` belongs to.
@@ -170,9 +199,21 @@ mod tests {
         assert_eq!(s.val_from_s, 50.0);
         assert_eq!(s.part(40.0), Part::Train);
         assert_eq!(s.part(80.0), Part::Validation);
+        // Three cycles; the first holds the row before its rise.
+        assert_eq!(
+            s.cycles(&t),
+            [vec![0, 1, 2, 3, 4], vec![5, 6, 7, 8], vec![9, 10, 11]]
+        );
         // Given a held-out start without a cycle column: the last round(9/4) = 2 rows validate.
         let s = Split::resolve(&t, Some(90.0), None, 0.25).unwrap();
         assert_eq!(s.val_from_s, 70.0);
+        assert!(s.cycles(&t).is_empty());
+        // A series that starts heating: its first row starts a cycle.
+        let mut hot = rpm;
+        hot[0] = 500.0;
+        let s = Split::resolve(&t, None, Some(("spindle_rpm", &hot)), 0.25).unwrap();
+        assert_eq!(s.cycle_starts_s, [0.0, 50.0, 90.0]);
+        assert_eq!(s.cycles(&t).len(), 3);
         assert_eq!(s.part(90.0), Part::Holdout);
     }
 
