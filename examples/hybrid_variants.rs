@@ -5,7 +5,7 @@
 //! `staus=`, `shist=`, `bil=0|1`, `ridge=`, `hidden=`, `restarts=`, `gain=`, `members=`,
 //! `seedoff=`, and the opt-in commanded spindle speed: `rpmexp=` heat-input exponents, `rpmtaus=`
 //! their filters' time constants, s; `feedtaus=` the axis feeds' filters, s; `val=` validation
-//! cycles) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
+//! cycles; `plan=full|noaxes|nosweep|noshops|combined` the calibration plan) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
 //! Prints per seed the kept nets, then the headline figures and the eight worst runs.
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
@@ -76,6 +76,9 @@ fn main() {
     // `states=dev`: the selection-only states (placement stream 9001), for choosing settings
     // without looking at the held-out evaluation states.
     let mut dev = false;
+    // `plan=`: the calibration plan (`full`, or without a group of cycles: `noaxes`,
+    // `nosweep`, `noshops`; `combined`: the seven combined-duty cycles only).
+    let mut plan = String::from("full");
     // Campaign settings: `every=` (s between measurement blocks), `stoplog=` / `stopevery=`
     // (spindle log after the stop), `spevery=` (spindle test interval while driving).
     let cfg_of = CampaignConfig::new;
@@ -114,6 +117,7 @@ fn main() {
             "rpmexp" => settings.spindle_speed_exponents = list(),
             "rpmtaus" => settings.spindle_speed_taus_s = list(),
             "feedtaus" => settings.axis_feed_taus_s = list(),
+            "plan" => plan = v.to_string(),
             "val" => settings.val_cycles = v.split(',').map(String::from).collect(),
             _ => panic!("unknown {k}"),
         }
@@ -122,7 +126,18 @@ fn main() {
     let plans = diagonal_plans(&spec).unwrap();
     let mut runs = Vec::new();
     for &seed in &seeds {
-        let data = calibration::calibrate(&spec, &ThermalCycle::calibration_plan(&spec), &{
+        let cycles: Vec<ThermalCycle> = ThermalCycle::calibration_plan(&spec)
+            .into_iter()
+            .filter(|c| match plan.as_str() {
+                "full" => true,
+                "noaxes" => !c.name.ends_with("_axis_alone"),
+                "nosweep" => c.name != "cal_spindle_sweep",
+                "noshops" => !c.name.ends_with("_shop"),
+                "combined" => ThermalCycle::combined_duty_set().iter().any(|d| d.name == c.name),
+                other => panic!("unknown plan {other}"),
+            })
+            .collect();
+        let data = calibration::calibrate(&spec, &cycles, &{
             let mut c = cfg_of(seed);
             if let Some(v) = every {
                 c.measure_every_s = v;

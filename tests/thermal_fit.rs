@@ -1,6 +1,6 @@
 //! `fit-thermal` and `predict-thermal` on real measurements: the real binary in
 //! a temporary folder, on a slice of a real spindle thermal test vendored in
-//! `tests/data/spindle-thermal/` (every 4th row of the first three cycles, see SOURCE.md), and
+//! `tests/data/spindle-thermal/` (every 4th row of the first four cycles, see SOURCE.md), and
 //! the error paths a user meets with a wrong file.
 
 use std::path::{Path, PathBuf};
@@ -157,7 +157,7 @@ fn fitted_model_predicts_every_row_and_beats_a_constant_on_the_held_out_cycle() 
     let holdout_from_s = ev["split"]["holdout_from_s"].as_f64().unwrap();
     let (fit_rows, hold_rows): (Vec<&Vec<f64>>, Vec<&Vec<f64>>) =
         rows.iter().partition(|r| r[0] < holdout_from_s);
-    // The last of the three cycles (3750 rpm, the last 8 h) is held out.
+    // The last of the four cycles (5000 rpm, the last 8 h) is held out.
     assert!(
         hold_rows.len() > 400 && fit_rows.len() > 900,
         "{} / {}",
@@ -453,9 +453,9 @@ fn the_spindle_speed_as_a_heat_input_lowers_the_cross_validated_error_on_every_c
         evaluation(dir.path(), "heat.json"),
         evaluation(dir.path(), "plain.json"),
     );
-    // One fold per cycle of the file (three), each holding one cycle out.
+    // One fold per cycle of the file (four), each holding one cycle out.
     let folds = heat["folds"].as_array().expect("folds");
-    assert_eq!(folds.len(), 3);
+    assert_eq!(folds.len(), 4);
     assert!(folds.iter().all(|f| f["rows"].as_u64() >= Some(480)));
     // Mean fold ratios measured on this slice: 38.3, 42.5, 35.1, 35.2, 24.8 % with the
     // heat-input features vs 45.1, 57.1, 36.0, 38.0, 28.0 % without them.
