@@ -5,6 +5,7 @@ use super::checks::{
     arc_error_msg, check_g10, check_io, check_values, motion_name, plane_axes, plane_names, AXES,
     IJK,
 };
+use super::cycles::{self, CycleInput, CycleState};
 use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, ToolLength, Units};
 use super::expr::Params;
 use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
@@ -39,6 +40,8 @@ pub struct Interpreter {
     homes_mm: [[f64; 3]; 2],
     /// Active tool length offset (G43/G43.1), along Z, mm.
     tool_offset_mm: f64,
+    /// Canned cycle state (G98/G99, initial level, remembered words).
+    cycle: CycleState,
 }
 
 /// What the motion step of a block will do.
@@ -70,6 +73,7 @@ impl Interpreter {
             axis_offset_saved_mm: [0.0; 3],
             homes_mm: [[0.0; 3]; 2],
             tool_offset_mm: 0.0,
+            cycle: CycleState::default(),
         }
     }
 
@@ -235,7 +239,12 @@ impl Interpreter {
             }
             _ => {}
         }
+        if let Some(r) = d.retract {
+            self.cycle.retract = r;
+        }
+        let previous_motion = self.motion;
         if let Some((m, _)) = d.motion {
+            self.cycle.motion_mode_set(matches!(m, Motion::Cycle(_)));
             self.motion = Some(m).filter(|m| *m != Motion::Cancel);
         }
         if let MotionStep::Move(m) = step {
@@ -248,6 +257,13 @@ impl Interpreter {
                     feed_mm_per_min: self.feed_mm_per_min,
                 }),
                 Motion::Arc { clockwise } => Some(self.arc(block, &d, end_mm, clockwise)?),
+                Motion::Cycle(cycle) => {
+                    let first = previous_motion != Some(m);
+                    for kind in self.canned_cycle(block, &d, cycle, first)? {
+                        emit(kind);
+                    }
+                    None
+                }
                 // `check` never schedules G80 as a move.
                 Motion::Cancel => None,
             };
@@ -267,6 +283,37 @@ impl Interpreter {
             None => {}
         }
         Ok(())
+    }
+
+    /// Expands a canned cycle block (see `cycles`); moves the tool to where it ends.
+    fn canned_cycle(
+        &mut self,
+        block: &Block,
+        d: &Decoded,
+        cycle: cycles::Cycle,
+        first: bool,
+    ) -> Result<Vec<CanonKind>, GcodeError> {
+        let input = CycleInput {
+            block,
+            d,
+            cycle,
+            col: d
+                .motion
+                .map(|m| m.1)
+                .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+                .unwrap_or(block.first_col),
+            first,
+            pos_mm: self.pos_mm,
+            plane: self.plane,
+            incremental: self.distance == Distance::Incremental,
+            scale: self.scale(),
+            offset_mm: [0, 1, 2].map(|a| self.offset_mm(a)),
+            feed_mm_per_min: self.feed_mm_per_min,
+            spindle: self.spindle,
+        };
+        let mut out = Vec::new();
+        self.pos_mm = cycles::run(&input, &mut self.cycle, &mut out)?;
+        Ok(out)
     }
 
     /// mm per program unit.
@@ -411,7 +458,8 @@ impl Interpreter {
         check_values(block, d)?;
         let step = self.motion_step(block, d)?;
         self.check_word_users(block, d, step)?;
-        if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. })) = step {
+        if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. } | Motion::Cycle(_))) = step
+        {
             let col = d
                 .motion
                 .map(|m| m.1)
@@ -506,6 +554,13 @@ impl Interpreter {
         let line = block.line;
         let inv = |w: &Word, msg: &str| GcodeError::invalid(line, w.col, msg);
         let arc_move = matches!(step, MotionStep::Move(Motion::Arc { .. }));
+        let cycle = match step {
+            MotionStep::Move(Motion::Cycle(c)) => Some(c),
+            _ => None,
+        };
+        if let Some(c) = cycle {
+            return cycles::check_words(line, c, d);
+        }
         let g10 = d.non_modal.filter(|n| n.0 == NonModal::SetCoordData);
         if let (Some(r), Some(_)) = (d.r, d.path_control.filter(|c| c.0 == 640)) {
             return Err(GcodeError::unsupported(

@@ -45,6 +45,7 @@
 
 mod arc;
 mod checks;
+mod cycles;
 mod decode;
 mod exec;
 mod expr;
@@ -55,6 +56,7 @@ mod flow_tests;
 mod tests;
 
 pub use crate::gcode::{GcodeError, GcodeErrorKind};
+pub use cycles::{MAX_REPEATS, PECK_CLEARANCE_MM};
 pub use exec::Interpreter;
 pub use expr::NUM_PARAMS;
 pub use flow::{MAX_CALL_DEPTH, MAX_ITERATIONS};
