@@ -333,6 +333,23 @@ impl Expander<'_> {
         });
     }
 
+    /// A tapping feed (G74/G84). LinuxCNC sends these two moves with the coordinates rotated
+    /// outside G17 — G18: (Y, Z, X), G19: (Z, X, Y) — while its position follows the cycle
+    /// as programmed; the twin moves where the controller does.
+    fn tap_feed(&mut self, level: f64) {
+        let p = self.to(level);
+        let shift = match self.ax {
+            1 => 1,
+            0 => 2,
+            _ => 0,
+        };
+        let end_mm = [0, 1, 2].map(|i| p[(i + shift) % 3]);
+        self.out.push(CanonKind::Feed {
+            end_mm,
+            feed_mm_per_min: self.feed,
+        });
+    }
+
     fn dwell(&mut self, duration_s: f64) {
         self.out.push(CanonKind::Dwell { duration_s });
     }
@@ -387,11 +404,11 @@ impl Expander<'_> {
                 } else {
                     SpindleDir::Cw
                 };
-                self.feed(bottom);
+                self.tap_feed(bottom);
                 self.spindle(SpindleDir::Off, rpm);
                 self.spindle(reverse, rpm);
                 self.dwell(0.0);
-                self.feed(clear);
+                self.tap_feed(clear);
                 self.spindle(SpindleDir::Off, rpm);
                 self.spindle(dir, rpm);
             }

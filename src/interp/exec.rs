@@ -6,8 +6,11 @@ use super::checks::{
     IJK,
 };
 use super::cycles::{self, CycleInput, CycleState};
-use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, ToolLength, Units};
+use super::decode::{
+    decode, Decoded, Distance, FeedMode, Motion, NonModal, Stop, ToolLength, Units,
+};
 use super::expr::Params;
+use super::feed;
 use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
 use crate::gcode::{Block, GcodeError, Word};
 
@@ -42,6 +45,8 @@ pub struct Interpreter {
     tool_offset_mm: f64,
     /// Canned cycle state (G98/G99, initial level, remembered words).
     cycle: CycleState,
+    /// G93 / G94 / G95; `feed_mm_per_min` then holds F in 1/min, mm/min or mm/rev.
+    feed_mode: FeedMode,
 }
 
 /// What the motion step of a block will do.
@@ -74,6 +79,7 @@ impl Interpreter {
             homes_mm: [[0.0; 3]; 2],
             tool_offset_mm: 0.0,
             cycle: CycleState::default(),
+            feed_mode: FeedMode::PerMinute,
         }
     }
 
@@ -127,6 +133,13 @@ impl Interpreter {
         let mut next = self.clone();
         let mut kinds = Vec::new();
         next.run_block(block, &mut kinds)?;
+        feed::apply(
+            next.feed_mode,
+            &mut kinds,
+            self.pos_mm,
+            next.feed_mm_per_min,
+            next.spindle.1,
+        );
         *self = next;
         out.extend(kinds.into_iter().map(|kind| CanonMove {
             line: block.line,
@@ -142,8 +155,16 @@ impl Interpreter {
         let step = self.check(block, &d)?;
         let mut emit = |kind| out.push(kind);
 
+        if let Some((mode, _)) = d.feed_mode {
+            self.feed_mode = mode;
+            self.feed_mm_per_min = 0.0;
+        }
         if let Some(f) = d.f {
-            self.feed_mm_per_min = f.value * self.scale();
+            let k = match self.feed_mode {
+                FeedMode::InverseTime => 1.0,
+                _ => self.scale(),
+            };
+            self.feed_mm_per_min = f.value * k;
         }
         if let Some(s) = d.s {
             self.spindle.1 = s.value;
@@ -468,7 +489,13 @@ impl Interpreter {
             if let Motion::Arc { clockwise } = m {
                 self.check_arc_words(block, d, col, clockwise)?;
             }
-            let feed = d.f.map_or(self.feed_mm_per_min, |f| f.value);
+            feed::check_move(block, d, col, m, self.feed_mode, self.spindle.1)?;
+            let kept = if d.feed_mode.is_some() {
+                0.0
+            } else {
+                self.feed_mm_per_min
+            };
+            let feed = d.f.map_or(kept, |f| f.value);
             if feed <= 0.0 {
                 let name = motion_name(m);
                 let msg = format!("{name} with zero feed rate (no F word > 0 given yet)");

@@ -49,6 +49,7 @@ mod cycles;
 mod decode;
 mod exec;
 mod expr;
+mod feed;
 mod flow;
 #[cfg(test)]
 mod flow_tests;
