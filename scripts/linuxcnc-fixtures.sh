@@ -5,7 +5,7 @@
 #   tests/data/linuxcnc/rs274-expected/REFUSED.txt           program refused: path and error line
 # The tool table tests/data/linuxcnc/tool.tbl is in inches, as rs274 reads it without an INI
 # file. In mm: T1 Ø12 × 150 long, T2 Ø6 × 100, T3 Ø3 × 80, T4 Ø20 × 120 (tests/linuxcnc_corpus.rs
-# gives our interpreter the same lengths).
+# gives our interpreter the same tools).
 # Needs LinuxCNC's `rs274` (default /usr/bin/rs274; override with RS274=...).
 set -euo pipefail
 cd "$(dirname "$0")/.."

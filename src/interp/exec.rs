@@ -566,7 +566,8 @@ impl Interpreter {
             };
         }
         Ok(match explicit {
-            Some(m @ Motion::Arc { .. }) => MotionStep::Move(m),
+            // G0/G1 alone: a move to where the tool is (LinuxCNC emits it too).
+            Some(m @ (Motion::Arc { .. } | Motion::Rapid | Motion::Linear)) => MotionStep::Move(m),
             _ => MotionStep::None,
         })
     }
