@@ -46,6 +46,8 @@
 mod arc;
 mod checks;
 mod cycles;
+#[cfg(test)]
+mod cycles_tests;
 mod decode;
 mod exec;
 mod expr;
