@@ -307,3 +307,76 @@ fn inverse_time_and_per_revolution_feeds_become_mm_per_minute_as_in_rs274() {
     // rs274: selecting a feed mode zeroes the feed rate: "Cannot do g1 with zero feed rate".
     assert!(err("G21 F100\nG94 G1 X5").msg.contains("zero feed"));
 }
+
+#[test]
+fn m70_m72_and_m73_restore_the_modal_state_as_rs274_does() {
+    // rs274 (mm program; its inch output converted): the G1 X1 under G20 G91 ends at
+    // X25.4; after M72, G1 X5 is absolute mm again at F100 with the spindle back to M3 S500
+    // and the flood coolant off; the M73 state comes back at `endsub`.
+    let src = "G21 G90 G17 F100 S500 M3\nG0 X0 Y0 Z10\nM70\n\
+               G20 G91 G18 F7 S800 M4 M8 G98\nG1 X1 F2\nM72\nG1 X5\n\
+               o100 sub\nM73\nG20 G91 F9 S300 M5 G19\nG1 X1\no100 endsub\n\
+               o100 call\nG1 X7\nM2";
+    let moves = run_program(src, &InterpConfig::default()).unwrap();
+    let feed_ends: Vec<([f64; 3], f64)> = moves
+        .iter()
+        .filter_map(|m| match m.kind {
+            CanonKind::Feed {
+                end_mm,
+                feed_mm_per_min,
+            } => Some((end_mm, feed_mm_per_min)),
+            _ => None,
+        })
+        .collect();
+    let want = [
+        ([25.4, 0.0, 10.0], 2.0 * 25.4),
+        ([5.0, 0.0, 10.0], 100.0),
+        // F9 on the G20 line is read in mm, the units before that block (rs274 too).
+        ([30.4, 0.0, 10.0], 9.0),
+        ([7.0, 0.0, 10.0], 100.0),
+    ];
+    assert_eq!(feed_ends.len(), want.len());
+    for ((end, f), (we, wf)) in feed_ends.iter().zip(want) {
+        assert!(
+            (0..3).all(|i| (end[i] - we[i]).abs() < 1e-9),
+            "{feed_ends:?}"
+        );
+        assert!((f - wf).abs() < 1e-9, "{feed_ends:?}");
+    }
+    let at = |line: usize| -> Vec<CanonKind> {
+        moves
+            .iter()
+            .filter(|m| m.line == line)
+            .map(|m| m.kind.clone())
+            .collect()
+    };
+    assert_eq!(
+        at(6),
+        [
+            CanonKind::Spindle {
+                dir: SpindleDir::Cw,
+                rpm: 500.0
+            },
+            CanonKind::Coolant {
+                mist: false,
+                flood: false
+            }
+        ]
+    );
+    assert_eq!(
+        at(12),
+        [CanonKind::Spindle {
+            dir: SpindleDir::Cw,
+            rpm: 500.0
+        }]
+    );
+    // rs274: "Cannot restore context from invalid stack frame - missing M70/M73?"
+    for bad in [
+        "G21\nM72",
+        "G21\nM70\nM71\nM72",
+        "G21\no1 sub\nM70\no1 endsub\no1 call\nM72",
+    ] {
+        let e = err(bad);
+        assert!(e.msg.contains("M72: no modal state saved"), "{bad}: {e}");
+    }
+}

@@ -14,6 +14,8 @@ use super::feed;
 use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
 use crate::gcode::{Block, GcodeError, Word};
 
+mod modal_state;
+
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
 #[derive(Debug, Clone)]
 pub struct Interpreter {
@@ -47,6 +49,8 @@ pub struct Interpreter {
     cycle: CycleState,
     /// G93 / G94 / G95; `feed_mm_per_min` then holds F in 1/min, mm/min or mm/rev.
     feed_mode: FeedMode,
+    /// States saved by M70/M73, per call level.
+    contexts: modal_state::Contexts,
 }
 
 /// What the motion step of a block will do.
@@ -80,6 +84,7 @@ impl Interpreter {
             tool_offset_mm: 0.0,
             cycle: CycleState::default(),
             feed_mode: FeedMode::PerMinute,
+            contexts: modal_state::Contexts::default(),
         }
     }
 
@@ -194,6 +199,9 @@ impl Interpreter {
                 mist: self.coolant.0,
                 flood: self.coolant.1,
             });
+        }
+        if let Some((m, col)) = d.modal_state {
+            self.modal_state_code(m, block.line, col, &mut emit)?;
         }
         if d.set_tool.is_some() {
             self.selected_tool = d.q.map_or(0, |q| q.value as u32);
