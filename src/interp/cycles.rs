@@ -1,4 +1,4 @@
-//! Canned cycles G73, G74, G81–G86, G88, G89 (LinuxCNC semantics), expanded into traverse,
+//! Canned cycles G73, G74, G81–G89 (LinuxCNC semantics), expanded into traverse,
 //! feed, dwell, spindle and pause actions.
 //!
 //! Terms, along the cycle axis (Z in G17, Y in G18, X in G19):
@@ -17,6 +17,13 @@
 //! The axis word, R, P and Q are remembered while the cycle stays the motion mode; a block
 //! that switches to a cycle must give the axis word and R (and P or Q where the cycle needs
 //! them). G73/G83 pecks back off (G73) or re-approach (G83) by [`PECK_CLEARANCE_MM`].
+//!
+//! G87 (back boring) takes the tool, spindle oriented (stopped), down at the hole position
+//! shifted by I/J/K along the plane's axes, back to the centre at the bottom, restarts the
+//! spindle, feeds up to the level of the third word (K in G17, J in G18, I in G19; G90: a
+//! coordinate, G91: relative to the bottom) and back down, then leaves shifted again, spindle
+//! oriented, up to the clear level and back to the centre, where the spindle restarts.
+//! Spindle orientation is reported as a spindle stop.
 
 use super::checks::{plane_axes, AXES};
 pub(super) use super::decode::Cycle;
@@ -40,6 +47,8 @@ pub(super) struct CycleState {
     r: Option<f64>,
     p: Option<f64>,
     q: Option<f64>,
+    /// G87's I, J, K (program units, by axis).
+    ijk: Option<[f64; 3]>,
 }
 
 impl CycleState {
@@ -82,6 +91,7 @@ pub(super) fn cycle_name(c: Cycle) -> &'static str {
         Cycle::G84 => "G84",
         Cycle::G85 => "G85",
         Cycle::G86 => "G86",
+        Cycle::G87 => "G87",
         Cycle::G88 => "G88",
         Cycle::G89 => "G89",
     }
@@ -102,7 +112,8 @@ pub(super) fn uses_q(c: Cycle) -> bool {
 pub(super) fn check_words(line: usize, c: Cycle, d: &Decoded) -> Result<(), GcodeError> {
     let name = cycle_name(c);
     let inv = |w: &Word, msg: String| Err(GcodeError::invalid(line, w.col, msg));
-    if let Some(w) = d.ijk.iter().flatten().chain(d.e.iter()).next() {
+    let ijk = d.ijk.iter().flatten().filter(|_| c != Cycle::G87);
+    if let Some(w) = ijk.chain(d.e.iter()).next() {
         return inv(
             w,
             format!("{} word with {name} (nothing uses it)", w.letter),
@@ -193,6 +204,17 @@ pub(super) fn run(
             return Err(inv(input.col, msg));
         }
     }
+    let mut ijk = None;
+    if cycle == Cycle::G87 {
+        ijk = match (d.ijk, state.ijk) {
+            ([Some(i), Some(j), Some(k)], _) => Some([i.value, j.value, k.value]),
+            ([None, None, None], Some(kept)) if !input.first => Some(kept),
+            _ => {
+                let msg = "G87 needs I, J and K (shift and top of the back bore)".to_string();
+                return Err(inv(input.col, msg));
+            }
+        };
+    }
     let repeats = match d.l {
         Some(l) if l.value.fract() != 0.0 || l.value < 1.0 => {
             let msg = format!(
@@ -213,7 +235,7 @@ pub(super) fn run(
     };
     match (cycle, input.spindle.0) {
         (Cycle::G84, SpindleDir::Cw) | (Cycle::G74, SpindleDir::Ccw) => {}
-        (Cycle::G86 | Cycle::G88, SpindleDir::Cw | SpindleDir::Ccw) => {}
+        (Cycle::G86 | Cycle::G87 | Cycle::G88, SpindleDir::Cw | SpindleDir::Ccw) => {}
         (Cycle::G84, _) => {
             let msg = "G84 (right-hand tapping) needs the spindle turning clockwise (M3)";
             return Err(inv(input.col, msg.to_string()));
@@ -222,7 +244,7 @@ pub(super) fn run(
             let msg = "G74 (left-hand tapping) needs the spindle turning counter-clockwise (M4)";
             return Err(inv(input.col, msg.to_string()));
         }
-        (Cycle::G86 | Cycle::G88, _) => {
+        (Cycle::G86 | Cycle::G87 | Cycle::G88, _) => {
             let msg = format!("{name} needs the spindle turning (M3 or M4)");
             return Err(inv(input.col, msg));
         }
@@ -285,6 +307,17 @@ pub(super) fn run(
         if hole[ax] != r_mm {
             cx.traverse(r_mm);
         }
+        if let Some(ijk) = ijk {
+            let mut shift = ijk.map(|v| v * k);
+            let top = if input.incremental {
+                bottom_mm + shift[ax]
+            } else {
+                shift[ax] + input.offset_mm[ax]
+            };
+            shift[ax] = 0.0;
+            cx.back_bore(shift, top, bottom_mm, clear_mm, input.spindle);
+            continue;
+        }
         cx.body(
             cycle,
             r_mm,
@@ -295,6 +328,7 @@ pub(super) fn run(
             input.spindle,
         );
     }
+    state.ijk = ijk.or(state.ijk);
 
     state.bottom = Some(bottom_word);
     state.r = Some(r_word);
@@ -356,6 +390,36 @@ impl Expander<'_> {
 
     fn spindle(&mut self, dir: SpindleDir, rpm: f64) {
         self.out.push(CanonKind::Spindle { dir, rpm });
+    }
+
+    /// G87 from the R plane (see the module documentation).
+    fn back_bore(
+        &mut self,
+        shift: [f64; 3],
+        top: f64,
+        bottom: f64,
+        clear: f64,
+        spindle: (SpindleDir, f64),
+    ) {
+        let (dir, rpm) = spindle;
+        let centre = *self.pos;
+        let shifted = [0, 1, 2].map(|i| centre[i] + shift[i]);
+        let rapid = |x: &mut Self, base: [f64; 3], level: f64| {
+            *x.pos = base;
+            x.traverse(level);
+        };
+        rapid(self, shifted, centre[self.ax]);
+        self.spindle(SpindleDir::Off, rpm);
+        rapid(self, shifted, bottom);
+        rapid(self, centre, bottom);
+        self.spindle(dir, rpm);
+        self.feed(top);
+        self.feed(bottom);
+        self.spindle(SpindleDir::Off, rpm);
+        rapid(self, shifted, bottom);
+        rapid(self, shifted, clear);
+        rapid(self, centre, clear);
+        self.spindle(dir, rpm);
     }
 
     /// The cycle's own moves, from the R plane.
@@ -436,6 +500,8 @@ impl Expander<'_> {
                 self.dwell(p);
                 self.feed(clear);
             }
+            // `run` expands G87 with `back_bore`.
+            Cycle::G87 => {}
         }
     }
 }

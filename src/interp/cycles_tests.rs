@@ -173,6 +173,23 @@ fn boring_cycles_g85_g86_g88_g89() {
 }
 
 #[test]
+fn g87_back_bores_from_below_with_the_spindle_oriented_on_the_way_in_and_out() {
+    check(
+        "M3 S500\nG98 G87 X5 Y1 Z-3 R2 I1 J0.5 K-1",
+        "STRAIGHT_TRAVERSE(5.0000, 1.0000, 10.0000)
+         STRAIGHT_TRAVERSE(5.0000, 1.0000, 2.0000)
+         STRAIGHT_TRAVERSE(6.0000, 1.5000, 2.0000)
+         STRAIGHT_TRAVERSE(6.0000, 1.5000, -3.0000)
+         STRAIGHT_TRAVERSE(5.0000, 1.0000, -3.0000)
+         STRAIGHT_FEED(5.0000, 1.0000, -1.0000)
+         STRAIGHT_FEED(5.0000, 1.0000, -3.0000)
+         STRAIGHT_TRAVERSE(6.0000, 1.5000, -3.0000)
+         STRAIGHT_TRAVERSE(6.0000, 1.5000, 10.0000)
+         STRAIGHT_TRAVERSE(5.0000, 1.0000, 10.0000)",
+    );
+}
+
+#[test]
 fn incremental_cycles_step_between_repeats_and_measure_r_from_the_initial_level() {
     check(
         "G91 G98 G81 X2 Y1 Z-4 R-5 L3",
@@ -263,8 +280,9 @@ fn cycle_errors_name_the_word_and_where() {
         assert_eq!((e.line, e.col), (2, col), "{src}: {e}");
         assert!(e.msg.contains(text), "{src}: {e}");
     }
-    let e = err("G21 F100\nG87 X5 Z-3 R2 I1 K-1");
-    assert!(e.is_unsupported() && e.msg.contains("G87"), "{e}");
+    // rs274: "J word missing with g87".
+    let e = err("G21 F100\nM3 S500\nG87 X5 Z-3 R2 I1 K-1");
+    assert!(e.msg.contains("G87 needs I, J and K"), "{e}");
     for lathe in ["G76 X1 Z-1", "G71 X1 Z-1", "G70 X1 Z-1"] {
         assert!(err(lathe).msg.contains("lathe cycle"), "{lathe}");
     }

@@ -16,7 +16,7 @@ pub(super) enum Motion {
     Arc { clockwise: bool },
     /// G80: no motion mode.
     Cancel,
-    /// G73, G74, G81–G86, G88, G89: a canned cycle (see `cycles`).
+    /// G73, G74, G81–G89: a canned cycle (see `cycles`).
     Cycle(Cycle),
 }
 
@@ -39,6 +39,8 @@ pub(super) enum Cycle {
     G85,
     /// G86: boring, spindle stop, rapid out.
     G86,
+    /// G87: back boring.
+    G87,
     /// G88: boring, spindle stop, manual out.
     G88,
     /// G89: boring, dwell, feed out.
@@ -375,6 +377,7 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         840 => (1, A::Motion(Motion::Cycle(Cycle::G84))),
         850 => (1, A::Motion(Motion::Cycle(Cycle::G85))),
         860 => (1, A::Motion(Motion::Cycle(Cycle::G86))),
+        870 => (1, A::Motion(Motion::Cycle(Cycle::G87))),
         880 => (1, A::Motion(Motion::Cycle(Cycle::G88))),
         890 => (1, A::Motion(Motion::Cycle(Cycle::G89))),
         980 => (10, A::Retract(Retract::InitialLevel)),
@@ -425,7 +428,6 @@ fn g_unsupported(code: u32) -> Rejected {
         520 => "local coordinate offset",
         591..=593 => "extra coordinate system",
         700 | 710..=712 | 720..=722 | 760 => "lathe cycle",
-        870 => "back boring cycle",
         960 | 970 => "spindle speed mode",
         _ => return Rejected::Unknown,
     };

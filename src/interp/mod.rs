@@ -30,12 +30,12 @@
 //! program must restart it with M3/M4.
 //!
 //! Also accepted:
-//! - Canned cycles G73, G74, G81, G82, G83, G84, G85, G86, G88, G89 with G98/G99, L repeats,
+//! - Canned cycles G73, G74, G81, G82, G83, G84, G85, G86, G87, G88, G89 with G98/G99, L repeats,
 //!   G91 incremental form, in the G17, G18 and G19 planes, cancelled by G80 or another motion
 //!   code (see `cycles`: R plane, initial level, the [`PECK_CLEARANCE_MM`] of G73/G83, the
-//!   spindle reversal of G74/G84, the pause of G88). The motion mode persists: a later block
-//!   with axis words drills again with the remembered Z, R, P, Q. G87 (back boring) and the
-//!   lathe cycles G70–G72, G76 are refused as unsupported.
+//!   spindle reversal of G74/G84, the back boring of G87, the pause of G88). The motion mode
+//!   persists: a later block with axis words drills again with the remembered Z, R, P, Q (and
+//!   G87's I, J, K). The lathe cycles G70–G72, G76 are refused as unsupported.
 //! - Feed modes G93 (inverse time), G94, G95 (per revolution): every feed move still leaves
 //!   with an equivalent feed in mm/min (see `feed`).
 //! - M70/M71/M72/M73: save, forget, restore the modal state (M73: restored when the current
