@@ -267,8 +267,10 @@ pub(super) fn run(
         return Err(inv(input.col, msg));
     }
     if let Some(q) = q {
-        if (r_mm - bottom_mm) / (q * k) > f64::from(MAX_REPEATS) {
-            let msg = format!("{name} would make more than {MAX_REPEATS} pecks (Q{q})");
+        let pecks = (r_mm - bottom_mm) / (q * k) * f64::from(repeats);
+        if pecks > f64::from(MAX_REPEATS) {
+            let msg =
+                format!("{name} would make more than {MAX_REPEATS} pecks in one block (Q{q})");
             return Err(GcodeError::unsupported(line, input.col, msg));
         }
     }
@@ -337,7 +339,7 @@ pub(super) fn run(
     Ok(pos)
 }
 
-/// Largest L (repeat count) accepted on a cycle.
+/// Largest L (repeat count) accepted on a cycle, and most G73/G83 pecks in one block.
 pub const MAX_REPEATS: u32 = 10_000;
 
 /// Emits moves along the cycle axis from the current position.

@@ -280,6 +280,11 @@ fn cycle_errors_name_the_word_and_where() {
         assert_eq!((e.line, e.col), (2, col), "{src}: {e}");
         assert!(e.msg.contains(text), "{src}: {e}");
     }
+    // Beyond what a block may expand to (LinuxCNC has no limit): refused, never a hang.
+    let e = err("G21 F100\nG83 X5 Z-1000 R2 Q0.01 L50");
+    assert!(e.is_unsupported() && e.msg.contains("pecks"), "{e}");
+    let e = err("G21 F100\nG81 X5 Z-1 R2 L100000");
+    assert!(e.is_unsupported() && e.msg.contains("L100000"), "{e}");
     // rs274: "J word missing with g87".
     let e = err("G21 F100\nM3 S500\nG87 X5 Z-3 R2 I1 K-1");
     assert!(e.msg.contains("G87 needs I, J and K"), "{e}");
