@@ -56,6 +56,7 @@ pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, Gcode
             Err(e) => tail_error = Some(e),
         }
     }
+    super::sub_files::load(&mut lines, cfg)?;
     let mut prog = Program {
         partner: vec![None; lines.len()],
         lines,
@@ -496,7 +497,7 @@ impl Runner {
                         OName::Named(_) => GcodeError::unsupported(
                             l.line,
                             o.col,
-                            format!("{} call: subroutine not in this file (subroutine files are not supported)", o.name),
+                            format!("{} call: subroutine not in this file nor in a subroutine folder (InterpConfig::subroutine_dirs)", o.name),
                         ),
                         OName::Number(_) => GcodeError::invalid(
                             l.line,

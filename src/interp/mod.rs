@@ -41,6 +41,8 @@
 //! - M70/M71/M72/M73: save, forget, restore the modal state (M73: restored when the current
 //!   subroutine returns), one slot per call level.
 //! - G0/G1 without axis words: a move to where the tool is, as LinuxCNC emits one.
+//! - `o<name> call` of a subroutine defined in `<name>.ngc` in one of
+//!   [`InterpConfig::subroutine_dirs`] (see `sub_files`).
 //! - G28/G30: rapid to the intermediate point (the axis words, in the current modes), then to
 //!   the stored position (#5161… / #5181…, set by G28.1/G30.1, default 0) along the given
 //!   axes, all axes if none is given. G10 L2/L20 P0…P6 set work offsets (R0 only).
@@ -68,6 +70,7 @@ mod feed;
 mod flow;
 #[cfg(test)]
 mod flow_tests;
+mod sub_files;
 #[cfg(test)]
 mod tests;
 
@@ -95,6 +98,10 @@ pub struct InterpConfig {
     /// Block delete switch: when on, lines starting with `/` are skipped (default: off, as
     /// LinuxCNC starts).
     pub block_delete: bool,
+    /// Folders searched, in order, for `<name>.ngc` when `o<name> call` names a subroutine the
+    /// program does not define (LinuxCNC's subroutine path). Default: none (such a call is
+    /// refused as unsupported).
+    pub subroutine_dirs: Vec<std::path::PathBuf>,
 }
 
 impl Default for InterpConfig {
@@ -104,6 +111,7 @@ impl Default for InterpConfig {
             work_offsets_mm: [[0.0; 3]; 6],
             tool_lengths_mm: Vec::new(),
             block_delete: false,
+            subroutine_dirs: Vec::new(),
         }
     }
 }
