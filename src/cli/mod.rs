@@ -6,7 +6,7 @@
 
 mod thermal;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -612,7 +612,12 @@ impl InterpretArgs {
     /// # Errors
     /// An unreadable or invalid machine or tool table.
     pub fn config(self) -> Result<commands::interpret::InterpretConfig> {
-        let mut interp = crate::interp::InterpConfig::default();
+        // Subroutine files `<name>.ngc` are looked up next to the program.
+        let folder = self.program.parent().unwrap_or(Path::new("")).to_path_buf();
+        let mut interp = crate::interp::InterpConfig {
+            subroutine_dirs: vec![folder],
+            ..Default::default()
+        };
         if let Some(path) = &self.tools {
             interp.tool_lengths_mm = commands::interpret::load_tool_lengths(path)?;
         }

@@ -146,6 +146,7 @@ pub(super) fn motion_name(m: Motion) -> &'static str {
         Motion::Arc { clockwise: true } => "G2",
         Motion::Arc { clockwise: false } => "G3",
         Motion::Cancel => "G80",
+        Motion::Cycle(c) => super::cycles::cycle_name(c),
     }
 }
 

@@ -16,6 +16,57 @@ pub(super) enum Motion {
     Arc { clockwise: bool },
     /// G80: no motion mode.
     Cancel,
+    /// G73, G74, G81–G89: a canned cycle (see `cycles`).
+    Cycle(Cycle),
+}
+
+/// The canned cycles (group 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Cycle {
+    /// G73: peck drilling with chip break.
+    G73,
+    /// G74: left-hand tapping.
+    G74,
+    /// G81: drilling.
+    G81,
+    /// G82: drilling with dwell.
+    G82,
+    /// G83: peck drilling.
+    G83,
+    /// G84: right-hand tapping.
+    G84,
+    /// G85: boring, feed out.
+    G85,
+    /// G86: boring, spindle stop, rapid out.
+    G86,
+    /// G87: back boring.
+    G87,
+    /// G88: boring, spindle stop, manual out.
+    G88,
+    /// G89: boring, dwell, feed out.
+    G89,
+}
+
+/// Group 10: canned cycle return level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(super) enum Retract {
+    /// G98: to the initial level (or the R plane if higher).
+    InitialLevel,
+    /// G99: to the R plane (LinuxCNC's start-up mode).
+    #[default]
+    RPlane,
+}
+
+/// Group 5: feed rate mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(super) enum FeedMode {
+    /// G93: inverse time, the F word of each feed move is 1/minutes.
+    InverseTime,
+    /// G94: units per minute (the start-up mode).
+    #[default]
+    PerMinute,
+    /// G95: units per spindle revolution.
+    PerRevolution,
 }
 
 /// Group 0: non-modal codes.
@@ -93,7 +144,9 @@ enum GAction {
     ArcDistance(Distance),
     CoordSystem(usize),
     ToolLength(ToolLength),
-    /// G40, G49, G94: cancel a mode we never have on (state already as commanded).
+    Retract(Retract),
+    FeedMode(FeedMode),
+    /// G40, G49: cancel a mode we never have on (state already as commanded).
     Nothing,
     /// G61 / G61.1 / G64: path control (the planner stops exactly at every move's end).
     PathControl,
@@ -110,6 +163,12 @@ pub(super) struct Decoded {
     pub arc_distance: Option<Distance>,
     pub coord_system: Option<usize>,
     pub tool_length: Option<(ToolLength, usize)>,
+    /// G98 / G99.
+    pub retract: Option<Retract>,
+    /// G93 / G94 / G95 and the column.
+    pub feed_mode: Option<(FeedMode, usize)>,
+    /// M70–M73 (modal state save/restore): the M number and column.
+    pub modal_state: Option<(u32, usize)>,
     /// M0, M1, M60, M2, M30 and the column.
     pub stop: Option<(Stop, usize)>,
     /// Path control code (G61, G61.1, G64) column.
@@ -190,6 +249,8 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     GAction::ArcDistance(x) => d.arc_distance = Some(x),
                     GAction::CoordSystem(i) => d.coord_system = Some(i),
                     GAction::ToolLength(t) => d.tool_length = Some((t, w.col)),
+                    GAction::Retract(r) => d.retract = Some(r),
+                    GAction::FeedMode(m) => d.feed_mode = Some((m, w.col)),
                     GAction::Nothing => {}
                     GAction::PathControl => d.path_control = Some((code, w.col)),
                 }
@@ -214,6 +275,10 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     480..=530 | 620..=680 if code.is_multiple_of(10) => {
                         d.io = Some((code / 10, w.col));
                         105
+                    }
+                    700..=730 if code.is_multiple_of(10) => {
+                        d.modal_state = Some((code / 10, w.col));
+                        107
                     }
                     610 => {
                         d.set_tool = Some(w.col);
@@ -304,6 +369,21 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         20 => (1, A::Motion(Motion::Arc { clockwise: true })),
         30 => (1, A::Motion(Motion::Arc { clockwise: false })),
         800 => (1, A::Motion(Motion::Cancel)),
+        730 => (1, A::Motion(Motion::Cycle(Cycle::G73))),
+        740 => (1, A::Motion(Motion::Cycle(Cycle::G74))),
+        810 => (1, A::Motion(Motion::Cycle(Cycle::G81))),
+        820 => (1, A::Motion(Motion::Cycle(Cycle::G82))),
+        830 => (1, A::Motion(Motion::Cycle(Cycle::G83))),
+        840 => (1, A::Motion(Motion::Cycle(Cycle::G84))),
+        850 => (1, A::Motion(Motion::Cycle(Cycle::G85))),
+        860 => (1, A::Motion(Motion::Cycle(Cycle::G86))),
+        870 => (1, A::Motion(Motion::Cycle(Cycle::G87))),
+        880 => (1, A::Motion(Motion::Cycle(Cycle::G88))),
+        890 => (1, A::Motion(Motion::Cycle(Cycle::G89))),
+        980 => (10, A::Retract(Retract::InitialLevel)),
+        990 => (10, A::Retract(Retract::RPlane)),
+        930 => (5, A::FeedMode(FeedMode::InverseTime)),
+        950 => (5, A::FeedMode(FeedMode::PerRevolution)),
         40 => (0, A::NonModal(NonModal::Dwell)),
         530 => (0, A::NonModal(NonModal::MachineCoords)),
         920 => (0, A::NonModal(NonModal::SetAxisOffsets)),
@@ -323,7 +403,7 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         910 => (3, A::Distance(Distance::Incremental)),
         901 => (4, A::ArcDistance(Distance::Absolute)),
         911 => (4, A::ArcDistance(Distance::Incremental)),
-        940 => (5, A::Nothing),
+        940 => (5, A::FeedMode(FeedMode::PerMinute)),
         200 => (6, A::Units(Units::Inch)),
         210 => (6, A::Units(Units::Mm)),
         400 => (7, A::Nothing),
@@ -347,11 +427,8 @@ fn g_unsupported(code: u32) -> Rejected {
         432 => "additional tool length offset",
         520 => "local coordinate offset",
         591..=593 => "extra coordinate system",
-        700 | 710..=712 | 720..=722 => "lathe cycle",
-        730 | 740 | 760 | 810..=890 => "canned cycle",
-        930 | 950 => "feed rate mode",
+        700 | 710..=712 | 720..=722 | 760 => "lathe cycle",
         960 | 970 => "spindle speed mode",
-        980 | 990 => "canned cycle return level",
         _ => return Rejected::Unknown,
     };
     Rejected::Unsupported(what)
@@ -364,7 +441,6 @@ fn m_unsupported(code: u32) -> Rejected {
     }
     let what = match code / 10 {
         19 => "spindle orientation",
-        70..=73 => "modal state save/restore",
         98 | 99 => "subroutine call/return",
         100..=199 => "user-defined M code",
         _ => return Rejected::Unknown,
@@ -415,7 +491,7 @@ mod tests {
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
         for text in [
-            "G43.2", "G41.1", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
+            "G43.2", "G41.1", "G76 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
         ] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");

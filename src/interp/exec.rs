@@ -5,10 +5,16 @@ use super::checks::{
     arc_error_msg, check_g10, check_io, check_values, motion_name, plane_axes, plane_names, AXES,
     IJK,
 };
-use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, ToolLength, Units};
+use super::cycles::{self, CycleInput, CycleState};
+use super::decode::{
+    decode, Decoded, Distance, FeedMode, Motion, NonModal, Stop, ToolLength, Units,
+};
 use super::expr::Params;
+use super::feed;
 use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
 use crate::gcode::{Block, GcodeError, Word};
+
+mod modal_state;
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
 #[derive(Debug, Clone)]
@@ -39,6 +45,12 @@ pub struct Interpreter {
     homes_mm: [[f64; 3]; 2],
     /// Active tool length offset (G43/G43.1), along Z, mm.
     tool_offset_mm: f64,
+    /// Canned cycle state (G98/G99, initial level, remembered words).
+    cycle: CycleState,
+    /// G93 / G94 / G95; `feed_mm_per_min` then holds F in 1/min, mm/min or mm/rev.
+    feed_mode: FeedMode,
+    /// States saved by M70/M73, per call level.
+    contexts: modal_state::Contexts,
 }
 
 /// What the motion step of a block will do.
@@ -70,6 +82,9 @@ impl Interpreter {
             axis_offset_saved_mm: [0.0; 3],
             homes_mm: [[0.0; 3]; 2],
             tool_offset_mm: 0.0,
+            cycle: CycleState::default(),
+            feed_mode: FeedMode::PerMinute,
+            contexts: modal_state::Contexts::default(),
         }
     }
 
@@ -123,6 +138,13 @@ impl Interpreter {
         let mut next = self.clone();
         let mut kinds = Vec::new();
         next.run_block(block, &mut kinds)?;
+        feed::apply(
+            next.feed_mode,
+            &mut kinds,
+            self.pos_mm,
+            next.feed_mm_per_min,
+            next.spindle.1,
+        );
         *self = next;
         out.extend(kinds.into_iter().map(|kind| CanonMove {
             line: block.line,
@@ -138,8 +160,16 @@ impl Interpreter {
         let step = self.check(block, &d)?;
         let mut emit = |kind| out.push(kind);
 
+        if let Some((mode, _)) = d.feed_mode {
+            self.feed_mode = mode;
+            self.feed_mm_per_min = 0.0;
+        }
         if let Some(f) = d.f {
-            self.feed_mm_per_min = f.value * self.scale();
+            let k = match self.feed_mode {
+                FeedMode::InverseTime => 1.0,
+                _ => self.scale(),
+            };
+            self.feed_mm_per_min = f.value * k;
         }
         if let Some(s) = d.s {
             self.spindle.1 = s.value;
@@ -169,6 +199,9 @@ impl Interpreter {
                 mist: self.coolant.0,
                 flood: self.coolant.1,
             });
+        }
+        if let Some((m, col)) = d.modal_state {
+            self.modal_state_code(m, block.line, col, &mut emit)?;
         }
         if d.set_tool.is_some() {
             self.selected_tool = d.q.map_or(0, |q| q.value as u32);
@@ -235,7 +268,12 @@ impl Interpreter {
             }
             _ => {}
         }
+        if let Some(r) = d.retract {
+            self.cycle.retract = r;
+        }
+        let previous_motion = self.motion;
         if let Some((m, _)) = d.motion {
+            self.cycle.motion_mode_set(matches!(m, Motion::Cycle(_)));
             self.motion = Some(m).filter(|m| *m != Motion::Cancel);
         }
         if let MotionStep::Move(m) = step {
@@ -248,6 +286,13 @@ impl Interpreter {
                     feed_mm_per_min: self.feed_mm_per_min,
                 }),
                 Motion::Arc { clockwise } => Some(self.arc(block, &d, end_mm, clockwise)?),
+                Motion::Cycle(cycle) => {
+                    let first = previous_motion != Some(m);
+                    for kind in self.canned_cycle(block, &d, cycle, first)? {
+                        emit(kind);
+                    }
+                    None
+                }
                 // `check` never schedules G80 as a move.
                 Motion::Cancel => None,
             };
@@ -267,6 +312,37 @@ impl Interpreter {
             None => {}
         }
         Ok(())
+    }
+
+    /// Expands a canned cycle block (see `cycles`); moves the tool to where it ends.
+    fn canned_cycle(
+        &mut self,
+        block: &Block,
+        d: &Decoded,
+        cycle: cycles::Cycle,
+        first: bool,
+    ) -> Result<Vec<CanonKind>, GcodeError> {
+        let input = CycleInput {
+            block,
+            d,
+            cycle,
+            col: d
+                .motion
+                .map(|m| m.1)
+                .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+                .unwrap_or(block.first_col),
+            first,
+            pos_mm: self.pos_mm,
+            plane: self.plane,
+            incremental: self.distance == Distance::Incremental,
+            scale: self.scale(),
+            offset_mm: [0, 1, 2].map(|a| self.offset_mm(a)),
+            feed_mm_per_min: self.feed_mm_per_min,
+            spindle: self.spindle,
+        };
+        let mut out = Vec::new();
+        self.pos_mm = cycles::run(&input, &mut self.cycle, &mut out)?;
+        Ok(out)
     }
 
     /// mm per program unit.
@@ -411,7 +487,8 @@ impl Interpreter {
         check_values(block, d)?;
         let step = self.motion_step(block, d)?;
         self.check_word_users(block, d, step)?;
-        if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. })) = step {
+        if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. } | Motion::Cycle(_))) = step
+        {
             let col = d
                 .motion
                 .map(|m| m.1)
@@ -420,7 +497,13 @@ impl Interpreter {
             if let Motion::Arc { clockwise } = m {
                 self.check_arc_words(block, d, col, clockwise)?;
             }
-            let feed = d.f.map_or(self.feed_mm_per_min, |f| f.value);
+            feed::check_move(block, d, col, m, self.feed_mode, self.spindle.1)?;
+            let kept = if d.feed_mode.is_some() {
+                0.0
+            } else {
+                self.feed_mm_per_min
+            };
+            let feed = d.f.map_or(kept, |f| f.value);
             if feed <= 0.0 {
                 let name = motion_name(m);
                 let msg = format!("{name} with zero feed rate (no F word > 0 given yet)");
@@ -491,7 +574,8 @@ impl Interpreter {
             };
         }
         Ok(match explicit {
-            Some(m @ Motion::Arc { .. }) => MotionStep::Move(m),
+            // G0/G1 alone: a move to where the tool is (LinuxCNC emits it too).
+            Some(m @ (Motion::Arc { .. } | Motion::Rapid | Motion::Linear)) => MotionStep::Move(m),
             _ => MotionStep::None,
         })
     }
@@ -506,6 +590,13 @@ impl Interpreter {
         let line = block.line;
         let inv = |w: &Word, msg: &str| GcodeError::invalid(line, w.col, msg);
         let arc_move = matches!(step, MotionStep::Move(Motion::Arc { .. }));
+        let cycle = match step {
+            MotionStep::Move(Motion::Cycle(c)) => Some(c),
+            _ => None,
+        };
+        if let Some(c) = cycle {
+            return cycles::check_words(line, c, d);
+        }
         let g10 = d.non_modal.filter(|n| n.0 == NonModal::SetCoordData);
         if let (Some(r), Some(_)) = (d.r, d.path_control.filter(|c| c.0 == 640)) {
             return Err(GcodeError::unsupported(

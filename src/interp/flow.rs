@@ -56,6 +56,7 @@ pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, Gcode
             Err(e) => tail_error = Some(e),
         }
     }
+    super::sub_files::load(&mut lines, cfg)?;
     let mut prog = Program {
         partner: vec![None; lines.len()],
         lines,
@@ -274,7 +275,7 @@ impl Runner {
             return Ok(pc + 1);
         }
         if let Some(o) = &l.oword {
-            return self.oword(prog, pc, l, o);
+            return self.oword(prog, pc, l, o, out);
         }
         let mut words = Vec::with_capacity(l.words.len());
         for w in &l.words {
@@ -453,6 +454,7 @@ impl Runner {
         pc: usize,
         l: &Line,
         o: &OWord,
+        out: &mut Vec<CanonMove>,
     ) -> Result<usize, GcodeError> {
         Ok(match o.kind {
             OKind::Sub => Self::partner(prog, pc)? + 1,
@@ -473,6 +475,13 @@ impl Runner {
                 if let Some(saved) = &frame.saved {
                     self.params.leave_call(saved);
                 }
+                // The state saved by M73 in the subroutine comes back.
+                let restored = self.interp.leave_call();
+                out.extend(
+                    restored
+                        .into_iter()
+                        .map(|kind| CanonMove { line: l.line, kind }),
+                );
                 self.params
                     .set_global("_value_returned", f64::from(u8::from(value.is_some())));
                 self.params.set_global("_value", value.unwrap_or(0.0));
@@ -488,7 +497,7 @@ impl Runner {
                         OName::Named(_) => GcodeError::unsupported(
                             l.line,
                             o.col,
-                            format!("{} call: subroutine not in this file (subroutine files are not supported)", o.name),
+                            format!("{} call: subroutine not in this file nor in a subroutine folder (InterpConfig::subroutine_dirs)", o.name),
                         ),
                         OName::Number(_) => GcodeError::invalid(
                             l.line,
@@ -510,6 +519,7 @@ impl Runner {
                     args.push(self.params.eval(a, l.line, o.col)?);
                 }
                 let saved = self.params.enter_call(&args);
+                self.interp.enter_call();
                 self.frames.push(Frame {
                     return_to: pc + 1,
                     saved: Some(saved),

@@ -263,3 +263,36 @@ fn io_and_override_m_codes_are_actions_without_motion() {
         assert_eq!(err(src).kind, GcodeErrorKind::Invalid, "{src}");
     }
 }
+
+#[test]
+fn a_call_runs_the_subroutine_file_of_that_name_from_the_subroutine_folders() {
+    let dir = std::env::temp_dir().join(format!("vmc-subs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("hop.ngc"),
+        "(before)\no<hop> sub\nG1 X#1 F100\no<step> call\no<hop> endsub\nG0 X99\nM2\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("step.ngc"), "o<step> sub\nG1 Y1\no<step> endsub\n").unwrap();
+    std::fs::write(dir.join("bare.ngc"), "G0 X1\n").unwrap();
+    let cfg = InterpConfig {
+        subroutine_dirs: vec![dir.join("missing"), dir.clone()],
+        ..InterpConfig::default()
+    };
+    let moves = run_program("G21\no<hop> call [5]\nG0 Z1\nM2", &cfg).unwrap();
+    let ends: Vec<[f64; 3]> = moves
+        .iter()
+        .filter_map(|m| match m.kind {
+            CanonKind::Feed { end_mm, .. } | CanonKind::Traverse { end_mm } => Some(end_mm),
+            _ => None,
+        })
+        .collect();
+    // Only the definition is taken from the file: its G0 X99 never runs.
+    assert_eq!(ends, [[5.0, 0.0, 0.0], [5.0, 1.0, 0.0], [5.0, 1.0, 1.0]]);
+    let e = run_program("G21\no<bare> call", &cfg).unwrap_err();
+    assert!(e.msg.contains("has no o<bare> sub"), "{e}");
+    assert_eq!((e.line, e.col), (2, 1));
+    let e = run_program("G21\no<nowhere> call", &cfg).unwrap_err();
+    assert!(e.is_unsupported(), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -2,9 +2,10 @@
 //! ([`CanonMove`]), the contract with the motion planner.
 //!
 //! Model: LinuxCNC's interpreter restricted to a 3-axis mill. The modal state (plane, units,
-//! distance modes, work offset, G92 offset, motion mode, feed, spindle, selected tool) starts as
-//! LinuxCNC starts a metric machine: G17 G21 G90 G91.1 (incremental I/J/K) G54 G80 (no motion
-//! mode), feed 0, spindle stopped at S0, tool 0, at [`InterpConfig::start_mm`].
+//! distance modes, work offset, G92 offset, motion mode, feed mode, feed, spindle, selected
+//! tool, canned cycle return level) starts as LinuxCNC starts a metric machine: G17 G21 G90
+//! G91.1 (incremental I/J/K) G54 G80 (no motion mode) G94 G99, feed 0, spindle stopped at S0,
+//! tool 0, at [`InterpConfig::start_mm`].
 //!
 //! Units: every output length is a machine coordinate in mm, every feed in mm/min:
 //! `p_machine_mm = k·p_program + g5x_offset_mm + g92_offset_mm` with k = 25.4 under G20,
@@ -12,9 +13,10 @@
 //! machine position). An F word is read in the units active when it is executed (RS274/NGC
 //! order: before this block's G20/G21) and stored in mm/min.
 //!
-//! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, M7/M8/M9, G4,
-//! G17–G19, G20/G21, G54–G59, G61/G61.1/G64, G90/G91, G90.1/G91.1, G10/G28/G30/G28.1/G30.1/
-//! G92/G92.1/G92.2/G92.3, motion (G0–G3, G53), M0/M1/M60/M2/M30.
+//! Execution order inside a block (RS274/NGC §3.8): G93/G94/G95, F, S, T, M6, M3/M4/M5,
+//! M7/M8/M9, M70–M73, G4, G17–G19, G20/G21, G43/G49, G54–G59, G61/G61.1/G64, G90/G91,
+//! G90.1/G91.1, G10/G28/G30/G28.1/G30.1/G92/G92.1/G92.2/G92.3, G98/G99, motion (G0–G3, G53,
+//! canned cycles), M0/M1/M60/M2/M30.
 //! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
 //! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
 //! |value| ≤ 1e9 so that all results stay finite.
@@ -28,6 +30,19 @@
 //! program must restart it with M3/M4.
 //!
 //! Also accepted:
+//! - Canned cycles G73, G74, G81, G82, G83, G84, G85, G86, G87, G88, G89 with G98/G99, L repeats,
+//!   G91 incremental form, in the G17, G18 and G19 planes, cancelled by G80 or another motion
+//!   code (see `cycles`: R plane, initial level, the [`PECK_CLEARANCE_MM`] of G73/G83, the
+//!   spindle reversal of G74/G84, the back boring of G87, the pause of G88). The motion mode
+//!   persists: a later block with axis words drills again with the remembered Z, R, P, Q (and
+//!   G87's I, J, K). The lathe cycles G70–G72, G76 are refused as unsupported.
+//! - Feed modes G93 (inverse time), G94, G95 (per revolution): every feed move still leaves
+//!   with an equivalent feed in mm/min (see `feed`).
+//! - M70/M71/M72/M73: save, forget, restore the modal state (M73: restored when the current
+//!   subroutine returns), one slot per call level.
+//! - G0/G1 without axis words: a move to where the tool is, as LinuxCNC emits one.
+//! - `o<name> call` of a subroutine defined in `<name>.ngc` in one of
+//!   [`InterpConfig::subroutine_dirs`] (see `sub_files`).
 //! - G28/G30: rapid to the intermediate point (the axis words, in the current modes), then to
 //!   the stored position (#5161… / #5181…, set by G28.1/G30.1, default 0) along the given
 //!   axes, all axes if none is given. G10 L2/L20 P0…P6 set work offsets (R0 only).
@@ -37,24 +52,30 @@
 //!   whatever the mode, so they change nothing.
 //! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
 //!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
-//! - G40 (cutter compensation off), G80 (cancel motion mode),
-//!   G94 (feed per minute), because they only confirm the state we are always in.
+//! - G40 (cutter compensation off), G80 (cancel motion mode), because they only confirm the
+//!   state we are always in.
 //!
 //! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
 
 mod arc;
 mod checks;
+mod cycles;
+#[cfg(test)]
+mod cycles_tests;
 mod decode;
 mod exec;
 mod expr;
+mod feed;
 mod flow;
 #[cfg(test)]
 mod flow_tests;
+mod sub_files;
 #[cfg(test)]
 mod tests;
 
 pub use crate::gcode::{GcodeError, GcodeErrorKind};
+pub use cycles::{MAX_REPEATS, PECK_CLEARANCE_MM};
 pub use exec::Interpreter;
 pub use expr::NUM_PARAMS;
 pub use flow::{MAX_CALL_DEPTH, MAX_ITERATIONS};
@@ -77,6 +98,10 @@ pub struct InterpConfig {
     /// Block delete switch: when on, lines starting with `/` are skipped (default: off, as
     /// LinuxCNC starts).
     pub block_delete: bool,
+    /// Folders searched, in order, for `<name>.ngc` when `o<name> call` names a subroutine the
+    /// program does not define (LinuxCNC's subroutine path). Default: none (such a call is
+    /// refused as unsupported).
+    pub subroutine_dirs: Vec<std::path::PathBuf>,
 }
 
 impl Default for InterpConfig {
@@ -86,6 +111,7 @@ impl Default for InterpConfig {
             work_offsets_mm: [[0.0; 3]; 6],
             tool_lengths_mm: Vec::new(),
             block_delete: false,
+            subroutine_dirs: Vec::new(),
         }
     }
 }

@@ -490,7 +490,20 @@ const ERROR_CASES: &[(&str, usize, usize, GcodeErrorKind, &str)] = &[
         GcodeErrorKind::Unsupported,
         "M19 (spindle orientation)",
     ),
-    ("G81 X1 Z-1 R1", 1, 1, GcodeErrorKind::Unsupported, "G81"),
+    (
+        "G76 X1 Z-1",
+        1,
+        1,
+        GcodeErrorKind::Unsupported,
+        "G76 (lathe cycle)",
+    ),
+    (
+        "G81 X1 Z-1 R1",
+        1,
+        1,
+        GcodeErrorKind::Invalid,
+        "G81 with zero feed rate",
+    ),
     ("G0 X1e3", 1, 6, GcodeErrorKind::Invalid, "E word"),
     (
         "G0 Y12345678901",
