@@ -133,7 +133,9 @@ fn main() {
                 "noaxes" => !c.name.ends_with("_axis_alone"),
                 "nosweep" => c.name != "cal_spindle_sweep",
                 "noshops" => !c.name.ends_with("_shop"),
-                "combined" => ThermalCycle::combined_duty_set().iter().any(|d| d.name == c.name),
+                "combined" => ThermalCycle::combined_duty_set()
+                    .iter()
+                    .any(|d| d.name == c.name),
                 other => panic!("unknown plan {other}"),
             })
             .collect();
