@@ -51,7 +51,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> {
     let data = calibration::calibrate(
         spec,
-        &ThermalCycle::calibration_plan(&spec),
+        &ThermalCycle::calibration_plan(spec),
         &CampaignConfig::new(1),
     )?;
     let settings = study::with_plan_validation(
@@ -122,7 +122,7 @@ pub fn workload_8h(
         spec,
         spec.axes.home_mm,
     )?;
-    let cycle = ThermalCycle::calibration_plan(&spec)[2].clone();
+    let cycle = ThermalCycle::calibration_plan(spec)[2].clone();
     let cfg = SimConfig::new(1.0, interp_ms * 1e-3)
         .map_err(SimError::from)?
         .sampling(SampleMode::EveryCycle);
@@ -215,6 +215,7 @@ mod tests {
 
     #[test]
     fn more_calibration_cycles_than_the_set_repeat_it_under_new_names() {
+        let spec = MachineSpec::reference();
         let m = ThermalCycle::calibration_plan(&spec).len();
         let c = calibration_cycles(&spec, 2 * m + 1);
         assert_eq!(c.len(), 2 * m + 1);

@@ -632,6 +632,7 @@ mod tests {
 
     #[test]
     fn validation_states_are_selection_only_and_the_lowest_score_is_chosen() {
+        let spec = MachineSpec::reference();
         let held_out: Vec<String> = calibration::evaluation_states(&spec, 1)
             .into_iter()
             .map(|s| s.cycle.name)

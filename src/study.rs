@@ -380,7 +380,7 @@ pub fn run_campaign_with_progress(
         spec,
         seeds,
         settings,
-        &ThermalCycle::calibration_plan(&spec),
+        &ThermalCycle::calibration_plan(spec),
         progress,
     )
 }

@@ -21,7 +21,7 @@ const SEEDS: [u64; 3] = [1, 2, 3];
 fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
     let data = calibration::calibrate(
         spec,
-        &ThermalCycle::calibration_plan(&spec),
+        &ThermalCycle::calibration_plan(spec),
         &CampaignConfig::new(seed),
     )
     .expect("campaign runs");
