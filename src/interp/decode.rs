@@ -65,6 +65,16 @@ pub(super) enum ToolLength {
     Off,
 }
 
+/// Group 7: cutter radius compensation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum CompMode {
+    /// G40.
+    Off,
+    /// G41 (`left`) / G42; `given`: G41.1 / G42.1, the D word is the tool diameter, else D
+    /// is a tool number.
+    On { left: bool, given: bool },
+}
+
 /// Group 6: length units.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Units {
@@ -93,7 +103,8 @@ enum GAction {
     ArcDistance(Distance),
     CoordSystem(usize),
     ToolLength(ToolLength),
-    /// G40, G49, G94: cancel a mode we never have on (state already as commanded).
+    CutterComp(CompMode),
+    /// G94: confirms the state we are always in.
     Nothing,
     /// G61 / G61.1 / G64: path control (the planner stops exactly at every move's end).
     PathControl,
@@ -110,6 +121,7 @@ pub(super) struct Decoded {
     pub arc_distance: Option<Distance>,
     pub coord_system: Option<usize>,
     pub tool_length: Option<(ToolLength, usize)>,
+    pub cutter_comp: Option<(CompMode, usize)>,
     /// M0, M1, M60, M2, M30 and the column.
     pub stop: Option<(Stop, usize)>,
     /// Path control code (G61, G61.1, G64) column.
@@ -129,6 +141,7 @@ pub(super) struct Decoded {
     pub s: Option<Word>,
     pub t: Option<Word>,
     pub h: Option<Word>,
+    pub d: Option<Word>,
     pub l: Option<Word>,
     pub e: Option<Word>,
     /// M48–M53 (override switches) or M62–M68 (I/O): the M number and column.
@@ -190,6 +203,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     GAction::ArcDistance(x) => d.arc_distance = Some(x),
                     GAction::CoordSystem(i) => d.coord_system = Some(i),
                     GAction::ToolLength(t) => d.tool_length = Some((t, w.col)),
+                    GAction::CutterComp(c) => d.cutter_comp = Some((c, w.col)),
                     GAction::Nothing => {}
                     GAction::PathControl => d.path_control = Some((code, w.col)),
                 }
@@ -248,6 +262,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'S' => d.s = Some(*w),
             'T' => d.t = Some(*w),
             'H' => d.h = Some(*w),
+            'D' => d.d = Some(*w),
             'L' => d.l = Some(*w),
             'E' => d.e = Some(*w),
             'Q' => d.q = Some(*w),
@@ -326,7 +341,14 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         940 => (5, A::Nothing),
         200 => (6, A::Units(Units::Inch)),
         210 => (6, A::Units(Units::Mm)),
-        400 => (7, A::Nothing),
+        400 => (7, A::CutterComp(CompMode::Off)),
+        410 | 411 | 420 | 421 => (
+            7,
+            A::CutterComp(CompMode::On {
+                left: code < 420,
+                given: code % 10 == 1,
+            }),
+        ),
         430 => (8, A::ToolLength(ToolLength::Table)),
         431 => (8, A::ToolLength(ToolLength::Given)),
         490 => (8, A::ToolLength(ToolLength::Off)),
@@ -343,7 +365,6 @@ fn g_unsupported(code: u32) -> Rejected {
         171 | 181 | 191 => "UVW plane",
         330 | 331 => "spindle-synchronised motion",
         382..=385 => "probing",
-        410 | 411 | 420 | 421 => "cutter radius compensation",
         432 => "additional tool length offset",
         520 => "local coordinate offset",
         591..=593 => "extra coordinate system",
@@ -415,7 +436,7 @@ mod tests {
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
         for text in [
-            "G43.2", "G41.1", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
+            "G43.2", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
         ] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");

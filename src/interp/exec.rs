@@ -5,7 +5,11 @@ use super::checks::{
     arc_error_msg, check_g10, check_io, check_values, motion_name, plane_axes, plane_names, AXES,
     IJK,
 };
-use super::decode::{decode, Decoded, Distance, Motion, NonModal, Stop, ToolLength, Units};
+use super::comp_block::{check_block, selected_radius};
+use super::cutter_comp::CutterComp;
+use super::decode::{
+    decode, CompMode, Decoded, Distance, Motion, NonModal, Stop, ToolLength, Units,
+};
 use super::expr::Params;
 use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir, MAX_ARC_TURNS};
 use crate::gcode::{Block, GcodeError, Word};
@@ -39,6 +43,8 @@ pub struct Interpreter {
     homes_mm: [[f64; 3]; 2],
     /// Active tool length offset (G43/G43.1), along Z, mm.
     tool_offset_mm: f64,
+    /// Cutter radius compensation; `pos_mm` stays the programmed (uncompensated) position.
+    comp: CutterComp,
 }
 
 /// What the motion step of a block will do.
@@ -70,6 +76,7 @@ impl Interpreter {
             axis_offset_saved_mm: [0.0; 3],
             homes_mm: [[0.0; 3]; 2],
             tool_offset_mm: 0.0,
+            comp: CutterComp::default(),
         }
     }
 
@@ -123,12 +130,14 @@ impl Interpreter {
         let mut next = self.clone();
         let mut kinds = Vec::new();
         next.run_block(block, &mut kinds)?;
+        next.comp.finish_block(block.line, kinds, next.ended, out);
         *self = next;
-        out.extend(kinds.into_iter().map(|kind| CanonMove {
-            line: block.line,
-            kind,
-        }));
         Ok(())
+    }
+
+    /// Releases the output held back by cutter radius compensation (end of the program).
+    pub fn flush(&mut self, out: &mut Vec<CanonMove>) {
+        self.comp.finish_block(0, Vec::new(), true, out);
     }
 
     /// Executes a block on `self`; may leave `self` half-updated on error (the caller works on
@@ -136,6 +145,11 @@ impl Interpreter {
     fn run_block(&mut self, block: &Block, out: &mut Vec<CanonKind>) -> Result<(), GcodeError> {
         let d = decode(block)?;
         let step = self.check(block, &d)?;
+        let comp_on_after = match d.cutter_comp {
+            Some((mode, _)) => mode != CompMode::Off,
+            None => self.comp.is_on(),
+        };
+        check_block(block, &d, self.comp.is_on(), comp_on_after, self.plane)?;
         let mut emit = |kind| out.push(kind);
 
         if let Some(f) = d.f {
@@ -189,6 +203,9 @@ impl Interpreter {
         }
         self.plane = d.plane.unwrap_or(self.plane);
         self.units = d.units.unwrap_or(self.units);
+        if let Some((mode, col)) = d.cutter_comp {
+            self.set_cutter_comp(block, &d, mode, col)?;
+        }
         match d.tool_length {
             Some((ToolLength::Table, _)) => {
                 let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
@@ -252,10 +269,19 @@ impl Interpreter {
                 Motion::Cancel => None,
             };
             if let Some(kind) = kind {
+                let start_mm = self.pos_mm;
                 self.pos_mm = end_mm;
-                emit(kind);
+                if self.comp.takes_motion() {
+                    let col = motion_col(block, &d);
+                    self.comp
+                        .motion(start_mm, &kind, out)
+                        .map_err(|msg| GcodeError::invalid(block.line, col, msg))?;
+                } else {
+                    out.push(kind);
+                }
             }
         }
+        let mut emit = |kind| out.push(kind);
         match d.stop {
             Some((Stop::End, _)) => {
                 emit(CanonKind::ProgramEnd);
@@ -265,6 +291,40 @@ impl Interpreter {
             Some((Stop::OptionalPause, _)) => emit(CanonKind::Pause(PauseKind::Optional)),
             Some((Stop::PalletShuttle, _)) => emit(CanonKind::Pause(PauseKind::PalletShuttle)),
             None => {}
+        }
+        Ok(())
+    }
+
+    /// G40 / G41 / G42 / G41.1 / G42.1 (checked against the state in `check_block`).
+    fn set_cutter_comp(
+        &mut self,
+        block: &Block,
+        d: &Decoded,
+        mode: CompMode,
+        col: usize,
+    ) -> Result<(), GcodeError> {
+        let cfg = &self.cfg;
+        let diameter_of = |tool: u32| {
+            if cfg.tool_diameters_mm.is_empty() {
+                return Some(0.0);
+            }
+            cfg.tool_diameters_mm.iter().find(|t| t.0 == tool).map(|t| t.1)
+        };
+        let radius = selected_radius(
+            block,
+            d,
+            col,
+            mode,
+            self.selected_tool,
+            self.scale(),
+            diameter_of,
+        )?;
+        match radius {
+            Some((side, radius_mm)) => {
+                let (a1, a2, axis) = plane_axes(self.plane);
+                self.comp.turn_on(side, radius_mm, [a1, a2, axis]);
+            }
+            None => self.comp.turn_off(),
         }
         Ok(())
     }
@@ -682,4 +742,12 @@ impl Interpreter {
         }
         Ok(())
     }
+}
+
+/// Column of a block's motion: its motion code, else its first axis word.
+fn motion_col(block: &Block, d: &Decoded) -> usize {
+    d.motion
+        .map(|m| m.1)
+        .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+        .unwrap_or(block.first_col)
 }

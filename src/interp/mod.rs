@@ -45,6 +45,8 @@
 
 mod arc;
 mod checks;
+mod comp_block;
+mod cutter_comp;
 mod decode;
 mod exec;
 mod expr;
@@ -74,6 +76,9 @@ pub struct InterpConfig {
     /// Tool lengths (tool number, length in mm) for G43 H. Empty (the default): every tool has
     /// length 0, the machine's positions being those of its own tool's tip.
     pub tool_lengths_mm: Vec<(u32, f64)>,
+    /// Tool diameters (tool number, diameter in mm) for cutter radius compensation G41/G42 D.
+    /// Empty (the default): every tool has diameter 0.
+    pub tool_diameters_mm: Vec<(u32, f64)>,
     /// Block delete switch: when on, lines starting with `/` are skipped (default: off, as
     /// LinuxCNC starts).
     pub block_delete: bool,
@@ -85,6 +90,7 @@ impl Default for InterpConfig {
             start_mm: [0.0; 3],
             work_offsets_mm: [[0.0; 3]; 6],
             tool_lengths_mm: Vec::new(),
+            tool_diameters_mm: Vec::new(),
             block_delete: false,
         }
     }
