@@ -72,6 +72,32 @@ struct Prev {
     rapid: bool,
 }
 
+/// Why a move cannot be compensated: the message, and whether the move is merely outside
+/// what is supported (rather than invalid).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct CompError {
+    pub msg: String,
+    pub unsupported: bool,
+}
+
+impl From<&str> for CompError {
+    fn from(msg: &str) -> Self {
+        Self {
+            msg: msg.to_string(),
+            unsupported: false,
+        }
+    }
+}
+
+impl From<String> for CompError {
+    fn from(msg: String) -> Self {
+        Self {
+            msg,
+            unsupported: false,
+        }
+    }
+}
+
 /// Compensation while on.
 #[derive(Debug, Clone, PartialEq)]
 struct Active {
@@ -140,7 +166,7 @@ impl CutterComp {
         start_mm: [f64; 3],
         kind: &CanonKind,
         out: &mut Vec<CanonKind>,
-    ) -> Result<(), String> {
+    ) -> Result<(), CompError> {
         let Some(mut a) = self.active.take() else {
             if matches!(kind, CanonKind::Arc { .. }) {
                 return Err("The move just after exiting cutter compensation mode must be straight, \
@@ -163,7 +189,7 @@ impl CutterComp {
         start_mm: [f64; 3],
         kind: &CanonKind,
         out: &mut Vec<CanonKind>,
-    ) -> Result<(), String> {
+    ) -> Result<(), CompError> {
         let [a1, a2, ax] = a.axes;
         let plane = |p: [f64; 3]| [p[a1], p[a2]];
         let tool = self.tool_mm.unwrap_or(start_mm);
@@ -180,7 +206,7 @@ impl CutterComp {
             CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } => {
                 let rapid = matches!(kind, CanonKind::Traverse { .. });
                 let p1 = plane(end_mm);
-                if p1 == p0 {
+                if p1 == p0 && !a.first_move {
                     // Along the plane's axis only: stays at the compensated plane position.
                     let end = put(cur, end_mm[ax]);
                     self.block_tail.push(out.len());
@@ -241,24 +267,16 @@ impl CutterComp {
                         .into());
                 }
                 let u0 = unit(sub(p0, c));
+                let _ = cur;
                 let u1 = unit(sub(p1, c));
                 let e = add(c, scale(u1, off_r));
                 let (start, center) = if a.first_move {
-                    // Centre on the end radius, as far from the start as from the end.
-                    let denom = 2.0 * dot(u1, sub(e, cur));
-                    let lambda = if denom.abs() > 1e-12 {
-                        -dot(sub(e, cur), sub(e, cur)) / denom
-                    } else {
-                        0.0
-                    };
-                    if lambda.abs() <= r {
-                        return Err(
-                            "Radius of cutter compensation entry arc is not greater than the \
-                             tool radius"
-                                .into(),
-                        );
-                    }
-                    (cur, add(e, scale(u1, lambda)))
+                    return Err(CompError {
+                        msg: "an arc as the cutter compensation entry move is not supported \
+                              (LinuxCNC moves its centre; use a straight entry move)"
+                            .into(),
+                        unsupported: true,
+                    });
                 } else {
                     let t0 = scale(perp(u0), rot);
                     let s0 = add(c, scale(u0, off_r));
@@ -268,7 +286,7 @@ impl CutterComp {
                         ccw,
                     };
                     let start =
-                        self.corner(a, p0, t0, path, s0, tool[ax], feed_mm_per_min, out)?;
+                        self.corner(a, p0, t0, path, s0, tool[ax], Some(feed_mm_per_min), out)?;
                     (start, c)
                 };
                 let end = put(e, end_mm[ax]);
@@ -314,9 +332,9 @@ impl CutterComp {
         path: Path,
         s0: P2,
         axis_mm: f64,
-        feed_mm_per_min: f64,
+        feed_mm_per_min: Option<f64>,
         out: &mut Vec<CanonKind>,
-    ) -> Result<P2, String> {
+    ) -> Result<P2, CompError> {
         let [a1, a2, ax] = a.axes;
         let tool = self.tool_mm.unwrap_or_default();
         let cur = [tool[a1], tool[a2]];
@@ -326,27 +344,41 @@ impl CutterComp {
         };
         let t1 = prev.tangent;
         let turn = a.side * cross(t1, t2).atan2(dot(t1, t2));
-        if turn < -CORNER_TOL_RAD {
-            // Outside corner: around the programmed corner at the tool radius.
+        let outside = if turn.abs() > std::f64::consts::PI - 1e-9 {
+            // The path reverses: an inside corner only where one offset path starts inside
+            // the other's circle.
+            match (prev.path, path) {
+                (Path::Circle { center, radius, .. }, _) => norm(sub(s0, center)) >= radius,
+                (_, Path::Circle { center, radius, .. }) => norm(sub(cur, center)) >= radius,
+                _ => true,
+            }
+        } else if turn.abs() <= CORNER_TOL_RAD {
+            return Ok(cur);
+        } else {
+            turn < 0.0
+        };
+        if outside {
+            // Outside corner: around the programmed corner at the tool radius (a rapid move
+            // goes straight).
             let mut end_mm = [0.0; 3];
             let mut center_mm = [0.0; 3];
             (end_mm[a1], end_mm[a2], end_mm[ax]) = (s0[0], s0[1], axis_mm);
             (center_mm[a1], center_mm[a2], center_mm[ax]) = (p0[0], p0[1], axis_mm);
-            out.push(CanonKind::Arc {
-                end_mm,
-                center_mm,
-                plane: plane_of(a.axes),
-                clockwise: a.side > 0.0,
-                extra_turns: 0,
-                feed_mm_per_min,
+            out.push(match feed_mm_per_min {
+                None => CanonKind::Traverse { end_mm },
+                Some(feed_mm_per_min) => CanonKind::Arc {
+                    end_mm,
+                    center_mm,
+                    plane: plane_of(a.axes),
+                    clockwise: a.side > 0.0,
+                    extra_turns: 0,
+                    feed_mm_per_min,
+                },
             });
             return Ok(s0);
         }
-        if turn <= CORNER_TOL_RAD {
-            return Ok(cur);
-        }
         // Inside corner: both offset paths meet.
-        let x = intersect(prev.path, path, p0).ok_or_else(|| {
+        let x = intersect(prev.path, path, p0, cur).ok_or_else(|| {
             match (prev.path, path) {
                 (Path::Circle { .. }, Path::Line { .. }) => {
                     "Arc to straight motion makes a corner the compensated tool can't fit in \
@@ -356,10 +388,7 @@ impl CutterComp {
                     "Arc to arc motion makes a corner the compensated tool can't fit in \
                      without gouging"
                 }
-                _ => {
-                    "Straight to arc motion makes a corner the compensated tool can't fit in \
-                     without gouging"
-                }
+                _ => "Arc move in concave corner cannot be reached by the tool without gouging",
             }
             .to_string()
         })?;
@@ -370,7 +399,8 @@ impl CutterComp {
                     return Err(format!(
                         "Straight {what} in concave corner cannot be reached by the tool \
                          without gouging"
-                    ));
+                    )
+                    .into());
                 }
             }
             Path::Circle { center, ccw, .. } => {
@@ -428,15 +458,16 @@ fn plane_of(axes: [usize; 3]) -> super::Plane {
     }
 }
 
-fn feed_of(kind: &CanonKind) -> f64 {
+/// The feed of a move, `None` for a rapid.
+fn feed_of(kind: &CanonKind) -> Option<f64> {
     match *kind {
         CanonKind::Feed {
             feed_mm_per_min, ..
         }
         | CanonKind::Arc {
             feed_mm_per_min, ..
-        } => feed_mm_per_min,
-        _ => 0.0,
+        } => Some(feed_mm_per_min),
+        _ => None,
     }
 }
 
@@ -471,25 +502,21 @@ fn sweep(center: P2, from: P2, to: P2, ccw: bool) -> f64 {
     ang
 }
 
-/// The intersection of two offset paths nearest to the programmed corner `near`.
-fn intersect(a: Path, b: Path, near: P2) -> Option<P2> {
-    let pick = |cands: Vec<P2>| {
-        cands
-            .into_iter()
-            .min_by(|p, q| norm(sub(*p, near)).total_cmp(&norm(sub(*q, near))))
-    };
-    match (a, b) {
+/// The intersection of two offset paths at an inside corner: after a line, the one nearest to
+/// the programmed corner `near`; after an arc, the last one before its compensated end `end`.
+fn intersect(a: Path, b: Path, near: P2, end: P2) -> Option<P2> {
+    let cands = match (a, b) {
         (Path::Line { point: p, dir: d }, Path::Line { point: q, dir: e }) => {
             let den = cross(d, e);
             if den.abs() < 1e-12 {
                 return None;
             }
             let t = cross(sub(q, p), e) / den;
-            Some(add(p, scale(d, t)))
+            return Some(add(p, scale(d, t)));
         }
         (Path::Line { point, dir }, Path::Circle { center, radius, .. })
         | (Path::Circle { center, radius, .. }, Path::Line { point, dir }) => {
-            pick(line_circle(point, dir, center, radius))
+            line_circle(point, dir, center, radius)
         }
         (
             Path::Circle {
@@ -502,8 +529,13 @@ fn intersect(a: Path, b: Path, near: P2) -> Option<P2> {
                 radius: r2,
                 ..
             },
-        ) => pick(circle_circle(c1, r1, c2, r2)),
-    }
+        ) => circle_circle(c1, r1, c2, r2),
+    };
+    let key = |p: &P2| match a {
+        Path::Circle { center, ccw, .. } => sweep(center, *p, end, ccw),
+        Path::Line { .. } => norm(sub(*p, near)),
+    };
+    cands.into_iter().min_by(|p, q| key(p).total_cmp(&key(q)))
 }
 
 fn line_circle(p: P2, d: P2, c: P2, r: f64) -> Vec<P2> {

@@ -275,7 +275,13 @@ impl Interpreter {
                     let col = motion_col(block, &d);
                     self.comp
                         .motion(start_mm, &kind, out)
-                        .map_err(|msg| GcodeError::invalid(block.line, col, msg))?;
+                        .map_err(|e| {
+                            if e.unsupported {
+                                GcodeError::unsupported(block.line, col, e.msg)
+                            } else {
+                                GcodeError::invalid(block.line, col, e.msg)
+                            }
+                        })?;
                 } else {
                     out.push(kind);
                 }
