@@ -21,10 +21,15 @@
 //! - G40: the held moves are final; the next move (the exit) goes straight from the
 //!   compensated position to the programmed point; an arc there is refused.
 
+use std::f64::consts::TAU;
+
 use super::{CanonKind, CanonMove};
 
 /// Turn angle (rad) below which a corner is treated as tangent (LinuxCNC's value).
 pub(super) const CORNER_TOL_RAD: f64 = 0.05;
+
+/// Angles closer than this (rad) are equal (rounding of intersections).
+const ANGLE_EPS: f64 = 1e-6;
 
 type P2 = [f64; 2];
 
@@ -267,9 +272,11 @@ impl CutterComp {
                         .into());
                 }
                 let u0 = unit(sub(p0, c));
+                // The end radius may differ a little from the start's (accepted spirals).
+                let off_r_end = norm(sub(p1, c)) - s * r * rot;
                 let _ = cur;
                 let u1 = unit(sub(p1, c));
-                let e = add(c, scale(u1, off_r));
+                let e = add(c, scale(u1, off_r_end));
                 let (start, center) = if a.first_move {
                     return Err(CompError {
                         msg: "an arc as the cutter compensation entry move is not supported \
@@ -282,7 +289,7 @@ impl CutterComp {
                     let s0 = add(c, scale(u0, off_r));
                     let path = Path::Circle {
                         center: c,
-                        radius: off_r,
+                        radius: off_r_end,
                         ccw,
                     };
                     let start =
@@ -303,7 +310,7 @@ impl CutterComp {
                     tangent: scale(perp(u1), rot),
                     path: Path::Circle {
                         center: c,
-                        radius: off_r,
+                        radius: off_r_end,
                         ccw,
                     },
                     start,
@@ -339,7 +346,8 @@ impl CutterComp {
         let tool = self.tool_mm.unwrap_or_default();
         let cur = [tool[a1], tool[a2]];
         let tail = std::mem::take(&mut self.tail);
-        let Some(prev) = a.prev else {
+        let Some(prev) = a.prev.filter(|_| a.radius_mm > 0.0) else {
+            // Nothing to join (radius 0: the programmed path itself).
             return Ok(cur);
         };
         let t1 = prev.tangent;
@@ -404,9 +412,12 @@ impl CutterComp {
                 }
             }
             Path::Circle { center, ccw, .. } => {
-                let old = sweep(center, prev.start, cur, ccw);
-                let new = sweep(center, prev.start, x, ccw);
-                if new > old + 1e-9 && old > 1e-9 {
+                // Going back from the end, the arc covers `len`; a point in the first half of
+                // the rest lies before its start (the arc would turn the other way), one in
+                // the second half a little past its end (radius rounding).
+                let len = sweep(center, prev.start, cur, ccw);
+                let back = sweep(center, x, cur, ccw);
+                if len > ANGLE_EPS && back > len && back < len + (TAU - len) / 2.0 {
                     return Err("Arc move in concave corner cannot be reached by the tool \
                                 without gouging"
                         .into());
@@ -497,7 +508,7 @@ fn sweep(center: P2, from: P2, to: P2, ccw: bool) -> f64 {
         ang = -ang;
     }
     if ang < 0.0 {
-        ang += std::f64::consts::TAU;
+        ang += TAU;
     }
     ang
 }
@@ -532,7 +543,11 @@ fn intersect(a: Path, b: Path, near: P2, end: P2) -> Option<P2> {
         ) => circle_circle(c1, r1, c2, r2),
     };
     let key = |p: &P2| match a {
-        Path::Circle { center, ccw, .. } => sweep(center, *p, end, ccw),
+        Path::Circle { center, ccw, .. } => {
+            // Angle back from the end; a point past the end counts double.
+            let back = sweep(center, *p, end, ccw);
+            back.min(2.0 * (TAU - back))
+        }
         Path::Line { .. } => norm(sub(*p, near)),
     };
     cands.into_iter().min_by(|p, q| key(p).total_cmp(&key(q)))
