@@ -352,7 +352,7 @@ impl CutterComp {
         };
         let t1 = prev.tangent;
         let turn = a.side * cross(t1, t2).atan2(dot(t1, t2));
-        let outside = if turn.abs() > std::f64::consts::PI - 1e-9 {
+        let outside = if turn.abs() > std::f64::consts::PI - CORNER_TOL_RAD {
             // The path reverses: an inside corner only where one offset path starts inside
             // the other's circle.
             match (prev.path, path) {
@@ -386,7 +386,7 @@ impl CutterComp {
             return Ok(s0);
         }
         // Inside corner: both offset paths meet.
-        let x = intersect(prev.path, path, p0, cur).ok_or_else(|| {
+        let x = intersect(prev.path, path, cur).ok_or_else(|| {
             match (prev.path, path) {
                 (Path::Circle { .. }, Path::Line { .. }) => {
                     "Arc to straight motion makes a corner the compensated tool can't fit in \
@@ -513,9 +513,9 @@ fn sweep(center: P2, from: P2, to: P2, ccw: bool) -> f64 {
     ang
 }
 
-/// The intersection of two offset paths at an inside corner: after a line, the one nearest to
-/// the programmed corner `near`; after an arc, the last one before its compensated end `end`.
-fn intersect(a: Path, b: Path, near: P2, end: P2) -> Option<P2> {
+/// The intersection of two offset paths at an inside corner: the last one before the first
+/// path's compensated end `end` (one a little past it if it is nearer).
+fn intersect(a: Path, b: Path, end: P2) -> Option<P2> {
     let cands = match (a, b) {
         (Path::Line { point: p, dir: d }, Path::Line { point: q, dir: e }) => {
             let den = cross(d, e);
@@ -548,7 +548,11 @@ fn intersect(a: Path, b: Path, near: P2, end: P2) -> Option<P2> {
             let back = sweep(center, *p, end, ccw);
             back.min(2.0 * (TAU - back))
         }
-        Path::Line { .. } => norm(sub(*p, near)),
+        Path::Line { dir, .. } => {
+            // Distance back from the end along the line; past the end counts double.
+            let back = dot(sub(end, *p), dir);
+            back.max(-2.0 * back)
+        }
     };
     cands.into_iter().min_by(|p, q| key(p).total_cmp(&key(q)))
 }
