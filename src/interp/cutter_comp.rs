@@ -353,12 +353,11 @@ impl CutterComp {
         let t1 = prev.tangent;
         let turn = a.side * cross(t1, t2).atan2(dot(t1, t2));
         let outside = if turn.abs() > std::f64::consts::PI - CORNER_TOL_RAD {
-            // The path reverses: an inside corner only where one offset path starts inside
-            // the other's circle.
+            // The path (almost) reverses: an inside corner only where an arc's offset path
+            // meets the other one.
             match (prev.path, path) {
-                (Path::Circle { center, radius, .. }, _) => norm(sub(s0, center)) >= radius,
-                (_, Path::Circle { center, radius, .. }) => norm(sub(cur, center)) >= radius,
-                _ => true,
+                (Path::Line { .. }, Path::Line { .. }) => true,
+                _ => intersect(prev.path, path, cur).is_none(),
             }
         } else if turn.abs() <= CORNER_TOL_RAD {
             return Ok(cur);
