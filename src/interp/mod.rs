@@ -47,6 +47,8 @@ mod arc;
 mod checks;
 mod comp_block;
 mod cutter_comp;
+#[cfg(test)]
+mod cutter_comp_tests;
 mod decode;
 mod exec;
 mod expr;
@@ -105,9 +107,9 @@ impl Default for InterpConfig {
 /// assert_eq!(moves[0].line, 2);
 /// assert_eq!(moves[0].kind, CanonKind::Feed { end_mm: [10.0, 0.0, 0.0], feed_mm_per_min: 600.0 });
 /// assert_eq!(moves[1].kind, CanonKind::ProgramEnd);
-/// let err = run_program("G1 X1 F100\nG41 X5", &InterpConfig::default()).unwrap_err();
+/// let err = run_program("G1 X1 F100\nG33 X5", &InterpConfig::default()).unwrap_err();
 /// assert!(err.is_unsupported());
-/// assert_eq!(err.to_string(), "line 2, column 1: G41 (cutter radius compensation) is not supported");
+/// assert_eq!(err.to_string(), "line 2, column 1: G33 (spindle-synchronised motion) is not supported");
 /// # Ok::<(), vmc_twin::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
