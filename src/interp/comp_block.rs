@@ -75,14 +75,20 @@ pub(super) fn check_block(
                 return err(col, "Cannot turn cutter radius comp on when on");
             }
             if d.plane.unwrap_or(plane) == Plane::Yz {
-                return err(col, "Cutter radius compensation allowed only in XY, XZ planes");
+                return err(
+                    col,
+                    "Cutter radius compensation allowed only in XY, XZ planes",
+                );
             }
         }
         _ => {}
     }
     if on_before {
         if let Some(col) = d.tool_change {
-            return err(col, "Cannot change tools with cutter radius compensation on");
+            return err(
+                col,
+                "Cannot change tools with cutter radius compensation on",
+            );
         }
         if let Some((m, col)) = d.io {
             let msg = if m <= 53 {
@@ -94,7 +100,10 @@ pub(super) fn check_block(
         }
         if d.plane.is_some_and(|p| p != plane) {
             let col = plane_col(block).unwrap_or(block.first_col);
-            return err(col, "Cannot change planes with cutter radius compensation on");
+            return err(
+                col,
+                "Cannot change planes with cutter radius compensation on",
+            );
         }
     }
     if !on_after {
@@ -114,8 +123,12 @@ pub(super) fn check_block(
         );
     }
     let msg = match d.non_modal {
-        Some((NonModal::Home(_), col)) => Some((col, "Cannot use g28 or g30 with cutter radius comp")),
-        Some((NonModal::MachineCoords, col)) => Some((col, "Cannot use g53 with cutter radius comp")),
+        Some((NonModal::Home(_), col)) => {
+            Some((col, "Cannot use g28 or g30 with cutter radius comp"))
+        }
+        Some((NonModal::MachineCoords, col)) => {
+            Some((col, "Cannot use g53 with cutter radius comp"))
+        }
         Some((
             NonModal::SetAxisOffsets
             | NonModal::ResetAxisOffsets

@@ -3,19 +3,22 @@
 //! Works in the active plane's coordinates (XY for G17, ZX for G18; G19 is refused), on the
 //! tool centre's path, in machine mm:
 //! - the side is +1 (left, G41) or −1 (right, G42); a negative G41.1/G42.1 diameter swaps it;
-//! - the entry move (the first move with motion in the plane after G41/G42) ends at the
-//!   programmed end offset by the radius perpendicular to the entry move; it must be longer
-//!   than the radius. An entry arc ends at the offset end point on a circle whose centre lies
-//!   on the end radius and which passes through the start;
+//! - the entry move (the first move after G41/G42) ends at the programmed end offset by the
+//!   radius perpendicular to the entry move; it must be longer than the radius in the plane
+//!   (so a move along the plane's axis alone cannot be the entry). An arc as the entry move is
+//!   not supported (LinuxCNC moves its end off the offset circle);
 //! - later moves are offset by the radius perpendicular to the programmed path (lines move
-//!   sideways, arcs keep their centre and change radius by ± the tool radius; an arc that
-//!   would shrink to nothing is refused);
+//!   sideways, arcs keep their centre and change radius by ± the tool radius, the end taken
+//!   on the end radius; an arc that would shrink to nothing is refused);
 //! - corners, from the programmed tangents: a turn away from the tool's side by more than
 //!   [`CORNER_TOL_RAD`] (outside corner) inserts an arc of the tool radius around the
 //!   programmed corner; a turn towards it by more than that (inside corner) moves the end of
 //!   the previous compensated move to the intersection of the two offset paths (one move of
 //!   look-ahead: the previous move, and the axis-only moves after it, are held until the next
-//!   move in the plane is known); smaller turns join the moves as they are;
+//!   move in the plane is known; after an arc, the intersection is the last one before its
+//!   end); smaller turns join the moves as they are. A turn within [`CORNER_TOL_RAD`] of a
+//!   full reversal is an inside corner only if an arc's offset path meets the other one.
+//!   Rapid moves take a straight line around an outside corner. Radius 0 joins nothing;
 //! - an inside corner that would make the previous move run backwards is refused (gouging);
 //! - moves along the plane's axis only keep the compensated plane position;
 //! - G40: the held moves are final; the next move (the exit) goes straight from the
@@ -174,9 +177,11 @@ impl CutterComp {
     ) -> Result<(), CompError> {
         let Some(mut a) = self.active.take() else {
             if matches!(kind, CanonKind::Arc { .. }) {
-                return Err("The move just after exiting cutter compensation mode must be straight, \
+                return Err(
+                    "The move just after exiting cutter compensation mode must be straight, \
                             not an arc"
-                    .into());
+                        .into(),
+                );
             }
             self.exit_pending = false;
             self.tool_mm = None;
@@ -232,10 +237,7 @@ impl CutterComp {
                 } else {
                     let dir = unit(sub(p1, p0));
                     let s0 = add(p0, scale(perp(dir), s * r));
-                    let path = Path::Line {
-                        point: s0,
-                        dir,
-                    };
+                    let path = Path::Line { point: s0, dir };
                     let feed = feed_of(kind);
                     let start = self.corner(a, p0, dir, path, s0, tool[ax], feed, out)?;
                     (dir, start)
@@ -268,13 +270,11 @@ impl CutterComp {
                 let big_r = norm(sub(p0, c));
                 let off_r = big_r - s * r * rot;
                 if off_r <= 0.0 {
-                    return Err("Tool radius not less than arc radius with comp"
-                        .into());
+                    return Err("Tool radius not less than arc radius with comp".into());
                 }
                 let u0 = unit(sub(p0, c));
                 // The end radius may differ a little from the start's (accepted spirals).
                 let off_r_end = norm(sub(p1, c)) - s * r * rot;
-                let _ = cur;
                 let u1 = unit(sub(p1, c));
                 let e = add(c, scale(u1, off_r_end));
                 let (start, center) = if a.first_move {
@@ -444,7 +444,8 @@ impl CutterComp {
         self.held
             .extend(kinds.into_iter().map(|kind| CanonMove { line, kind }));
         if self.active.is_some() {
-            self.tail.extend(self.block_tail.drain(..).map(|i| base + i));
+            self.tail
+                .extend(self.block_tail.drain(..).map(|i| base + i));
         } else {
             self.block_tail.clear();
             self.tail.clear();

@@ -88,8 +88,12 @@ fn assert_path(src: &str, reference: &str) {
     let expected = parse_ref(reference);
     assert_eq!(ours.len(), expected.len(), "{src}\nours {ours:?}");
     for (i, (o, r)) in ours.iter().zip(&expected).enumerate() {
-        let close = o.1.len() == r.1.len() && o.1.iter().zip(&r.1).all(|(a, b)| (a - b).abs() <= TOL);
-        assert!(o.0 == r.0 && close, "{src}\nmove {i}: ours {o:?}, rs274 {r:?}");
+        let close =
+            o.1.len() == r.1.len() && o.1.iter().zip(&r.1).all(|(a, b)| (a - b).abs() <= TOL);
+        assert!(
+            o.0 == r.0 && close,
+            "{src}\nmove {i}: ours {o:?}, rs274 {r:?}"
+        );
     }
 }
 
@@ -240,8 +244,18 @@ fn held_moves_are_released_at_the_end_of_the_text_and_keep_their_lines() {
 fn errors_follow_linuxcnc() {
     // (program, line, column, rs274's message)
     let cases = [
-        ("G0 X0 Y0\nG41 D1\nG1 X5", 4, 1, "Length of cutter compensation entry move"),
-        ("G0 X0 Y0\nG41 D1\nG1 Z-1\nG1 X20", 4, 1, "entry move is not greater"),
+        (
+            "G0 X0 Y0\nG41 D1\nG1 X5",
+            4,
+            1,
+            "Length of cutter compensation entry move",
+        ),
+        (
+            "G0 X0 Y0\nG41 D1\nG1 Z-1\nG1 X20",
+            4,
+            1,
+            "entry move is not greater",
+        ),
         (
             "G0 X0 Y0\nG41 D1\nG1 X20 Y0\nG1 X30 Y0\nG1 X30 Y1\nG1 X20 Y1",
             7,
@@ -254,7 +268,12 @@ fn errors_follow_linuxcnc() {
             1,
             "Tool radius not less than arc radius with comp",
         ),
-        ("G0 X0 Y0\nG41 D1\nG1 X20\nG42 D1", 5, 1, "Cannot turn cutter radius comp on when on"),
+        (
+            "G0 X0 Y0\nG41 D1\nG1 X20\nG42 D1",
+            5,
+            1,
+            "Cannot turn cutter radius comp on when on",
+        ),
         ("G0 X0 Y0\nG41 D3", 3, 5, "tool 3 is not in the tool table"),
         ("G19 G41 D1", 2, 5, "allowed only in XY, XZ planes"),
         ("G41 D1\nG18", 3, 1, "Cannot change planes"),
@@ -264,7 +283,12 @@ fn errors_follow_linuxcnc() {
         ("G41 D1\nT2 M6", 3, 4, "Cannot change tools"),
         ("G41 D1\nG43 H1", 3, 1, "Cannot change tool offset"),
         ("G41 D1\nG55", 3, 1, "Cannot change coordinate systems"),
-        ("G0 X0 Y0\nG41 D1\nG1 X20\nG40\nG2 X30 R5", 6, 1, "must be straight, not an arc"),
+        (
+            "G0 X0 Y0\nG41 D1\nG1 X20\nG40\nG2 X30 R5",
+            6,
+            1,
+            "must be straight, not an arc",
+        ),
         (
             "G0 X0 Y0\nG41 D1\nG1 X20 Y0\nG3 X10 Y10 R10",
             5,

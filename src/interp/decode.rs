@@ -435,9 +435,7 @@ mod tests {
 
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
-        for text in [
-            "G43.2", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
-        ] {
+        for text in ["G43.2", "G81 Z1", "G59.1", "G33", "M98", "M19", "G38.2"] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
             assert!(

@@ -273,15 +273,13 @@ impl Interpreter {
                 self.pos_mm = end_mm;
                 if self.comp.takes_motion() {
                     let col = motion_col(block, &d);
-                    self.comp
-                        .motion(start_mm, &kind, out)
-                        .map_err(|e| {
-                            if e.unsupported {
-                                GcodeError::unsupported(block.line, col, e.msg)
-                            } else {
-                                GcodeError::invalid(block.line, col, e.msg)
-                            }
-                        })?;
+                    self.comp.motion(start_mm, &kind, out).map_err(|e| {
+                        if e.unsupported {
+                            GcodeError::unsupported(block.line, col, e.msg)
+                        } else {
+                            GcodeError::invalid(block.line, col, e.msg)
+                        }
+                    })?;
                 } else {
                     out.push(kind);
                 }
@@ -314,7 +312,10 @@ impl Interpreter {
             if cfg.tool_diameters_mm.is_empty() {
                 return Some(0.0);
             }
-            cfg.tool_diameters_mm.iter().find(|t| t.0 == tool).map(|t| t.1)
+            cfg.tool_diameters_mm
+                .iter()
+                .find(|t| t.0 == tool)
+                .map(|t| t.1)
         };
         let radius = selected_radius(
             block,

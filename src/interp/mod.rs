@@ -13,8 +13,8 @@
 //! order: before this block's G20/G21) and stored in mm/min.
 //!
 //! Execution order inside a block (RS274/NGC §3.8): F, S, T, M6, M3/M4/M5, M7/M8/M9, G4,
-//! G17–G19, G20/G21, G54–G59, G61/G61.1/G64, G90/G91, G90.1/G91.1, G10/G28/G30/G28.1/G30.1/
-//! G92/G92.1/G92.2/G92.3, motion (G0–G3, G53), M0/M1/M60/M2/M30.
+//! G17–G19, G20/G21, G40/G41/G42, G43/G49, G54–G59, G61/G61.1/G64, G90/G91, G90.1/G91.1,
+//! G10/G28/G30/G28.1/G30.1/G92/G92.1/G92.2/G92.3, motion (G0–G3, G53), M0/M1/M60/M2/M30.
 //! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
 //! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
 //! |value| ≤ 1e9 so that all results stay finite.
@@ -37,8 +37,19 @@
 //!   whatever the mode, so they change nothing.
 //! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
 //!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
-//! - G40 (cutter compensation off), G80 (cancel motion mode),
-//!   G94 (feed per minute), because they only confirm the state we are always in.
+//! - G41 / G42 D (cutter radius compensation left / right of the path, D a tool number whose
+//!   diameter comes from [`InterpConfig::tool_diameters_mm`]; D0 or no D: the current tool),
+//!   G41.1 / G42.1 D (D the diameter, in program units; negative: the other side), G40 (off),
+//!   in the G17 or G18 plane, with LinuxCNC's paths and refusals (see `cutter_comp`): entry
+//!   move offset perpendicular at its end, outside corners rounded at the tool radius, inside
+//!   corners trimmed (one move of look-ahead: the compensated output is held until the next
+//!   move in the plane is known, in order with the actions between), exit move after G40
+//!   straight from the compensated point. While it is on, the interpreter's position stays the
+//!   programmed point (G91 moves and incremental arc centres start from it); M6, plane, tool length and work offset
+//!   changes, G28/G30, G53, G92 and I/O M codes are refused, as LinuxCNC refuses them. An arc
+//!   as the entry move is unsupported.
+//! - G80 (cancel motion mode), G94 (feed per minute), because they only confirm the state we
+//!   are always in.
 //!
 //! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
