@@ -159,11 +159,15 @@ impl CutterComp {
     }
 
     /// G40: the held moves become final; the next move is the exit move.
-    pub fn turn_off(&mut self) {
-        if self.active.take().is_some() {
+    pub fn turn_off(&mut self) -> Result<(), CompError> {
+        if let Some(a) = self.active.take() {
+            if let (Some(prev), Some(tool)) = (a.prev, self.tool_mm) {
+                check_line_direction(&prev, [tool[a.axes[0]], tool[a.axes[1]]])?;
+            }
             self.exit_pending = true;
         }
         self.tail.clear();
+        Ok(())
     }
 
     /// Compensates one programmed move (`start_mm` → the move's end, machine mm) and pushes
@@ -400,16 +404,7 @@ impl CutterComp {
             .to_string()
         })?;
         match prev.path {
-            Path::Line { .. } => {
-                if dot(sub(x, prev.start), t1) < -1e-9 {
-                    let what = if prev.rapid { "traverse" } else { "feed" };
-                    return Err(format!(
-                        "Straight {what} in concave corner cannot be reached by the tool \
-                         without gouging"
-                    )
-                    .into());
-                }
-            }
+            Path::Line { .. } => check_line_direction(&prev, x)?,
             Path::Circle { center, ccw, .. } => {
                 // Going back from the end, the arc covers `len`; a point in the first half of
                 // the rest lies before its start (the arc would turn the other way), one in
@@ -459,6 +454,19 @@ impl CutterComp {
             *i -= keep_from;
         }
     }
+}
+
+/// A straight move, once its end `end` is final, must still run the programmed way (an inside
+/// corner before it may have moved its start past its end).
+fn check_line_direction(prev: &Prev, end: P2) -> Result<(), CompError> {
+    if matches!(prev.path, Path::Line { .. }) && dot(sub(end, prev.start), prev.tangent) < -1e-9 {
+        let what = if prev.rapid { "traverse" } else { "feed" };
+        return Err(format!(
+            "Straight {what} in concave corner cannot be reached by the tool without gouging"
+        )
+        .into());
+    }
+    Ok(())
 }
 
 fn plane_of(axes: [usize; 3]) -> super::Plane {

@@ -331,7 +331,10 @@ impl Interpreter {
                 let (a1, a2, axis) = plane_axes(self.plane);
                 self.comp.turn_on(side, radius_mm, [a1, a2, axis]);
             }
-            None => self.comp.turn_off(),
+            None => self
+                .comp
+                .turn_off()
+                .map_err(|e| GcodeError::invalid(block.line, col, e.msg))?,
         }
         Ok(())
     }
