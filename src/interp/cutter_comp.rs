@@ -291,9 +291,12 @@ impl CutterComp {
                 } else {
                     let t0 = scale(perp(u0), rot);
                     let s0 = add(c, scale(u0, off_r));
+                    // LinuxCNC meets a line with the start radius, an arc with the end radius
+                    // (they differ within the accepted spiral tolerance).
+                    let after_arc = matches!(a.prev, Some(Prev { path: Path::Circle { .. }, .. }));
                     let path = Path::Circle {
                         center: c,
-                        radius: off_r_end,
+                        radius: if after_arc { off_r_end } else { off_r },
                         ccw,
                     };
                     let start =
