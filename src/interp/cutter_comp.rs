@@ -78,6 +78,8 @@ struct Prev {
     /// Start of the compensated move.
     start: P2,
     rapid: bool,
+    /// The entry move (LinuxCNC does not check its direction).
+    entry: bool,
 }
 
 /// Why a move cannot be compensated: the message, and whether the move is merely outside
@@ -255,6 +257,7 @@ impl CutterComp {
                     path: Path::Line { point: e, dir },
                     start,
                     rapid,
+                    entry: a.first_move,
                 });
                 a.first_move = false;
                 self.tool_mm = Some(end);
@@ -293,7 +296,13 @@ impl CutterComp {
                     let s0 = add(c, scale(u0, off_r));
                     // LinuxCNC meets a line with the start radius, an arc with the end radius
                     // (they differ within the accepted spiral tolerance).
-                    let after_arc = matches!(a.prev, Some(Prev { path: Path::Circle { .. }, .. }));
+                    let after_arc = matches!(
+                        a.prev,
+                        Some(Prev {
+                            path: Path::Circle { .. },
+                            ..
+                        })
+                    );
                     let path = Path::Circle {
                         center: c,
                         radius: if after_arc { off_r_end } else { off_r },
@@ -322,6 +331,7 @@ impl CutterComp {
                     },
                     start,
                     rapid: false,
+                    entry: false,
                 });
                 a.first_move = false;
                 self.tool_mm = Some(end);
@@ -462,7 +472,8 @@ impl CutterComp {
 /// A straight move, once its end `end` is final, must still run the programmed way (an inside
 /// corner before it may have moved its start past its end).
 fn check_line_direction(prev: &Prev, end: P2) -> Result<(), CompError> {
-    if matches!(prev.path, Path::Line { .. }) && dot(sub(end, prev.start), prev.tangent) < -1e-9 {
+    let line = matches!(prev.path, Path::Line { .. }) && !prev.entry;
+    if line && dot(sub(end, prev.start), prev.tangent) < -1e-9 {
         let what = if prev.rapid { "traverse" } else { "feed" };
         return Err(format!(
             "Straight {what} in concave corner cannot be reached by the tool without gouging"
