@@ -263,6 +263,12 @@ fn errors_follow_linuxcnc() {
             "Straight feed in concave corner cannot be reached by the tool without gouging",
         ),
         (
+            "G0 X0 Y0\nG41 D1\nG1 X20 Y0\nG1 X30 Y0\nG1 X30 Y1\nG40\nG1 X0 Y0",
+            7,
+            1,
+            "Straight feed in concave corner cannot be reached by the tool without gouging",
+        ),
+        (
             "G0 X0 Y-5\nG41 D1\nG1 X20 Y-5\nG3 X25 Y0 R5",
             5,
             1,
