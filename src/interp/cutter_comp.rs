@@ -172,6 +172,12 @@ impl CutterComp {
         Ok(())
     }
 
+    /// A tool change re-reads the machine position: the compensated point left by the last
+    /// compensated move (if any) becomes the programmed one. Returns it.
+    pub fn take_tool_position(&mut self) -> Option<[f64; 3]> {
+        self.tool_mm.take()
+    }
+
     /// Compensates one programmed move (`start_mm` → the move's end, machine mm) and pushes
     /// what the block emits for it onto `out` (the block's output so far). On error the
     /// message to report at the block's motion word.

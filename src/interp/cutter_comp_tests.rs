@@ -234,6 +234,18 @@ fn arc_to_arc_near_reversal_is_an_inside_corner_where_the_offset_circles_meet() 
 }
 
 #[test]
+fn a_tool_change_after_g40_makes_the_compensated_point_the_programmed_one() {
+    assert_path(
+        "G0 X0 Y0\nG41 D1\nG1 X20 Y0\nG1 X20 Y20\nG40\nT2 M6\nG0 Z10\nG1 X0 Y0",
+        "STRAIGHT_TRAVERSE(0.0000, 0.0000, 0.0000)
+         STRAIGHT_FEED(14.0000, 6.0000, 0.0000)
+         STRAIGHT_FEED(14.0000, 20.0000, 0.0000)
+         STRAIGHT_TRAVERSE(14.0000, 20.0000, 10.0000)
+         STRAIGHT_FEED(0.0000, 0.0000, 10.0000)",
+    );
+}
+
+#[test]
 fn held_moves_are_released_at_the_end_of_the_text_and_keep_their_lines() {
     let moves = run_program("G0 X0 Y0\nG41.1 D2 F100\nG1 X20\nG1 Y-20", &cfg()).unwrap();
     let lines: Vec<usize> = moves.iter().map(|m| m.line).collect();

@@ -163,6 +163,9 @@ impl Interpreter {
             self.selected_tool = t.value as u32;
         }
         if d.tool_change.is_some() {
+            if let Some(p) = self.comp.take_tool_position() {
+                self.pos_mm = p;
+            }
             self.spindle.0 = SpindleDir::Off;
             self.report_spindle(&mut emit);
             emit(CanonKind::ToolChange {
