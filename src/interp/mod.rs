@@ -45,10 +45,11 @@
 //!   corners trimmed (one move of look-ahead: the compensated output is held until the next
 //!   move in the plane is known, in order with the actions between), exit move after G40
 //!   straight from the compensated point (a tool change before it makes that point the
-//!   programmed one, as LinuxCNC re-reads the position after M6). While it is on, the interpreter's position stays the
-//!   programmed point (G91 moves and incremental arc centres start from it); M6, plane, tool length and work offset
-//!   changes, G28/G30, G53, G92 and I/O M codes are refused, as LinuxCNC refuses them. An arc
-//!   as the entry move is unsupported.
+//!   programmed one, as LinuxCNC re-reads the position after M6). While it is on, the
+//!   interpreter's position stays the programmed point (G91 moves and incremental arc centres
+//!   start from it); M6, plane, tool length and work offset changes, G28/G30, G53, G92 and
+//!   I/O M codes are refused, as LinuxCNC refuses them. An arc as the entry move is
+//!   unsupported.
 //! - G80 (cancel motion mode), G94 (feed per minute), because they only confirm the state we
 //!   are always in.
 //!
