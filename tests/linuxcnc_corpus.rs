@@ -10,12 +10,9 @@
 //! - `interp/bad/*.ngc`: every program must be rejected (either kind).
 //! - `interp/good/*.ngc`: must not be rejected as invalid.
 //! - `nc_files/**.ngc`: every program is interpreted without a panic (errors are fine).
-//! - `crazy-paths` and `inside-corners` (whose subroutine calls we reject) are also checked in a
-//!   derived form: the first call of each subroutine inlined — it has cutter-compensation radius
-//!   0, so LinuxCNC emits the programmed path — and G64 / M0 / `G41.1 D…` lines dropped (planner
-//!   setting, pause, zero-radius compensation: none changes the canonical path). Each inlined
-//!   call's moves must appear, in order, as a contiguous run of the reference output. This is
-//!   where our arcs (G17 and G18, G2 and G3, mm and inch) meet LinuxCNC's numbers.
+//! - A case folder's `*.tbl` tool table is loaded (diameters for cutter radius compensation,
+//!   lengths for G43). `crazy-paths`, `inside-corners` and `cam-nisley` check compensated paths
+//!   (lines and arcs, inside and outside corners, both sides, mm and inch) against LinuxCNC.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -228,9 +225,9 @@ fn case_dirs(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// Reference cases whose output our interpreter reproduces exactly (a floor: it may only rise).
-const MATCHED_FLOOR: usize = 32;
+const MATCHED_FLOOR: usize = 36;
 /// Example programs (`nc_files`) accepted (a floor).
-const NC_ACCEPTED_FLOOR: usize = 131;
+const NC_ACCEPTED_FLOOR: usize = 148;
 
 /// True if LinuxCNC's output ends with an error message (a line that is not a canonical call).
 /// (An output without `PROGRAM_END()` also counts: LinuxCNC stopped before the end.)
@@ -243,10 +240,36 @@ fn reference_stopped_with_an_error(expected: &str) -> bool {
 
 /// Runs a corpus program; subroutine files are looked up in its folder and its `subs` folder.
 fn run(path: &Path) -> Result<Vec<CanonMove>, GcodeError> {
-    run_program(
-        &read_lossy(path),
-        &with_sub_dirs(InterpConfig::default(), path),
-    )
+    run_program(&read_lossy(path), &with_sub_dirs(case_config(path), path))
+}
+
+/// The interpreter settings of a case: the tool table of its folder (`*.tbl`, LinuxCNC's
+/// `T… P… Z… D…` lines, read in inches as the stand-alone `rs274` reads it without an INI file)
+/// if there is one.
+fn case_config(program: &Path) -> InterpConfig {
+    let mut cfg = InterpConfig::default();
+    let mut tables = Vec::new();
+    if let Some(dir) = program.parent() {
+        files_with_ext(dir, "tbl", false, &mut tables);
+    }
+    for table in tables {
+        for line in read_lossy(&table).lines() {
+            let data = line.split(';').next().unwrap_or("");
+            let word = |letter: char| {
+                data.split_whitespace()
+                    .find(|w| w.to_ascii_uppercase().starts_with(letter))
+                    .and_then(|w| w[1..].parse::<f64>().ok())
+            };
+            if let Some(t) = word('T') {
+                let tool = t as u32;
+                cfg.tool_lengths_mm
+                    .push((tool, word('Z').unwrap_or(0.0) * 25.4));
+                cfg.tool_diameters_mm
+                    .push((tool, word('D').unwrap_or(0.0) * 25.4));
+            }
+        }
+    }
+    cfg
 }
 
 fn with_sub_dirs(cfg: InterpConfig, program: &Path) -> InterpConfig {
@@ -379,7 +402,13 @@ fn linuxcnc_good_programs_are_never_rejected_as_invalid() {
 const REFUSED_BY_LINUXCNC_TOO: &[(&str, &str)] = &[
     // `O<g20sub> callsub`: `callsub` is not an O-word keyword.
     ("nestedcall.ngc", "unknown O-word keyword \"callsub\""),
+    // `g41` then `g0z1` from the same point: an entry move of length 0.
+    ("g76.ngc", ENTRY_TOO_SHORT),
+    ("lathe-g76.ngc", ENTRY_TOO_SHORT),
 ];
+
+const ENTRY_TOO_SHORT: &str =
+    "Length of cutter compensation entry move is not greater than the tool radius";
 
 #[test]
 fn linuxcnc_example_programs_never_panic_and_are_rejected_as_invalid_only_where_linuxcnc_is() {
@@ -424,128 +453,9 @@ fn linuxcnc_example_programs_never_panic_and_are_rejected_as_invalid_only_where_
         "only {ok} example programs accepted, floor {NC_ACCEPTED_FLOOR}"
     );
 }
-
-/// Derives a program without O-words from a LinuxCNC program of the simple form
-/// `oN sub … oN endsub` + main lines + `oN call`: the first call of each subroutine is inlined
-/// with its `oM if … oM endif` blocks dropped (they only switch compensation on for non-zero
-/// radius), later calls end the derived program. Returns the text and, per inlined call, the
-/// range of derived lines (1-based, inclusive start, exclusive end) it spans.
-fn inline_first_calls(src: &str) -> (String, Vec<(usize, usize)>) {
-    let lower = |l: &str| l.trim().to_ascii_lowercase();
-    let mut subs: Vec<(String, Vec<String>)> = Vec::new();
-    let mut main: Vec<String> = Vec::new();
-    let mut current: Option<(String, Vec<String>)> = None;
-    let mut skipping_if = false;
-    for line in src.lines() {
-        let l = lower(line);
-        let first = l.split_whitespace().next().unwrap_or("").to_string();
-        let second = l.split_whitespace().nth(1).unwrap_or("");
-        let dropped = matches!(l.as_str(), "g64" | "m00" | "m0")
-            || l.starts_with("g41.1 d")
-            || l.starts_with('#');
-        if first.starts_with('o') && second == "sub" {
-            current = Some((first, Vec::new()));
-        } else if first.starts_with('o') && second == "endsub" {
-            subs.extend(current.take());
-        } else if first.starts_with('o') && second == "if" {
-            skipping_if = true;
-        } else if first.starts_with('o') && second == "endif" {
-            skipping_if = false;
-        } else if let Some((_, body)) = current.as_mut() {
-            if !skipping_if && !dropped {
-                body.push(line.to_string());
-            }
-        } else if !dropped {
-            main.push(line.to_string());
-        }
-    }
-    let (mut text, mut spans, mut called) =
-        (Vec::<String>::new(), Vec::new(), Vec::<String>::new());
-    let mut span_start = 1;
-    for line in main {
-        let l = lower(&line);
-        let mut words = l.split_whitespace();
-        let (first, second) = (words.next().unwrap_or(""), words.next().unwrap_or(""));
-        if first.starts_with('o') && second == "call" {
-            if called.iter().any(|c| c == first) {
-                continue;
-            }
-            called.push(first.to_string());
-            let body = subs
-                .iter()
-                .find(|(name, _)| name == first)
-                .map(|s| s.1.clone())
-                .unwrap_or_default();
-            text.extend(body);
-            spans.push((span_start, text.len() + 1));
-            span_start = text.len() + 1;
-        } else if first.starts_with('o') {
-            panic!("unexpected O word line {line:?}");
-        } else {
-            text.push(line);
-        }
-    }
-    (text.join("\n"), spans)
-}
-
-/// Length of the longest prefix of `chunk` matching `reference` from `at`.
-fn matching_prefix(chunk: &[RefMove], reference: &[Tolerant], at: usize) -> usize {
-    chunk
-        .iter()
-        .zip(&reference[at.min(reference.len())..])
-        .take_while(|(o, r)| same(o, r))
-        .count()
-}
-
-#[test]
-fn first_subroutine_calls_of_crazy_paths_and_inside_corners_match_linuxcnc() {
-    let interp = corpus_dir().join("interp");
-    let mut checked_moves = 0;
-    for case in ["crazy-paths", "inside-corners"] {
-        let (derived, spans) = inline_first_calls(&read_lossy(&interp.join(case).join("test.ngc")));
-        let moves = run_program(&derived, &InterpConfig::default())
-            .unwrap_or_else(|e| panic!("{case}: derived program rejected: {e}"));
-        let reference = parse_expected(&read_lossy(&interp.join(case).join("expected")));
-        assert!(
-            spans.len() >= 2,
-            "{case}: only {} subroutine calls inlined",
-            spans.len()
-        );
-        let mut cursor = 0;
-        for (k, &(from, to)) in spans.iter().enumerate() {
-            let chunk_moves: Vec<CanonMove> = moves
-                .iter()
-                .filter(|m| (from..to).contains(&m.line))
-                .cloned()
-                .collect();
-            let chunk = ours(&chunk_moves);
-            assert!(!chunk.is_empty(), "{case}: call {k} produced no moves");
-            let found = (cursor..reference.len())
-                .find(|&at| matching_prefix(&chunk, &reference, at) == chunk.len());
-            let Some(at) = found else {
-                let best = (cursor..reference.len())
-                    .max_by_key(|&at| matching_prefix(&chunk, &reference, at))
-                    .unwrap_or(cursor);
-                let n = matching_prefix(&chunk, &reference, best);
-                panic!(
-                    "{case}: call {k} ({} moves) not found in the reference; best run of {n} at {best}; \
-                     next ours {:?}, reference {:?}",
-                    chunk.len(),
-                    chunk.get(n),
-                    reference.get(best + n).map(|r| &r.0)
-                );
-            };
-            cursor = at + chunk.len();
-            checked_moves += chunk.len();
-        }
-    }
-    println!("moves checked against LinuxCNC in inlined subroutine calls: {checked_moves}");
-    assert!(checked_moves > 150);
-}
-
 /// Example programs (`nc_files`) whose stored `rs274` output (`rs274-expected`, made by
 /// `scripts/linuxcnc-fixtures.sh`) our moves reproduce exactly (a floor).
-const NC_MATCHED_FLOOR: usize = 95;
+const NC_MATCHED_FLOOR: usize = 104;
 
 /// Example programs whose moves differ from `rs274`'s by design, with the reason.
 const NC_DIVERGENT: &[(&str, &str)] = &[(
@@ -560,6 +470,13 @@ const NC_DIVERGENT: &[(&str, &str)] = &[(
 fn fixture_config() -> InterpConfig {
     InterpConfig {
         tool_lengths_mm: vec![(1, 150.0), (2, 100.0), (3, 80.0), (4, 120.0)],
+        // As rs274 reads the table: the inch values times 25.4.
+        tool_diameters_mm: vec![
+            (1, 0.472441 * 25.4),
+            (2, 0.236220 * 25.4),
+            (3, 0.118110 * 25.4),
+            (4, 0.787402 * 25.4),
+        ],
         ..InterpConfig::default()
     }
 }

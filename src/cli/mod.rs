@@ -600,8 +600,8 @@ pub struct InterpretArgs {
     /// default: start at the origin with zero work offsets, as `rs274` does.
     #[arg(long)]
     pub machine: Option<PathBuf>,
-    /// Tool table (TOML, `[[tool]]` with `number`, `length_mm`, `diameter_mm`) for G43 H;
-    /// default: every tool has length 0.
+    /// Tool table (TOML, `[[tool]]` with `number`, `length_mm`, `diameter_mm`) for G43 H and
+    /// G41/G42 D; default: every tool has length 0 and diameter 0.
     #[arg(long)]
     pub tools: Option<PathBuf>,
 }
@@ -619,7 +619,8 @@ impl InterpretArgs {
             ..Default::default()
         };
         if let Some(path) = &self.tools {
-            interp.tool_lengths_mm = commands::interpret::load_tool_lengths(path)?;
+            (interp.tool_lengths_mm, interp.tool_diameters_mm) =
+                commands::interpret::load_tools(path)?;
         }
         if let Some(path) = &self.machine {
             let machine = commands::load_machine(Some(path), None)?;

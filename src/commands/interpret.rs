@@ -39,16 +39,21 @@ struct ToolTable {
     tool: Vec<ToolEntry>,
 }
 
-/// Reads a tool table (TOML, see `docs/usage.md`) as (tool number, length in mm) pairs.
+/// Tool lengths and diameters, mm, by tool number.
+pub type ToolData = (Vec<(u32, f64)>, Vec<(u32, f64)>);
+
+/// Reads a tool table (TOML, see `docs/usage.md`) as (tool number, length in mm) and
+/// (tool number, diameter in mm) pairs.
 ///
 /// # Errors
 /// An unreadable file, bad TOML, a tool given twice, a length or diameter that is not finite
 /// (or a negative diameter).
-pub fn load_tool_lengths(path: &std::path::Path) -> Result<Vec<(u32, f64)>> {
+pub fn load_tools(path: &std::path::Path) -> Result<ToolData> {
     let file = path.display().to_string();
     let text = crate::files::read_text(path).with_context(|| file.clone())?;
     let table: ToolTable = toml::from_str(&text).with_context(|| file.clone())?;
     let mut out: Vec<(u32, f64)> = Vec::new();
+    let mut diameters = Vec::new();
     for t in &table.tool {
         if out.iter().any(|o| o.0 == t.number) {
             anyhow::bail!("{file}: tool {} appears twice", t.number);
@@ -66,8 +71,9 @@ pub fn load_tool_lengths(path: &std::path::Path) -> Result<Vec<(u32, f64)>> {
             );
         }
         out.push((t.number, t.length_mm));
+        diameters.push((t.number, t.diameter_mm));
     }
-    Ok(out)
+    Ok((out, diameters))
 }
 
 /// Interprets the program and prints its canonical calls.

@@ -6,7 +6,7 @@ use super::expr::{Assign, ExprWord, Line, OKind, OName, OWord};
 use super::GcodeError;
 
 /// Letters whose words the interpreter understands.
-const SUPPORTED_LETTERS: &str = "EFGHIJKLMNPQRSTXYZ";
+const SUPPORTED_LETTERS: &str = "DEFGHIJKLMNPQRSTXYZ";
 
 /// Parses one line (1-based `line`). `Ok(None)` for a line that does nothing (blank, plain
 /// comments only, or a lone N word).
@@ -315,7 +315,6 @@ fn unsupported_letter_msg(letter: char) -> String {
         'A' | 'B' | 'C' | 'U' | 'V' | 'W' => {
             format!("{letter} axis word is not supported (3-axis XYZ machine)")
         }
-        'D' => format!("{letter} word is not supported"),
         _ => format!("unknown word letter '{letter}'"),
     }
 }

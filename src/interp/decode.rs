@@ -116,6 +116,16 @@ pub(super) enum ToolLength {
     Off,
 }
 
+/// Group 7: cutter radius compensation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum CompMode {
+    /// G40.
+    Off,
+    /// G41 (`left`) / G42; `given`: G41.1 / G42.1, the D word is the tool diameter, else D
+    /// is a tool number.
+    On { left: bool, given: bool },
+}
+
 /// Group 6: length units.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Units {
@@ -146,8 +156,7 @@ enum GAction {
     ToolLength(ToolLength),
     Retract(Retract),
     FeedMode(FeedMode),
-    /// G40, G49: cancel a mode we never have on (state already as commanded).
-    Nothing,
+    CutterComp(CompMode),
     /// G61 / G61.1 / G64: path control (the planner stops exactly at every move's end).
     PathControl,
 }
@@ -169,6 +178,8 @@ pub(super) struct Decoded {
     pub feed_mode: Option<(FeedMode, usize)>,
     /// M70–M73 (modal state save/restore): the M number and column.
     pub modal_state: Option<(u32, usize)>,
+    /// G40 / G41 / G42 / G41.1 / G42.1 and the column.
+    pub cutter_comp: Option<(CompMode, usize)>,
     /// M0, M1, M60, M2, M30 and the column.
     pub stop: Option<(Stop, usize)>,
     /// Path control code (G61, G61.1, G64) column.
@@ -188,6 +199,7 @@ pub(super) struct Decoded {
     pub s: Option<Word>,
     pub t: Option<Word>,
     pub h: Option<Word>,
+    pub d: Option<Word>,
     pub l: Option<Word>,
     pub e: Option<Word>,
     /// M48–M53 (override switches) or M62–M68 (I/O): the M number and column.
@@ -251,7 +263,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     GAction::ToolLength(t) => d.tool_length = Some((t, w.col)),
                     GAction::Retract(r) => d.retract = Some(r),
                     GAction::FeedMode(m) => d.feed_mode = Some((m, w.col)),
-                    GAction::Nothing => {}
+                    GAction::CutterComp(c) => d.cutter_comp = Some((c, w.col)),
                     GAction::PathControl => d.path_control = Some((code, w.col)),
                 }
             }
@@ -313,6 +325,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'S' => d.s = Some(*w),
             'T' => d.t = Some(*w),
             'H' => d.h = Some(*w),
+            'D' => d.d = Some(*w),
             'L' => d.l = Some(*w),
             'E' => d.e = Some(*w),
             'Q' => d.q = Some(*w),
@@ -406,7 +419,14 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         940 => (5, A::FeedMode(FeedMode::PerMinute)),
         200 => (6, A::Units(Units::Inch)),
         210 => (6, A::Units(Units::Mm)),
-        400 => (7, A::Nothing),
+        400 => (7, A::CutterComp(CompMode::Off)),
+        410 | 411 | 420 | 421 => (
+            7,
+            A::CutterComp(CompMode::On {
+                left: code < 420,
+                given: code % 10 == 1,
+            }),
+        ),
         430 => (8, A::ToolLength(ToolLength::Table)),
         431 => (8, A::ToolLength(ToolLength::Given)),
         490 => (8, A::ToolLength(ToolLength::Off)),
@@ -423,7 +443,6 @@ fn g_unsupported(code: u32) -> Rejected {
         171 | 181 | 191 => "UVW plane",
         330 | 331 => "spindle-synchronised motion",
         382..=385 => "probing",
-        410 | 411 | 420 | 421 => "cutter radius compensation",
         432 => "additional tool length offset",
         520 => "local coordinate offset",
         591..=593 => "extra coordinate system",
@@ -490,9 +509,7 @@ mod tests {
 
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
-        for text in [
-            "G43.2", "G41.1", "G76 Z1", "G59.1", "G33", "M98", "M19", "G38.2",
-        ] {
+        for text in ["G43.2", "G76 Z1", "G59.1", "G33", "M98", "M19", "G38.2"] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
             assert!(

@@ -5,9 +5,11 @@ use super::checks::{
     arc_error_msg, check_g10, check_io, check_values, motion_name, plane_axes, plane_names, AXES,
     IJK,
 };
+use super::comp_block::{check_block, selected_radius};
+use super::cutter_comp::CutterComp;
 use super::cycles::{self, CycleInput, CycleState};
 use super::decode::{
-    decode, Decoded, Distance, FeedMode, Motion, NonModal, Stop, ToolLength, Units,
+    decode, CompMode, Decoded, Distance, FeedMode, Motion, NonModal, Stop, ToolLength, Units,
 };
 use super::expr::Params;
 use super::feed;
@@ -51,6 +53,8 @@ pub struct Interpreter {
     feed_mode: FeedMode,
     /// States saved by M70/M73, per call level.
     contexts: modal_state::Contexts,
+    /// Cutter radius compensation; `pos_mm` stays the programmed (uncompensated) position.
+    comp: CutterComp,
 }
 
 /// What the motion step of a block will do.
@@ -85,6 +89,7 @@ impl Interpreter {
             cycle: CycleState::default(),
             feed_mode: FeedMode::PerMinute,
             contexts: modal_state::Contexts::default(),
+            comp: CutterComp::default(),
         }
     }
 
@@ -145,12 +150,14 @@ impl Interpreter {
             next.feed_mm_per_min,
             next.spindle.1,
         );
+        next.comp.finish_block(block.line, kinds, next.ended, out);
         *self = next;
-        out.extend(kinds.into_iter().map(|kind| CanonMove {
-            line: block.line,
-            kind,
-        }));
         Ok(())
+    }
+
+    /// Releases the output held back by cutter radius compensation (end of the program).
+    pub fn flush(&mut self, out: &mut Vec<CanonMove>) {
+        self.comp.finish_block(0, Vec::new(), true, out);
     }
 
     /// Executes a block on `self`; may leave `self` half-updated on error (the caller works on
@@ -158,6 +165,11 @@ impl Interpreter {
     fn run_block(&mut self, block: &Block, out: &mut Vec<CanonKind>) -> Result<(), GcodeError> {
         let d = decode(block)?;
         let step = self.check(block, &d)?;
+        let comp_on_after = match d.cutter_comp {
+            Some((mode, _)) => mode != CompMode::Off,
+            None => self.comp.is_on(),
+        };
+        check_block(block, &d, self.comp.is_on(), comp_on_after, self.plane)?;
         let mut emit = |kind| out.push(kind);
 
         if let Some((mode, _)) = d.feed_mode {
@@ -179,6 +191,9 @@ impl Interpreter {
             self.selected_tool = t.value as u32;
         }
         if d.tool_change.is_some() {
+            if let Some(p) = self.comp.take_tool_position() {
+                self.pos_mm = p;
+            }
             self.spindle.0 = SpindleDir::Off;
             self.report_spindle(&mut emit);
             emit(CanonKind::ToolChange {
@@ -222,6 +237,9 @@ impl Interpreter {
         }
         self.plane = d.plane.unwrap_or(self.plane);
         self.units = d.units.unwrap_or(self.units);
+        if let Some((mode, col)) = d.cutter_comp {
+            self.set_cutter_comp(block, &d, mode, col)?;
+        }
         match d.tool_length {
             Some((ToolLength::Table, _)) => {
                 let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
@@ -297,10 +315,23 @@ impl Interpreter {
                 Motion::Cancel => None,
             };
             if let Some(kind) = kind {
+                let start_mm = self.pos_mm;
                 self.pos_mm = end_mm;
-                emit(kind);
+                if self.comp.takes_motion() {
+                    let col = motion_col(block, &d);
+                    self.comp.motion(start_mm, &kind, out).map_err(|e| {
+                        if e.unsupported {
+                            GcodeError::unsupported(block.line, col, e.msg)
+                        } else {
+                            GcodeError::invalid(block.line, col, e.msg)
+                        }
+                    })?;
+                } else {
+                    out.push(kind);
+                }
             }
         }
+        let mut emit = |kind| out.push(kind);
         match d.stop {
             Some((Stop::End, _)) => {
                 emit(CanonKind::ProgramEnd);
@@ -343,6 +374,46 @@ impl Interpreter {
         let mut out = Vec::new();
         self.pos_mm = cycles::run(&input, &mut self.cycle, &mut out)?;
         Ok(out)
+    }
+
+    /// G40 / G41 / G42 / G41.1 / G42.1 (checked against the state in `check_block`).
+    fn set_cutter_comp(
+        &mut self,
+        block: &Block,
+        d: &Decoded,
+        mode: CompMode,
+        col: usize,
+    ) -> Result<(), GcodeError> {
+        let cfg = &self.cfg;
+        let diameter_of = |tool: u32| {
+            if cfg.tool_diameters_mm.is_empty() {
+                return Some(0.0);
+            }
+            cfg.tool_diameters_mm
+                .iter()
+                .find(|t| t.0 == tool)
+                .map(|t| t.1)
+        };
+        let radius = selected_radius(
+            block,
+            d,
+            col,
+            mode,
+            self.selected_tool,
+            self.scale(),
+            diameter_of,
+        )?;
+        match radius {
+            Some((side, radius_mm)) => {
+                let (a1, a2, axis) = plane_axes(self.plane);
+                self.comp.turn_on(side, radius_mm, [a1, a2, axis]);
+            }
+            None => self
+                .comp
+                .turn_off()
+                .map_err(|e| GcodeError::invalid(block.line, col, e.msg))?,
+        }
+        Ok(())
     }
 
     /// mm per program unit.
@@ -773,4 +844,12 @@ impl Interpreter {
         }
         Ok(())
     }
+}
+
+/// Column of a block's motion: its motion code, else its first axis word.
+fn motion_col(block: &Block, d: &Decoded) -> usize {
+    d.motion
+        .map(|m| m.1)
+        .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+        .unwrap_or(block.first_col)
 }

@@ -85,6 +85,7 @@ pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, Gcode
         }
         pc = runner.step(&prog, pc, &mut out)?;
         if let Some(line) = runner.main_m99_end {
+            runner.interp.flush(&mut out);
             out.push(CanonMove {
                 line,
                 kind: CanonKind::ProgramEnd,
@@ -100,7 +101,10 @@ pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, Gcode
     }
     match prog.tail_error {
         Some(e) => Err(e),
-        None => Ok(out),
+        None => {
+            runner.interp.flush(&mut out);
+            Ok(out)
+        }
     }
 }
 

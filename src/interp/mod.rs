@@ -14,9 +14,9 @@
 //! order: before this block's G20/G21) and stored in mm/min.
 //!
 //! Execution order inside a block (RS274/NGC §3.8): G93/G94/G95, F, S, T, M6, M3/M4/M5,
-//! M7/M8/M9, M70–M73, G4, G17–G19, G20/G21, G43/G49, G54–G59, G61/G61.1/G64, G90/G91,
-//! G90.1/G91.1, G10/G28/G30/G28.1/G30.1/G92/G92.1/G92.2/G92.3, G98/G99, motion (G0–G3, G53,
-//! canned cycles), M0/M1/M60/M2/M30.
+//! M7/M8/M9, M70–M73, G4, G17–G19, G20/G21, G40/G41/G42, G43/G49, G54–G59, G61/G61.1/G64,
+//! G90/G91, G90.1/G91.1, G10/G28/G30/G28.1/G30.1/G92/G92.1/G92.2/G92.3, G98/G99, motion (G0–G3,
+//! G53, canned cycles), M0/M1/M60/M2/M30.
 //! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
 //! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
 //! |value| ≤ 1e9 so that all results stay finite.
@@ -52,8 +52,20 @@
 //!   whatever the mode, so they change nothing.
 //! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
 //!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
-//! - G40 (cutter compensation off), G80 (cancel motion mode), because they only confirm the
-//!   state we are always in.
+//! - G41 / G42 D (cutter radius compensation left / right of the path, D a tool number whose
+//!   diameter comes from [`InterpConfig::tool_diameters_mm`]; D0 or no D: the current tool),
+//!   G41.1 / G42.1 D (D the diameter, in program units; negative: the other side), G40 (off),
+//!   in the G17 or G18 plane, with LinuxCNC's paths and refusals (see `cutter_comp`): entry
+//!   move offset perpendicular at its end, outside corners rounded at the tool radius, inside
+//!   corners trimmed (one move of look-ahead: the compensated output is held until the next
+//!   move in the plane is known, in order with the actions between), exit move after G40
+//!   straight from the compensated point (a tool change before it makes that point the
+//!   programmed one, as LinuxCNC re-reads the position after M6). While it is on, the
+//!   interpreter's position stays the programmed point (G91 moves and incremental arc centres
+//!   start from it); M6, plane, tool length and work offset changes, G28/G30, G53, G92 and
+//!   I/O M codes are refused, as LinuxCNC refuses them. An arc as the entry move is
+//!   unsupported.
+//! - G80 (cancel motion mode).
 //!
 //! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
@@ -63,6 +75,10 @@ mod checks;
 mod cycles;
 #[cfg(test)]
 mod cycles_tests;
+mod comp_block;
+mod cutter_comp;
+#[cfg(test)]
+mod cutter_comp_tests;
 mod decode;
 mod exec;
 mod expr;
@@ -95,6 +111,9 @@ pub struct InterpConfig {
     /// Tool lengths (tool number, length in mm) for G43 H. Empty (the default): every tool has
     /// length 0, the machine's positions being those of its own tool's tip.
     pub tool_lengths_mm: Vec<(u32, f64)>,
+    /// Tool diameters (tool number, diameter in mm) for cutter radius compensation G41/G42 D.
+    /// Empty (the default): every tool has diameter 0.
+    pub tool_diameters_mm: Vec<(u32, f64)>,
     /// Block delete switch: when on, lines starting with `/` are skipped (default: off, as
     /// LinuxCNC starts).
     pub block_delete: bool,
@@ -110,6 +129,7 @@ impl Default for InterpConfig {
             start_mm: [0.0; 3],
             work_offsets_mm: [[0.0; 3]; 6],
             tool_lengths_mm: Vec::new(),
+            tool_diameters_mm: Vec::new(),
             block_delete: false,
             subroutine_dirs: Vec::new(),
         }
@@ -125,9 +145,9 @@ impl Default for InterpConfig {
 /// assert_eq!(moves[0].line, 2);
 /// assert_eq!(moves[0].kind, CanonKind::Feed { end_mm: [10.0, 0.0, 0.0], feed_mm_per_min: 600.0 });
 /// assert_eq!(moves[1].kind, CanonKind::ProgramEnd);
-/// let err = run_program("G1 X1 F100\nG41 X5", &InterpConfig::default()).unwrap_err();
+/// let err = run_program("G1 X1 F100\nG33 X5", &InterpConfig::default()).unwrap_err();
 /// assert!(err.is_unsupported());
-/// assert_eq!(err.to_string(), "line 2, column 1: G41 (cutter radius compensation) is not supported");
+/// assert_eq!(err.to_string(), "line 2, column 1: G33 (spindle-synchronised motion) is not supported");
 /// # Ok::<(), vmc_twin::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
