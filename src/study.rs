@@ -23,7 +23,7 @@ use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{
     self, ErrorPredictor, ModelKind, PredictError, Settings, TrainSummary,
 };
-use crate::predict::provenance::{InputRanges, TrainedOn};
+use crate::predict::provenance::TrainedOn;
 use crate::program::{self, ProgramError};
 use crate::sim::SimError;
 use crate::twin::{sub_seed, Twin, TwinError};
@@ -311,7 +311,7 @@ fn campaign_for_seed(
     let (linear, ls) = predictor::train_linear(&data, &geometry, &s)?;
     let trained_on = |sensors: &[String]| TrainedOn {
         machine: data.origin.clone(),
-        inputs: InputRanges::of(&data, sensors),
+        inputs: data.input_ranges(sensors),
     };
     let trained_on = [
         trained_on(hybrid.sensor_names()),

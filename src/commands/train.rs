@@ -9,7 +9,7 @@ use crate::files;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{self, ErrorPredictor, ModelKind, Settings, TrainSummary};
-use crate::predict::provenance::{InputRanges, TrainedOn};
+use crate::predict::provenance::TrainedOn;
 use crate::study::{self, ForMachine};
 
 /// What to train, validated.
@@ -55,7 +55,7 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
         .unwrap_or_else(|| cfg.machine.identity(None));
     let trained_on = |sensors: &[String]| TrainedOn {
         machine: Some(machine.clone()),
-        inputs: InputRanges::of(&data, sensors),
+        inputs: data.input_ranges(sensors),
     };
     let (json, summary) = match cfg.kind {
         ModelKind::Hybrid => {

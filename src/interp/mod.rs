@@ -72,13 +72,13 @@
 
 mod arc;
 mod checks;
-mod cycles;
-#[cfg(test)]
-mod cycles_tests;
 mod comp_block;
 mod cutter_comp;
 #[cfg(test)]
 mod cutter_comp_tests;
+mod cycles;
+#[cfg(test)]
+mod cycles_tests;
 mod decode;
 mod exec;
 mod expr;

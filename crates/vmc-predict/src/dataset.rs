@@ -44,7 +44,7 @@ use std::fmt::Write as _;
 
 use thiserror::Error;
 
-use crate::provenance::MachineIdentity;
+use crate::provenance::{InputRanges, MachineIdentity};
 
 /// Which instrument produced a record.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -221,6 +221,44 @@ fn cell(v: f64) -> String {
 }
 
 impl Dataset {
+    /// The ranges of `sensors` (names of this dataset's columns) and of the logged spindle speed over
+    /// every record. A sensor without a finite reading gets `[NaN, NaN]`, never
+    /// outside.
+    pub fn input_ranges(&self, sensors: &[String]) -> InputRanges {
+        let cols: Vec<Option<usize>> = sensors
+            .iter()
+            .map(|n| self.sensor_names.iter().position(|d| d == n))
+            .collect();
+        let mut sensor_degc = vec![[f64::INFINITY, f64::NEG_INFINITY]; sensors.len()];
+        let mut rpm: Option<[f64; 2]> = None;
+        for r in &self.records {
+            for (range, col) in sensor_degc.iter_mut().zip(&cols) {
+                if let Some(v) = col
+                    .and_then(|c| r.temps_degc.get(c))
+                    .filter(|v| v.is_finite())
+                {
+                    range[0] = range[0].min(*v);
+                    range[1] = range[1].max(*v);
+                }
+            }
+            if let Some(n) = r.spindle_rpm.filter(|n| n.is_finite()) {
+                let range = rpm.get_or_insert([n, n]);
+                range[0] = range[0].min(n);
+                range[1] = range[1].max(n);
+            }
+        }
+        for range in &mut sensor_degc {
+            if range[0] > range[1] {
+                *range = [f64::NAN, f64::NAN];
+            }
+        }
+        InputRanges {
+            sensors: sensors.to_vec(),
+            sensor_degc,
+            spindle_rpm: rpm,
+        }
+    }
+
     /// Records of one instrument.
     pub fn of(&self, instrument: Instrument) -> impl Iterator<Item = &Record> {
         self.records

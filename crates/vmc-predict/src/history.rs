@@ -326,7 +326,10 @@ mod tests {
         h.features_into(&mut f);
         // Settled after many τ (e^-16.7): each filter equals its input (m/min).
         assert_eq!(f[0], 0.0);
-        assert!((f[1] - 2.0).abs() < 1e-6 && (f[2] - 6.0).abs() < 1e-6, "{f:?}");
+        assert!(
+            (f[1] - 2.0).abs() < 1e-6 && (f[2] - 6.0).abs() < 1e-6,
+            "{f:?}"
+        );
         assert!(FeedHistory::new(&[]).is_empty());
         assert_eq!(FeedHistory::n_features(0), 0);
     }

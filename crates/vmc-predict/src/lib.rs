@@ -6,6 +6,7 @@
 //! sensor readings.
 pub mod controller;
 pub mod dataset;
+pub mod guard;
 pub mod history;
 pub mod linreg;
 pub mod metrics;
