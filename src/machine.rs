@@ -312,13 +312,19 @@ impl MachineSpec {
         Ok(())
     }
 
-    /// A fingerprint of the description without its ambient profile: FNV-1a (64 bit) of its
+    /// A fingerprint of the description without its ambient profile and tool: FNV-1a (64 bit) of its
     /// canonical JSON, in hex. Two descriptions with the same fingerprint build the same machine.
     pub fn fingerprint(&self) -> String {
         // The shop's air is not part of the machine: a model calibrated in one shop is the
         // machine's model in another (its trained ranges say whether it knows that air).
         let mut machine = self.clone();
         machine.thermal.ambient = crate::thermal::AmbientProfile::Constant { temp_degc: 0.0 };
+        // Nor is the tool in the spindle: a hybrid model follows a tool change (its geometry
+        // check refuses the models that cannot).
+        machine.tool = ToolSpec {
+            offset_mm: [0.0; 3],
+            diameter_mm: 0.0,
+        };
         // A MachineSpec always serialises (plain data, finite numbers checked on load).
         let text = serde_json::to_string(&machine).unwrap_or_default();
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;

@@ -275,22 +275,29 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
     let write = |name: &str, lines: &[String]| {
         std::fs::write(t.0.join(name), lines.join("\n") + "\n").unwrap();
     };
-    // A corrupt measurement cell (line 2 is the first record; its dx_um is the 7th cell).
+    // The header follows the comment lines (the machine's identity).
+    let h = lines.iter().position(|l| !l.starts_with('#')).unwrap();
+    let dx = lines[h].split(',').position(|c| c == "dx_um").unwrap();
+    // A corrupt measurement cell in the first record (file line h + 2).
     let mut huge = lines.clone();
-    let mut cells: Vec<String> = huge[1].split(',').map(String::from).collect();
-    cells[6] = "1e308".into();
-    huge[1] = cells.join(",");
+    let mut cells: Vec<String> = huge[h + 1].split(',').map(String::from).collect();
+    cells[dx] = "1e308".into();
+    huge[h + 1] = cells.join(",");
     write("huge.csv", &huge);
     assert_eq!(
         one_line_error(&t.0, &["train", "--data", "huge.csv", "-o", "m.json"]),
-        "huge.csv: line 2, column `dx_um`: implausible value 1e308: beyond ±1e6 (a corrupt cell or a unit mistake?)"
+        format!(
+            "huge.csv: line {}, column `dx_um`: implausible value 1e308: beyond ±1e6 (a corrupt \
+             cell or a unit mistake?)",
+            h + 2
+        )
     );
     // A column pasted twice.
-    let header = lines[0].clone();
+    let header = lines[h].clone();
     let last = header.rsplit(',').next().unwrap().to_string();
     let n = header.split(',').count();
-    lines[0] = format!("{header},{last}");
-    for l in lines.iter_mut().skip(1) {
+    lines[h] = format!("{header},{last}");
+    for l in lines.iter_mut().skip(h + 1) {
         let v = l.rsplit(',').next().unwrap().to_string();
         l.push(',');
         l.push_str(&v);

@@ -151,7 +151,8 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
 
 /// The model of `path` as a compensator for the run's machine (retooled to the machine's tool
 /// offset when it is a hybrid model, which `out` is told), guarded by its trained ranges. A model
-/// calibrated on another machine or realisation is refused unless `allow_other_machine`.
+/// of other kinematics is refused; one calibrated on another machine or realisation is refused
+/// unless `allow_other_machine`.
 fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunController> {
     let machine = &cfg.machine;
     // A read error and a content error alike are named by the file, once.
@@ -162,6 +163,27 @@ fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunC
             Ok((model, model_file::file::trained_on(&text)?))
         })
         .with_context(|| path.display().to_string())?;
+    let does_not_fit = || {
+        format!(
+            "{}: model does not fit machine {}",
+            path.display(),
+            machine.machine.name
+        )
+    };
+    let trained_tool_mm = model.geometry().tool_offset_mm;
+    let (model, retooled) = model
+        .for_machine_geometry(&machine.geometry())
+        .with_context(does_not_fit)?;
+    if retooled {
+        writeln!(
+            out,
+            "note: {} was calibrated with tool offset {:?} mm; its elementary errors are \
+             synthesised for this machine's tool offset {:?} mm",
+            path.display(),
+            trained_tool_mm,
+            machine.tool.offset_mm
+        )?;
+    }
     let here = machine.identity(Some(cfg.seed));
     match trained_on.as_ref().and_then(|t| t.machine.as_ref()) {
         Some(id) => {
@@ -187,27 +209,6 @@ fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunC
              8): neither is checked",
             path.display()
         )?,
-    }
-    let does_not_fit = || {
-        format!(
-            "{}: model does not fit machine {}",
-            path.display(),
-            machine.machine.name
-        )
-    };
-    let trained_tool_mm = model.geometry().tool_offset_mm;
-    let (model, retooled) = model
-        .for_machine_geometry(&machine.geometry())
-        .with_context(does_not_fit)?;
-    if retooled {
-        writeln!(
-            out,
-            "note: {} was calibrated with tool offset {:?} mm; its elementary errors are \
-             synthesised for this machine's tool offset {:?} mm",
-            path.display(),
-            trained_tool_mm,
-            machine.tool.offset_mm
-        )?;
     }
     let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
     let ctrl = Compensator::for_machine(model, &names).with_context(does_not_fit)?;
