@@ -4,8 +4,10 @@
 //! Keys: `states=dev` (selection-only states), `seeds=`, predictor settings (`taus=`, `hist=`,
 //! `staus=`, `shist=`, `bil=0|1`, `ridge=`, `hidden=`, `restarts=`, `gain=`, `members=`,
 //! `seedoff=`, and the opt-in commanded spindle speed: `rpmexp=` heat-input exponents, `rpmtaus=`
-//! their filters' time constants, s; `feedtaus=` the axis feeds' filters, s; `val=` validation
-//! cycles; `plan=full|noaxes|nosweep|noshops|combined` the calibration plan) and campaign settings (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
+//! their filters' time constants, s; `feedtaus=` the axis feeds' filters, s; `feedown=1` each
+//! axis part sees only its own axis's feed; `val=` validation cycles;
+//! `plan=full|noaxes|nosweep|noshops|combined` the calibration plan) and campaign settings
+//! (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
 //! Prints per seed the kept nets, then the headline figures and the eight worst runs.
 use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::machine::MachineSpec;
@@ -117,6 +119,7 @@ fn main() {
             "rpmexp" => settings.spindle_speed_exponents = list(),
             "rpmtaus" => settings.spindle_speed_taus_s = list(),
             "feedtaus" => settings.axis_feed_taus_s = list(),
+            "feedown" => settings.axis_feed_own_axis = v == "1",
             "plan" => plan = v.to_string(),
             "val" => settings.val_cycles = v.split(',').map(String::from).collect(),
             _ => panic!("unknown {k}"),

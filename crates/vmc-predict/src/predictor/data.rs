@@ -43,6 +43,9 @@ pub(crate) struct SensorSelection {
     pub feed_taus_s: Vec<f64>,
     /// Axis-feed features ([`FeedHistory`]) of each (cycle, time) instant.
     feed: HashMap<String, HashMap<u64, Vec<f64>>>,
+    /// Whether each axis part sees only its own axis's feed features (and no other part sees
+    /// any) instead of every part seeing all three axes' ([`Settings::axis_feed_own_axis`]).
+    pub feed_own_axis: bool,
 }
 
 impl SensorSelection {
@@ -91,6 +94,7 @@ impl SensorSelection {
             speed: HashMap::new(),
             feed_taus_s: Vec::new(),
             feed: HashMap::new(),
+            feed_own_axis: false,
         })
     }
 
@@ -205,10 +209,17 @@ impl SensorSelection {
     /// cycle's axis-feed log (every record, in time order) runs through the filters from the
     /// cycle's first record on (axes at rest before it). Nothing with no time constants; every
     /// record must carry the feeds otherwise.
-    pub fn with_axis_feeds(mut self, ds: &Dataset, taus_s: &[f64]) -> Result<Self, PredictError> {
+    /// With `own_axis`, axis part k sees only axis k's features and no other part sees any.
+    pub fn with_axis_feeds(
+        mut self,
+        ds: &Dataset,
+        taus_s: &[f64],
+        own_axis: bool,
+    ) -> Result<Self, PredictError> {
         if taus_s.is_empty() {
             return Ok(self);
         }
+        self.feed_own_axis = own_axis;
         check_taus("axis_feed_taus_s", taus_s)?;
         self.feed_taus_s = taus_s.to_vec();
         if let Some((index, r)) = ds
@@ -240,9 +251,20 @@ impl SensorSelection {
         Ok(self)
     }
 
-    /// Axis-feed features (every part sees them).
+    /// Axis-feed features of all three axes.
     pub fn n_feed(&self) -> usize {
         FeedHistory::n_features(self.feed_taus_s.len())
+    }
+
+    /// The range (within the three axes' feed features) that the part of axis `axis` (None:
+    /// the spindle, the squareness, a baseline) sees.
+    fn feed_range(&self, axis: Option<usize>) -> std::ops::Range<usize> {
+        let n = self.feed_taus_s.len();
+        match (self.feed_own_axis, axis) {
+            (false, _) => 0..self.n_feed(),
+            (true, Some(k)) => k * n..(k + 1) * n,
+            (true, None) => 0..0,
+        }
     }
 
     /// Spindle-speed features of the spindle part.
@@ -278,21 +300,23 @@ impl SensorSelection {
         self.history_idx.len() * self.taus_s.len()
     }
 
-    /// Model inputs of the axis parts and the squareness: the readings, then the history
-    /// features, then the axis-feed features.
-    pub fn n_inputs(&self) -> usize {
-        self.cols.len() + self.n_shared_history() + self.n_feed()
+    /// Model inputs of the part of axis `axis` (None: the squareness or a baseline): the
+    /// readings, then the history features, then the axis-feed features it sees.
+    pub fn n_inputs_of(&self, axis: Option<usize>) -> usize {
+        self.cols.len() + self.n_shared_history() + self.feed_range(axis).len()
     }
 
-    /// Model inputs of the spindle part: [`Self::n_inputs`] (readings, shared history, axis
-    /// feeds), then the spindle-only history features, then the spindle-speed features.
+    /// Model inputs of the spindle part: [`Self::n_inputs_of`] `None` (readings, shared
+    /// history, axis feeds it sees), then the spindle-only history features, then the
+    /// spindle-speed features.
     pub fn n_spindle_inputs(&self) -> usize {
-        self.n_inputs() + self.spindle_idx.len() * self.spindle_taus_s.len() + self.n_speed()
+        self.n_inputs_of(None) + self.spindle_idx.len() * self.spindle_taus_s.len() + self.n_speed()
     }
 
-    /// Appends the selected temperatures of `r` (then its history features, if any) to `row`;
-    /// with `spindle`, also the spindle-only history features.
-    pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>, spindle: bool) {
+    /// Appends the selected temperatures of `r` (then its history features, if any, and the
+    /// axis-feed features the part of `axis` sees) to `row`; with `spindle`, also the
+    /// spindle-only history features.
+    pub fn push_temps(&self, r: &Record, row: &mut Vec<f64>, spindle: bool, axis: Option<usize>) {
         row.extend(self.cols.iter().map(|&c| r.temps_degc[c]));
         let n_shared = self.n_shared_history();
         let n_own = if spindle {
@@ -320,9 +344,9 @@ impl SensorSelection {
             }
         };
         push(0, n_shared, &history);
-        let nf = self.n_feed();
-        let feed = if nf > 0 { at(&self.feed) } else { None };
-        push(0, nf, &feed);
+        let fr = self.feed_range(axis);
+        let feed = if fr.is_empty() { None } else { at(&self.feed) };
+        push(fr.start, fr.len(), &feed);
         push(n_shared, n_own, &history);
         let ns = self.n_speed();
         if spindle && ns > 0 {

@@ -77,6 +77,10 @@ pub(crate) struct HybridParts {
     /// history features.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub axis_feed_taus_s: Vec<f64>,
+    /// The axis part k sees only axis k's feed features, the spindle part and the squareness
+    /// none (absent: false, every part sees all three axes').
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub axis_feed_own_axis: bool,
 }
 
 /// Query-time state: the held readings, part evaluators with cached temperature-only results,
@@ -100,6 +104,13 @@ struct Runtime {
     feed: FeedHistory,
     /// Readings and shared history features (a prefix of `inputs`).
     n_history: usize,
+    /// Whether each axis part sees only its own axis's feed features (then `inputs` holds
+    /// none and `axis_inputs` the parts' own inputs).
+    own_feed: bool,
+    /// The feed features of the three axes (X's, then Y's, then Z's).
+    feeds: Vec<f64>,
+    /// With `own_feed`: axis k's inputs, the shared prefix then axis k's feed features.
+    axis_inputs: [Vec<f64>; 3],
     /// Inputs of the axis parts and the squareness (a prefix of `inputs`): the readings and
     /// shared history features, then the feed features.
     n_shared: usize,
@@ -167,10 +178,16 @@ impl HybridPredictor {
         }
         let feed = FeedHistory::new(&parts.axis_feed_taus_s);
         let n_history = history.len();
-        let k = n_history + feed.len();
+        let own_feed = parts.axis_feed_own_axis && !feed.is_empty();
+        // Inputs of the squareness (and the prefix of the spindle's), and of each axis part.
+        let (k, k_axis) = if own_feed {
+            (n_history, n_history + parts.axis_feed_taus_s.len())
+        } else {
+            (n_history + feed.len(), n_history + feed.len())
+        };
         let k_spindle = k + spindle_history.n_history() + speed.len();
         for (name, part) in AXIS_NETS.iter().zip(&parts.axis_nets) {
-            part.check(name, 1, k, 6)?;
+            part.check(name, 1, k_axis, 6)?;
         }
         parts.spindle_net.check("spindle", 0, k_spindle, 5)?;
         check_linear_model("squareness", &parts.squareness, k, 3)?;
@@ -200,8 +217,11 @@ impl HybridPredictor {
             history,
             spindle_history,
             speed,
+            feeds: vec![0.0; feed.len()],
             feed,
             n_history,
+            own_feed,
+            axis_inputs: std::array::from_fn(|_| vec![0.0; k_axis]),
             n_shared: k,
             inputs: vec![0.0; k_spindle],
             readings: vec![f64::NAN; sensors.len()],
@@ -287,15 +307,27 @@ impl HybridPredictor {
         let rt = &mut self.rt;
         rt.stale = false;
         let (shared, own) = rt.inputs.split_at_mut(rt.n_shared);
-        let (readings, feeds) = shared.split_at_mut(rt.n_history);
+        let (readings, shared_feeds) = shared.split_at_mut(rt.n_history);
         rt.history.features_into(&rt.readings, readings);
-        rt.feed.features_into(feeds);
+        rt.feed.features_into(&mut rt.feeds);
+        if !rt.own_feed {
+            shared_feeds.copy_from_slice(&rt.feeds);
+        }
         let (own, speed) = own.split_at_mut(rt.spindle_history.n_history());
         rt.spindle_history.history_into(&rt.readings, own);
         rt.speed.features_into(speed);
         let temps = &rt.inputs[..rt.n_shared];
-        for net in &mut rt.axes {
-            net.set_temps(temps);
+        if rt.own_feed {
+            let n = rt.feeds.len() / 3;
+            for (k, (net, x)) in rt.axes.iter_mut().zip(&mut rt.axis_inputs).enumerate() {
+                x[..rt.n_history].copy_from_slice(&temps[..rt.n_history]);
+                x[rt.n_history..].copy_from_slice(&rt.feeds[k * n..(k + 1) * n]);
+                net.set_temps(x);
+            }
+        } else {
+            for net in &mut rt.axes {
+                net.set_temps(temps);
+            }
         }
         rt.spindle.set_temps(&rt.inputs);
         let mut s = [0.0; 5];
@@ -376,7 +408,7 @@ pub fn train_hybrid(
             &settings.spindle_speed_exponents,
             &settings.spindle_speed_taus_s,
         )?
-        .with_axis_feeds(ds, &settings.axis_feed_taus_s)?;
+        .with_axis_feeds(ds, &settings.axis_feed_taus_s, settings.axis_feed_own_axis)?;
     let split = CycleSplit::new(ds, settings)?;
     // Build every table before training anything, so data errors surface at once.
     const NEEDED_FOR: [&str; 3] = [
@@ -498,6 +530,7 @@ pub fn train_hybrid(
         spindle_speed_exponents: sel.speed_exponents.clone(),
         spindle_speed_taus_s: sel.speed_taus_s.clone(),
         axis_feed_taus_s: sel.feed_taus_s.clone(),
+        axis_feed_own_axis: sel.feed_own_axis,
     };
     let predictor = HybridPredictor::from_parts(sel.names.clone(), *geometry, parts)?;
     let summary = TrainSummary {
@@ -569,11 +602,11 @@ fn table_of(
 ) -> Result<Table, PredictError> {
     let mut table = Table::new();
     for r in recs {
-        let mut row = Vec::with_capacity(sel.n_spindle_inputs() + 1);
+        let mut row = Vec::with_capacity(sel.n_spindle_inputs() + sel.n_feed() + 1);
         if let Some(k) = pos_axis {
             row.push(r.pos_mm[k]);
         }
-        sel.push_temps(r, &mut row, spindle);
+        sel.push_temps(r, &mut row, spindle, pos_axis);
         table.inputs.push(row);
         table.targets.push(required_values(r, cols, instrument)?);
         table.groups.push(split.id(&r.cycle));

@@ -191,7 +191,7 @@ pub fn train_linear(
             hi[i] = hi[i].max(r.pos_mm[i]);
         }
         temps.clear();
-        sel.push_temps(r, &mut temps, false);
+        sel.push_temps(r, &mut temps, false, None);
         temp_ref_degc
             .iter_mut()
             .zip(&temps)
@@ -215,7 +215,7 @@ pub fn train_linear(
     let mut table = Table::new();
     for r in &recs {
         temps.clear();
-        sel.push_temps(r, &mut temps, false);
+        sel.push_temps(r, &mut temps, false, None);
         let mut f = vec![0.0; n_features(k)];
         features_into(&scaling, r.pos_mm, &temps, &mut f);
         table.inputs.push(f);

@@ -395,6 +395,10 @@ pub struct Settings {
     /// ([`crate::history::FeedHistory`]): the heat of the screws and motors, which no sensor
     /// may touch. The dataset needs the axis-feed columns.
     pub axis_feed_taus_s: Vec<f64>,
+    /// With [`Self::axis_feed_taus_s`]: each axis part sees only its own axis's feed features,
+    /// and the spindle part and the squareness none (default: `false`, every part sees all
+    /// three axes'). A screw heats with its own axis's traffic and stretches its own axis.
+    pub axis_feed_own_axis: bool,
 }
 
 impl Default for Settings {
@@ -418,6 +422,7 @@ impl Default for Settings {
             spindle_history_taus_s: Vec::new(),
             spindle_history_sensors: Vec::new(),
             axis_feed_taus_s: Vec::new(),
+            axis_feed_own_axis: false,
             axis_bilinear: true,
             spindle_speed_exponents: Vec::new(),
             spindle_speed_taus_s: Vec::new(),

@@ -119,7 +119,7 @@ pub fn train_volumetric(
     let mut table = Table::new();
     for r in recs {
         let mut row = r.pos_mm.to_vec();
-        sel.push_temps(r, &mut row, false);
+        sel.push_temps(r, &mut row, false, None);
         table.inputs.push(row);
         table
             .targets

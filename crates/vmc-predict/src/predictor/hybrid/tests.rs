@@ -302,6 +302,58 @@ fn spindle_speed_features_reach_the_spindle_part_alone_and_survive_the_model_fil
 }
 
 #[test]
+fn own_axis_feeds_reach_that_axis_part_alone_and_survive_the_model_file() {
+    let mut ds = td::dataset(&[4.0, 7.0, 5.5, 3.0], 11);
+    // Each cycle runs one axis in its first two hours (cycle c: axis c mod 3).
+    for r in &mut ds.records {
+        let c: usize = r.cycle.trim_start_matches("cycle").parse().unwrap();
+        let mut f = [0.0; 3];
+        if r.time_s < 7200.0 {
+            f[c % 3] = 4000.0;
+        }
+        r.axis_feed_mm_per_min = Some(f);
+    }
+    let settings = Settings {
+        hidden_candidates: vec![6],
+        max_epochs: 20,
+        axis_feed_taus_s: vec![600.0, 3600.0],
+        axis_feed_own_axis: true,
+        ..Settings::default()
+    };
+    let (mut p, _) = train_hybrid(&ds, &td::geometry(), &settings).unwrap();
+    let n = ds.sensor_names.len();
+    // Axis parts: position, readings, own feed's two filters (bilinear: × position too).
+    for part in &p.parts().axis_nets {
+        assert_eq!(part.linear.n_in(), 1 + (n + 2) + (n + 2));
+    }
+    assert_eq!(p.parts().spindle_net.linear.n_in(), n);
+    assert_eq!(p.parts().squareness.n_in(), n);
+    let text = p.to_json_string().unwrap();
+    assert!(text
+        .replace(char::is_whitespace, "")
+        .contains("\"axis_feed_own_axis\":true"));
+    let mut back = HybridPredictor::from_json_str(&text).unwrap();
+    let q = [100.0, 50.0, -80.0];
+    let hot = td::temps_degc(6.0, 7200.0);
+    p.observe_readings(0.0, &hot);
+    back.observe_readings(0.0, &hot);
+    let rest = p.elementary_errors(q);
+    for k in 0..=30 {
+        let t = 60.0 * f64::from(k);
+        p.observe_axis_feeds(t, [0.0, 0.0, 5000.0]);
+        back.observe_axis_feeds(t, [0.0, 0.0, 5000.0]);
+    }
+    let ran = p.elementary_errors(q);
+    assert_eq!(ran, back.elementary_errors(q));
+    // Z's traffic moves the Z part only.
+    assert_ne!(ran.axes[2], rest.axes[2]);
+    assert_eq!(ran.axes[0], rest.axes[0]);
+    assert_eq!(ran.axes[1], rest.axes[1]);
+    assert_eq!(ran.spindle, rest.spindle);
+    assert_eq!(ran.squareness, rest.squareness);
+}
+
+#[test]
 fn hybrid_predicts_a_held_out_cycle_within_half_a_micrometre_rms() {
     let (mut p, summary) = trained();
     let (err, truth) = held_out_rms(&mut p, |t| t.to_vec());
