@@ -106,6 +106,8 @@ pub struct CutSimulation {
     pub growth_ratio: f64,
     /// Largest D of the last quarter over the largest of the first four tooth periods.
     pub growth_from_start: f64,
+    /// D fell a millionfold from the first quarter to the last: the cut settled to round-off.
+    pub settled: bool,
     /// Stable or chatter (see the module's criterion).
     pub verdict: Verdict,
     /// Amplitude spectrum of the tip displacement (x and y combined, m) over the last half.
@@ -243,7 +245,7 @@ pub fn simulate_cut(
             last_pass.copy_from_slice(&run.s);
         }
     }
-    let (growth_ratio, growth_from_start, verdict) = judge(&change);
+    let (growth_ratio, growth_from_start, settled, verdict) = judge(&change);
     let tail = steps / 2;
     let axis = |a: usize, steady: bool| -> Vec<f64> {
         (tail..steps)
@@ -271,6 +273,7 @@ pub fn simulate_cut(
         change_per_tooth_m: change,
         growth_ratio,
         growth_from_start,
+        settled,
         verdict,
         spectrum,
         disturbance_spectrum,
@@ -279,10 +282,11 @@ pub fn simulate_cut(
     })
 }
 
-/// Growth ratio, growth from the start and verdict from the changes per tooth period.
-fn judge(change: &[f64]) -> (f64, f64, Verdict) {
+/// Growth ratio, growth from the start, settled and verdict from the changes per tooth
+/// period.
+fn judge(change: &[f64]) -> (f64, f64, bool, Verdict) {
     if change.iter().any(|d| !d.is_finite()) {
-        return (f64::INFINITY, f64::INFINITY, Verdict::Chatter);
+        return (f64::INFINITY, f64::INFINITY, false, Verdict::Chatter);
     }
     let len = change.len();
     let q = len / 4;
@@ -300,6 +304,7 @@ fn judge(change: &[f64]) -> (f64, f64, Verdict) {
     (
         ratio,
         from_start,
+        settled,
         if chatter {
             Verdict::Chatter
         } else {
@@ -315,9 +320,9 @@ mod tests {
     #[test]
     fn the_verdict_follows_the_change_per_tooth() {
         let decay: Vec<f64> = (0..400).map(|k| 0.99f64.powi(k)).collect();
-        assert_eq!(judge(&decay).2, Verdict::Stable);
+        assert_eq!(judge(&decay).3, Verdict::Stable);
         let growth: Vec<f64> = (0..400).map(|k| 1.001f64.powi(k)).collect();
-        assert_eq!(judge(&growth).2, Verdict::Chatter);
+        assert_eq!(judge(&growth).3, Verdict::Chatter);
         // Grew 1000-fold in the first quarter, then saturated with a slight decline.
         let saturated: Vec<f64> = (0..400)
             .map(|k| {
@@ -328,7 +333,7 @@ mod tests {
                 }
             })
             .collect();
-        assert_eq!(judge(&saturated).2, Verdict::Chatter);
+        assert_eq!(judge(&saturated).3, Verdict::Chatter);
         // Settled to round-off: noise at 1e-20 after a decay from 1 is stable.
         let settled: Vec<f64> = (0..400)
             .map(|k| {
@@ -339,7 +344,7 @@ mod tests {
                 }
             })
             .collect();
-        assert_eq!(judge(&settled).2, Verdict::Stable);
-        assert_eq!(judge(&[1.0, f64::NAN, 1.0, 1.0]).2, Verdict::Chatter);
+        assert_eq!(judge(&settled).3, Verdict::Stable);
+        assert_eq!(judge(&[1.0, f64::NAN, 1.0, 1.0]).3, Verdict::Chatter);
     }
 }
