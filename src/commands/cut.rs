@@ -157,12 +157,9 @@ fn report(cfg: &CutConfig, sim: &CutSimulation, sdm: Option<&LobePoint>) -> Stri
                 s,
                 "verdict: stable (a disturbance of the steady cut dies out: {growth})"
             );
-            let peak = sim
-                .disturbance_peak_hz
-                .map_or("-".to_string(), |f| format!("{f:.1} Hz"));
             let _ = writeln!(
                 s,
-                "chatter frequency: none (the decaying disturbance peaks at {peak}; tooth passing {tooth_hz:.1} Hz)"
+                "chatter frequency: none (tooth passing {tooth_hz:.1} Hz)"
             );
         }
     }

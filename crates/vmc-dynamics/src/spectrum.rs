@@ -24,7 +24,7 @@ impl Spectrum {
     /// samples or a step that is not positive).
     pub fn of(signal: &[f64], step_s: f64) -> Self {
         let len = signal.len();
-        if len < 4 || !(step_s > 0.0) {
+        if len < 4 || step_s.is_nan() || step_s <= 0.0 {
             return Self {
                 frequency_hz: Vec::new(),
                 amplitude: Vec::new(),
@@ -83,7 +83,7 @@ impl Spectrum {
             .enumerate()
             .filter(|(j, _)| (lo_hz..=hi_hz).contains(&self.frequency_hz[*j]))
             .max_by(|a, b| a.1.total_cmp(b.1))?;
-        if !(a > 0.0) {
+        if a.is_nan() || a <= 0.0 {
             return None;
         }
         let mut f = self.frequency_hz[j];

@@ -12,6 +12,8 @@
 //! [`ForceModel::Process`] uses all terms and drops a tooth's force when h ≤ 0 (it left the
 //! cut); [`ForceModel::Linear`] keeps only the regenerative and process-damping terms (no feed,
 //! no edge forces, no loss of contact) — the linear delay equation that ZOA and SDM analyse.
+//! With a helix the sum runs over the axial disks of [`crate::forces::Disks`] as well (each of
+//! height a_p/K at its own lag, neighbours at most one step angle ωΔt apart).
 //!
 //! Instability criterion: in the linear model the vibration starts from a small initial
 //! displacement and its amplitude A_k = √Σ(q² + (q̇/ω)²) is sampled once per tooth period
