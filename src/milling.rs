@@ -308,6 +308,26 @@ mod tests {
     }
 
     #[test]
+    fn the_helical_benchmark_tool_loads_with_its_helix() {
+        let t = ToolDynamics::from_toml_str(
+            include_str!("../machines/benchmarks/helical-4flute-30deg.toml"),
+            "machines/benchmarks/helical-4flute-30deg.toml",
+        )
+        .unwrap();
+        assert_eq!((t.tool.teeth, t.tool.helix_deg), (4, 30.0));
+        assert_eq!((t.modes.x.len(), t.modes.y.len()), (1, 1));
+        let err = ToolDynamics::from_toml_str(
+            &DEFAULT_TOOL_TOML.replacen("teeth = 2", "teeth = 2\nhelix_deg = 95.0", 1),
+            "t.toml",
+        )
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "t.toml: helix angle must be in [0, 90) deg, got 95"
+        );
+    }
+
+    #[test]
     fn speeds_parse_as_a_range_or_a_list_and_bad_ones_are_named() {
         assert_eq!(
             parse_speeds("1000:2000:3").unwrap(),

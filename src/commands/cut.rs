@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use crate::dynamics::cut::{simulate_cut, CutOptions, CutSimulation, Verdict};
-use crate::dynamics::{lobes, BoundaryKind, Cut, LobePoint, Method, Milling};
+use crate::dynamics::{sdm_lowest_critical_depth, BoundaryKind, Cut, LobePoint, Milling};
 use crate::files;
 use crate::milling::{cut_csv, kind_name, ToolDynamics};
 use crate::record;
@@ -46,16 +46,7 @@ pub fn cut(cfg: &CutConfig, out: &mut dyn Write) -> Result<()> {
     let t = &cfg.tool;
     let sim = simulate_cut(&t.tool, &t.modes, &cfg.cut, &cfg.options)?;
     let c = &cfg.cut;
-    let sdm = lobes(
-        Method::Sdm,
-        &t.tool,
-        &t.modes,
-        c.immersion,
-        c.milling,
-        &[c.spindle_rpm],
-    )?
-    .into_iter()
-    .next();
+    let sdm = sdm_lowest_critical_depth(&t.tool, &t.modes, c.immersion, c.milling, c.spindle_rpm)?;
     let text = report(cfg, &sim, sdm.as_ref());
     out.write_all(text.as_bytes())?;
     if let Some(path) = &cfg.out {
@@ -188,7 +179,7 @@ fn report(cfg: &CutConfig, sim: &CutSimulation, sdm: Option<&LobePoint>) -> Stri
         None => {
             let _ = writeln!(
                 s,
-                "SDM critical depth at {} rpm: none in the searched range (20 × the zero-order minimum)",
+                "SDM critical depth at {} rpm: none up to 20 × the zero-order minimum depth",
                 c.spindle_rpm
             );
         }

@@ -43,6 +43,6 @@ pub mod time_domain;
 pub mod zoa;
 
 pub use cut::{simulate_cut, CutOptions, CutSimulation, Verdict};
-pub use lobes::{lobes, LobePoint, Method};
+pub use lobes::{lobes, sdm_lowest_critical_depth, LobePoint, Method};
 pub use params::{Cut, DynamicsError, Milling, Mode, TipModes, Tool};
 pub use sdm::BoundaryKind;

@@ -385,6 +385,30 @@ impl SpeedSdm<'_> {
         self.bisect(lo, hi, hi_st, tol_mm).map(Some)
     }
 
+    /// The lowest critical depth at this speed: the first unstable depth of an even scan of
+    /// `scan` depths over (0, `max_depth_mm`], refined by bisection against the depth before it
+    /// to `tol_mm`; `None` when every scanned depth is stable. Unlike the tracer it cannot step
+    /// over an unstable island wider than the scan's spacing under a higher boundary.
+    pub fn lowest_critical_depth(
+        &self,
+        max_depth_mm: f64,
+        scan: usize,
+        tol_mm: f64,
+    ) -> Result<Option<LobePoint>, DynamicsError> {
+        positive("max_depth_mm", max_depth_mm)?;
+        positive("tol_mm", tol_mm)?;
+        let mut lo = 0.0;
+        for k in 1..=scan.max(1) {
+            let a = max_depth_mm * k as f64 / scan.max(1) as f64;
+            let st = self.stability(a)?;
+            if !st.is_stable() {
+                return self.bisect(lo, a, st, tol_mm).map(Some);
+            }
+            lo = a;
+        }
+        Ok(None)
+    }
+
     /// Bisection between a stable `lo` and an unstable `hi` (with its stability) to `tol_mm`.
     fn bisect(
         &self,

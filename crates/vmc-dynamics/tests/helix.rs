@@ -86,7 +86,7 @@ fn helix_zero_reproduces_the_straight_tooth_results() {
 /// stiffening the benchmark mode (modal mass scaled, same frequency and damping: the ZOA depth
 /// scales with the stiffness) and checks that helical SDM (m = 80) finds the same boundary at
 /// a_e/D = 0.05 down milling, where straight-tooth SDM finds flip lobes at about half that
-/// depth: within 1.5 % in depth (observed 0.2–0.4 %; the first-order SDM error falls as m⁻²),
+/// depth: within 1.5 % in depth (observed 0.17–0.33 %; the first-order SDM error falls as m⁻²),
 /// the same once-per-tooth rotation of the chatter to 0.005 cycles, and a Hopf boundary.
 #[test]
 fn at_one_axial_pitch_helical_sdm_meets_the_zero_order_solution() {
@@ -126,6 +126,12 @@ fn at_one_axial_pitch_helical_sdm_meets_the_zero_order_solution() {
             .unwrap()
             .unwrap();
         let tau = tool.tooth_period_s(n);
+        println!(
+            "{n} rpm: helical SDM {:.4} mm vs ZOA {:.4} mm ({:+.2} %)",
+            s.critical_depth_mm,
+            z.critical_depth_mm,
+            100.0 * (s.critical_depth_mm / z.critical_depth_mm - 1.0)
+        );
         assert!(
             relative(s.critical_depth_mm, pitch_mm) < 0.015,
             "{n} rpm: SDM {s:?}, ZOA {z:?}"
@@ -203,6 +209,36 @@ fn a_helix_island_is_seen_by_both_methods() {
             assert_eq!(st.kind, BoundaryKind::Flip, "{a} mm");
         }
     }
+    // The tracer of `lobes`, coming from 10 800 rpm, follows the Hopf boundary over the island
+    // at 10 900 rpm; the scan of `sdm_lowest_critical_depth` finds the island's lower edge, and
+    // the time domain confirms it (5 % under: decays, 5 % over: grows).
+    let traced = lobes(
+        Method::Sdm,
+        &tool,
+        &modes,
+        0.05,
+        Milling::Down,
+        &[10_800.0, 10_900.0],
+    )
+    .unwrap();
+    let lowest = sdm_lowest_critical_depth(&tool, &modes, 0.05, Milling::Down, 10_900.0)
+        .unwrap()
+        .unwrap();
+    assert_eq!(lowest.kind, BoundaryKind::Flip);
+    assert!(
+        lowest.critical_depth_mm < 0.95 * traced[1].critical_depth_mm,
+        "{lowest:?} vs {traced:?}"
+    );
+    assert!(
+        td.growth_ratio(10_900.0, 0.95 * lowest.critical_depth_mm)
+            .unwrap()
+            < 1.0
+    );
+    assert!(
+        td.growth_ratio(10_900.0, 1.05 * lowest.critical_depth_mm)
+            .unwrap()
+            > 1.0
+    );
     // The same cutter with straight teeth has no boundary below 14 mm at this speed.
     let mut straight = tool;
     straight.helix_deg = 0.0;
