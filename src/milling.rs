@@ -1,5 +1,5 @@
 //! The app side of the milling-dynamics study: the tool file (TOML) that gives a cutter and the
-//! modes of its tool tip, and the lobes table (CSV). The numerics are the `vmc-dynamics` crate
+//! modes of its tool tip, the lobes table (CSV) and the time series of one cut (CSV). The numerics are the `vmc-dynamics` crate
 //! (re-exported as [`crate::dynamics`]); this module only reads, checks and writes.
 //!
 //! A tool file (units in names; every field checked, unknown fields refused):
@@ -9,7 +9,7 @@
 //! [tool]
 //! teeth = 2
 //! diameter_mm = 16.0
-//! helix_deg = 0.0                   # optional; only straight teeth are supported
+//! helix_deg = 0.0                   # optional, in [0, 90); 0 = straight teeth
 //! kt_n_per_m2 = 6.0e8               # tangential specific cutting force
 //! kn_n_per_m2 = 2.0e8               # normal (radial) specific cutting force
 //! kte_n_per_m = 0.0                 # optional edge coefficients
@@ -217,6 +217,25 @@ pub fn lobes_csv(points: &[LobePoint]) -> String {
     s
 }
 
+/// The time series of one cut as CSV: `time_s, x_um, y_um, fx_n, fy_n` (tip displacement in
+/// µm, cutting force on the tool in N), one row per integration step.
+pub fn cut_csv(sim: &crate::dynamics::CutSimulation) -> String {
+    let mut s = String::with_capacity(48 * sim.displacement_m.len() + 32);
+    s.push_str("time_s,x_um,y_um,fx_n,fy_n\n");
+    for (i, (p, f)) in sim.displacement_m.iter().zip(&sim.force_n).enumerate() {
+        let _ = writeln!(
+            s,
+            "{:.9},{:.6},{:.6},{:.6},{:.6}",
+            sim.time_s(i),
+            p[0] * 1e6,
+            p[1] * 1e6,
+            f[0],
+            f[1]
+        );
+    }
+    s
+}
+
 /// `hopf` or `flip`.
 pub fn kind_name(kind: crate::dynamics::BoundaryKind) -> &'static str {
     match kind {
@@ -286,6 +305,26 @@ mod tests {
         // The sampled speeds touch the lobes' bottoms only approximately: within 5 %.
         assert!(min >= want_mm * (1.0 - 1e-9), "{min} vs {want_mm}");
         assert!(min < want_mm * 1.05, "{min} vs {want_mm}");
+    }
+
+    #[test]
+    fn the_helical_benchmark_tool_loads_with_its_helix() {
+        let t = ToolDynamics::from_toml_str(
+            include_str!("../machines/benchmarks/helical-4flute-30deg.toml"),
+            "machines/benchmarks/helical-4flute-30deg.toml",
+        )
+        .unwrap();
+        assert_eq!((t.tool.teeth, t.tool.helix_deg), (4, 30.0));
+        assert_eq!((t.modes.x.len(), t.modes.y.len()), (1, 1));
+        let err = ToolDynamics::from_toml_str(
+            &DEFAULT_TOOL_TOML.replacen("teeth = 2", "teeth = 2\nhelix_deg = 95.0", 1),
+            "t.toml",
+        )
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "t.toml: helix angle must be in [0, 90) deg, got 95"
+        );
     }
 
     #[test]

@@ -393,3 +393,87 @@ fn a_crash_found_by_check_is_drawn_in_its_recording_at_its_time() {
         &data[..data.len().min(3000)]
     );
 }
+
+#[test]
+fn a_lobe_diagram_is_drawn_with_hopf_and_flip_lobes_apart() {
+    let dir = TempDir::new("lobes");
+    let d = dir.path();
+    let o = vmc(
+        d,
+        &[
+            "lobes",
+            "--immersion",
+            "0.05",
+            "--rpm",
+            "8000:12000:41",
+            "--rrd",
+            "lobes.rrd",
+        ],
+    );
+    let out = ok(o, "lobes --rrd");
+    assert!(out.contains("wrote lobes.rrd"), "{out}");
+    let file = d.join("lobes.rrd");
+    assert_verified(&file);
+    // At a_e/D = 0.05 this speed range holds both Hopf lobes and the flip lobe near 10 000 rpm.
+    assert_has(
+        &printed(&file, "-vv"),
+        &[
+            "lobes/critical_depth_mm/boundary",
+            "lobes/critical_depth_mm/hopf",
+            "lobes/critical_depth_mm/flip",
+            "lobes/chatter_frequency_hz/hopf",
+            "lobes/chatter_frequency_hz/flip",
+            "report",
+        ],
+        &["spindle_rpm"],
+        "lobes recording",
+    );
+    let data = printed(&file, "-vvv");
+    // `rrd print` shows the first characters of the report.
+    assert!(
+        data.contains("Critical depth against spindle speed"),
+        "no report in the recording"
+    );
+}
+
+#[test]
+fn a_cut_recording_holds_vibration_forces_and_spectra() {
+    let dir = TempDir::new("cut");
+    let d = dir.path();
+    let o = vmc(
+        d,
+        &[
+            "cut",
+            "--rpm",
+            "10000",
+            "--depth-mm",
+            "4.3",
+            "--immersion",
+            "0.05",
+            "--revolutions",
+            "100",
+            "--rrd",
+            "cut.rrd",
+        ],
+    );
+    let out = ok(o, "cut --rrd");
+    assert!(out.contains("verdict: chatter"), "{out}");
+    assert!(out.contains("wrote cut.rrd"), "{out}");
+    let file = d.join("cut.rrd");
+    assert_verified(&file);
+    assert_has(
+        &printed(&file, "-vv"),
+        &[
+            "cut/vibration_um/x",
+            "cut/vibration_um/y",
+            "cut/force_n/fx",
+            "cut/force_n/fy",
+            "cut/change_per_tooth_um",
+            "spectrum/vibration_um",
+            "spectrum/disturbance_um",
+            "report",
+        ],
+        &["sim_time"],
+        "cut recording",
+    );
+}

@@ -4,6 +4,7 @@
 //! Options that several commands share are one flattened group each ([`MachineArg`],
 //! [`SensorsArg`], [`ForceArg`], [`RrdArgs`]), so a flag means the same everywhere.
 
+mod cut;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -16,6 +17,7 @@ use crate::predict::predictor::ModelKind;
 use crate::record;
 use crate::sim::{SimConfig, SimConfigError};
 
+pub use cut::CutArgs;
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
 /// `vmc-twin`: the whole command line.
@@ -61,6 +63,10 @@ pub enum Command {
     /// radial immersion and up or down milling (semi-discretisation, zero-order analytic or
     /// time-domain simulation).
     Lobes(LobesArgs),
+    /// One cut in the time domain: the vibration at the tool tip, the cutting forces, the
+    /// spectrum, the chatter frequency and the verdict (stable or chatter), with the
+    /// semi-discretisation critical depth at that speed.
+    Cut(CutArgs),
     /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
     /// `rs274`, to compare with a controller.
     Interpret(InterpretArgs),
@@ -516,7 +522,7 @@ pub enum MethodArg {
     Time,
 }
 
-/// Milling direction of `lobes --milling`.
+/// Milling direction of `lobes --milling` and `cut --milling`.
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum MillingArg {
     /// Up (conventional) milling.
@@ -547,6 +553,9 @@ pub struct LobesArgs {
     /// Write the lobes as CSV (spindle_rpm, critical_depth_mm, chatter_frequency_hz, kind).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write a Rerun recording of the lobe diagram (depth against speed, Hopf and flip lobes).
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rrd: Option<PathBuf>,
     #[command(flatten)]
     pub force: ForceArg,
 }
@@ -586,6 +595,7 @@ impl LobesArgs {
             },
             speeds_rpm,
             out: self.out,
+            rrd: self.rrd,
             force: self.force.force,
         })
     }

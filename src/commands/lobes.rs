@@ -27,6 +27,8 @@ pub struct LobesConfig {
     pub speeds_rpm: Vec<f64>,
     /// CSV output.
     pub out: Option<PathBuf>,
+    /// Rerun recording of the lobe diagram.
+    pub rrd: Option<PathBuf>,
     /// Overwrite an existing output file.
     pub force: bool,
 }
@@ -34,7 +36,7 @@ pub struct LobesConfig {
 /// Most rows printed; longer tables are thinned on screen (every row is in `--out`).
 const MAX_PRINTED_ROWS: usize = 41;
 
-/// Computes the lobes, prints the minimum and the table, writes the CSV.
+/// Computes the lobes, prints the minimum and the table, writes the CSV and the recording.
 ///
 /// # Errors
 /// An output that may not be written, values the dynamics refuses.
@@ -42,6 +44,41 @@ pub fn lobes(cfg: &LobesConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(path) = &cfg.out {
         files::check_writable(path, cfg.force)?;
     }
+    if let Some(path) = &cfg.rrd {
+        crate::record::check_rrd_path(path, cfg.force)?;
+    }
+    // The report is printed and, with --rrd, also stored in the recording.
+    let mut text = Vec::new();
+    let points = compute_and_report(cfg, &mut text)?;
+    out.write_all(&text)?;
+    if let Some(path) = &cfg.out {
+        files::write_atomic(path, lobes_csv(&points).as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    if let Some(path) = &cfg.rrd {
+        let t = &cfg.tool;
+        let title = format!(
+            "vmc-twin lobes {} {} {} {} {:?}",
+            t.name,
+            method_name(cfg.method),
+            cfg.immersion,
+            super::cut::milling_name(cfg.milling),
+            cfg.speeds_rpm
+        );
+        let md = format!(
+            "# vmc-twin lobes\n\nCritical depth against spindle speed: the boundary as a grey \
+             line, Hopf lobes blue, flip lobes orange (speeds rounded to whole rpm on the \
+             `spindle_rpm` timeline).\n\n```text\n{}```\n",
+            String::from_utf8_lossy(&text)
+        );
+        let bytes = crate::record::dynamics::record_lobes(path, cfg.force, &title, &points, &md)?;
+        super::wrote_recording(out, path, bytes, "")?;
+    }
+    Ok(())
+}
+
+/// Computes the lobes and writes the report (minimum and table).
+fn compute_and_report(cfg: &LobesConfig, out: &mut dyn Write) -> Result<Vec<LobePoint>> {
     let t = &cfg.tool;
     let points = lobes_of(
         cfg.method,
@@ -59,10 +96,7 @@ pub fn lobes(cfg: &LobesConfig, out: &mut dyn Write) -> Result<()> {
         t.tool.teeth,
         method_name(cfg.method),
         cfg.immersion,
-        match cfg.milling {
-            Milling::Up => "up",
-            Milling::Down => "down",
-        },
+        super::cut::milling_name(cfg.milling),
         cfg.speeds_rpm.len()
     )?;
     match points
@@ -87,11 +121,7 @@ pub fn lobes(cfg: &LobesConfig, out: &mut dyn Write) -> Result<()> {
             cfg.speeds_rpm.len() - points.len()
         )?;
     }
-    if let Some(path) = &cfg.out {
-        files::write_atomic(path, lobes_csv(&points).as_bytes(), cfg.force)?;
-        writeln!(out, "wrote {}", path.display())?;
-    }
-    Ok(())
+    Ok(points)
 }
 
 /// The lobes as a table, thinned to about [`MAX_PRINTED_ROWS`] rows.

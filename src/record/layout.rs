@@ -23,7 +23,7 @@ use rerun::blueprint::{
 
 /// Room for the views (blueprint and selection panels collapsed), the time cursor at the end of
 /// `timeline` (every path fully drawn).
-fn framed(root: Horizontal, timeline: &str) -> Blueprint {
+pub(crate) fn framed(root: Horizontal, timeline: &str) -> Blueprint {
     Blueprint::new(root)
         .with_blueprint_panel(BlueprintPanel::from_state(PanelState::Collapsed))
         .with_selection_panel(SelectionPanel::from_state(PanelState::Collapsed))

@@ -21,6 +21,9 @@
 //! | `legend` | `TextDocument` | colours and magnification |
 //! | `runs/seed<s>/<state>/<diagonal>/{before,after}` | `Scalars` | campaign only: \|E\| of every held-out hybrid run (see [`campaign`]) |
 //!
+//! The milling-dynamics commands write their own recordings ([`dynamics`]: lobe diagram, one
+//! cut's vibration, forces and spectra).
+//!
 //! Timelines: `sim_time` (duration, s of twin time), `sample` (measurement point index) and, for
 //! straight-line tests such as the diagonals, `diagonal_mm` (position along the line from the
 //! first measurement point, mm, rounded). Scene units are metres (see [`scene`]).
@@ -36,6 +39,7 @@
 
 pub mod campaign;
 pub mod check;
+pub mod dynamics;
 pub mod layout;
 mod recorder;
 pub mod scene;

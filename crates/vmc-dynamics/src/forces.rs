@@ -18,6 +18,13 @@
 //!
 //! Process damping adds F = −(C a_p / v_c)·D(φ)·q̇ with D = [s², sc; sc, c²] (the normal
 //! penetration rate ẋ s + ẏ c resisted along the normal), v_c = πDn/60 the cutting speed.
+//!
+//! Helical teeth (helix angle β): the point of tooth j at height z above the tip is at angle
+//! φ_j(z) = φ + 2πj/N − k_β z with the lag k_β = 2 tanβ / D. The flute is cut into K disks of
+//! height a_p/K ([`Disks`], the axial discretisation of Altintas' textbook), each a straight
+//! tooth at its mid-height lag, so a_p·H becomes (a_p/K)·Σ_k H(φ − k_β z_k). The mean over a
+//! revolution does not depend on the lag, so the zero-order matrix A₀ is the same for every
+//! helix angle.
 
 use std::f64::consts::PI;
 
@@ -145,7 +152,77 @@ fn screened_integrals(tool: &Tool, window: &Engagement, phi_a: f64, phi_b: f64) 
     (ss, cc, sc)
 }
 
-/// Zero-order (time-averaged) directional matrix A₀ = (N/2π)∫_{φ_st}^{φ_ex} H dφ in N/m².
+/// Axial discretisation of a helical flute into disks of equal height.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Disks {
+    lags_rad: Vec<f64>,
+}
+
+impl Disks {
+    /// Disks over an axial depth `depth_m` (m) such that neighbouring disks lag by at most
+    /// `max_lag_rad`: K = ⌈k_β a_p / max_lag⌉ (at least 1), disk k at z_k = (k + ½) a_p / K.
+    /// Straight teeth (or a zero depth) give one disk without lag, i.e. the straight-tooth model.
+    pub fn new(tool: &Tool, depth_m: f64, max_lag_rad: f64) -> Self {
+        let total = tool.lag_rad_per_m() * depth_m;
+        if total <= 0.0 || !total.is_finite() || max_lag_rad <= 0.0 {
+            return Self {
+                lags_rad: vec![0.0],
+            };
+        }
+        // The small allowance keeps K = m when the total lag is exactly m times the maximum
+        // (rounding must not add a disk: see `helical_cutting_matrix_mean`).
+        let count = ((total / max_lag_rad) - 1e-9).ceil().max(1.0) as usize;
+        let lags_rad = (0..count)
+            .map(|k| total * (k as f64 + 0.5) / count as f64)
+            .collect();
+        Self { lags_rad }
+    }
+
+    /// Number of disks K.
+    pub fn count(&self) -> usize {
+        self.lags_rad.len()
+    }
+
+    /// Lag angle k_β z_k of each disk in rad (0 for straight teeth).
+    pub fn lags_rad(&self) -> &[f64] {
+        &self.lags_rad
+    }
+}
+
+/// Mean over [φ_a, φ_b] of the helical directional matrix (1/K)·Σ_k H(φ − k_β z_k) in N/m², so
+/// that the force is a_p times it. With disks one step apart in lag and steps that tile the
+/// tooth pitch, a depth of one axial pitch (k_β a_p = 2π/N) gives exactly A₀ at every step.
+pub fn helical_cutting_matrix_mean(
+    tool: &Tool,
+    window: &Engagement,
+    disks: &Disks,
+    phi_a: f64,
+    phi_b: f64,
+) -> Matrix2<f64> {
+    let mut h = Matrix2::zeros();
+    for lag in disks.lags_rad() {
+        h += cutting_matrix_mean(tool, window, phi_a - lag, phi_b - lag);
+    }
+    h / disks.count() as f64
+}
+
+/// Mean over [φ_a, φ_b] of the helical process-damping shape (1/K)·Σ_k D(φ − k_β z_k).
+pub fn helical_damping_matrix_mean(
+    tool: &Tool,
+    window: &Engagement,
+    disks: &Disks,
+    phi_a: f64,
+    phi_b: f64,
+) -> Matrix2<f64> {
+    let mut d = Matrix2::zeros();
+    for lag in disks.lags_rad() {
+        d += damping_matrix_mean(tool, window, phi_a - lag, phi_b - lag);
+    }
+    d / disks.count() as f64
+}
+
+/// Zero-order (time-averaged) directional matrix A₀ = (N/2π)∫_{φ_st}^{φ_ex} H dφ in N/m²
+/// (the same for every helix angle).
 pub fn average_cutting_matrix(tool: &Tool, window: &Engagement) -> Matrix2<f64> {
     cutting_matrix_mean(tool, window, 0.0, 2.0 * PI / f64::from(tool.teeth))
 }

@@ -17,23 +17,32 @@
 //! [`lobes()`] gives one API for the stability lobes of all three; [`beam`] builds tip modes
 //! of an Euler–Bernoulli clamped-free cantilever; [`modal`] the state-space form.
 //!
-//! Assumptions: straight teeth (a non-zero helix angle is rejected with
-//! [`DynamicsError::UnsupportedHelix`]), uniform pitch, linear force law (edge forces only in
-//! the time domain's process model), rigid workpiece, constant speed. Units: SI unless the
+//! [`cut`] simulates one cut with the process force (feed, edge forces, loss of contact) from
+//! its steady vibration and judges it stable or chattering; [`spectrum`] gives its amplitude
+//! spectrum (radix-2 FFT).
+//!
+//! Helical teeth: the flute is cut into axial disks that lag by the helix (see [`forces`]);
+//! SDM and the time domain use them, ZOA's mean directional matrix does not depend on the
+//! helix. Assumptions: uniform pitch, linear force law (edge forces only in the time domain's
+//! process model), a tool rigid along its axis (every disk sees the tip's displacement),
+//! rigid workpiece, constant speed. Units: SI unless the
 //! name says `_mm`, `_rpm`, `_deg`. Everything is f64, deterministic and free of I/O.
 
 #![warn(missing_docs)]
 
 pub mod beam;
+pub mod cut;
 pub mod forces;
 pub mod lobes;
 pub mod milling;
 pub mod modal;
 pub mod params;
 pub mod sdm;
+pub mod spectrum;
 pub mod time_domain;
 pub mod zoa;
 
-pub use lobes::{lobes, LobePoint, Method};
+pub use cut::{simulate_cut, CutOptions, CutSimulation, Verdict};
+pub use lobes::{lobes, sdm_lowest_critical_depth, LobePoint, Method};
 pub use params::{Cut, DynamicsError, Milling, Mode, TipModes, Tool};
 pub use sdm::BoundaryKind;

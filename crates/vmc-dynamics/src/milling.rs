@@ -13,6 +13,11 @@
 //! v_c = πDn/60. It is solved by [`crate::sdm`] with m steps per tooth period (default 40).
 //! Steps during which no tooth cuts reuse one exponential per speed.
 //!
+//! Helical teeth: H and D are the disk means of [`crate::forces::helical_cutting_matrix_mean`]
+//! with disks one step angle (2π/(N m)) apart in lag at most. The disks depend on the depth,
+//! so with a helix the step terms are built for each depth instead of once per speed; straight
+//! teeth keep one disk without lag (the straight-tooth model, unchanged).
+//!
 //! Critical depth at a speed: [`MillingSdm::grid_boundary`] scans a depth grid and returns the
 //! midpoint between the last stable and the first unstable depth; [`MillingSdm::trace`]
 //! follows the boundary from speed to speed, bracketing around the previous speed's depth and
@@ -22,7 +27,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::{Complex, DMatrix};
 
-use crate::forces::{cutting_matrix_mean, cutting_speed_m_per_s, damping_matrix_mean, Engagement};
+use std::borrow::Cow;
+
+use crate::forces::{
+    cutting_speed_m_per_s, helical_cutting_matrix_mean, helical_damping_matrix_mean, Disks,
+    Engagement,
+};
 use crate::modal::ModalModel;
 use crate::params::{positive, validate_speed, DynamicsError, Milling, TipModes, Tool};
 use crate::sdm::LobePoint;
@@ -104,7 +114,8 @@ pub struct SpeedSdm<'a> {
     spindle_rpm: f64,
     period_s: f64,
     dt_s: f64,
-    /// Per step; `None` while no tooth cuts.
+    omega_rad_per_s: f64,
+    /// Per step; `None` while no tooth cuts. Empty for helical teeth (built per depth).
     terms: Vec<Option<StepTerms>>,
     free: DMatrix<f64>,
 }
@@ -153,11 +164,29 @@ impl MillingSdm {
         let period_s = self.tool.tooth_period_s(spindle_rpm);
         let dt_s = period_s / self.steps as f64;
         let omega = 2.0 * std::f64::consts::PI * spindle_rpm / 60.0;
-        let terms = (0..self.steps)
+        let terms = if self.tool.lag_rad_per_m() == 0.0 {
+            self.step_terms(omega, dt_s, &Disks::new(&self.tool, 0.0, 0.0))
+        } else {
+            Vec::new()
+        };
+        Ok(SpeedSdm {
+            sdm: self,
+            spindle_rpm,
+            period_s,
+            dt_s,
+            omega_rad_per_s: omega,
+            terms,
+            free: (&self.a0 * dt_s).exp(),
+        })
+    }
+
+    /// Force terms of every step (per metre of depth) for the given disks.
+    fn step_terms(&self, omega: f64, dt_s: f64, disks: &Disks) -> Vec<Option<StepTerms>> {
+        (0..self.steps)
             .map(|i| {
                 let (pa, pb) = (omega * dt_s * i as f64, omega * dt_s * (i + 1) as f64);
-                let h = cutting_matrix_mean(&self.tool, &self.window, pa, pb);
-                let dm = damping_matrix_mean(&self.tool, &self.window, pa, pb);
+                let h = helical_cutting_matrix_mean(&self.tool, &self.window, disks, pa, pb);
+                let dm = helical_damping_matrix_mean(&self.tool, &self.window, disks, pa, pb);
                 if h.iter().all(|v| *v == 0.0) && dm.iter().all(|v| *v == 0.0) {
                     return None;
                 }
@@ -166,15 +195,7 @@ impl MillingSdm {
                 let bdc = &self.b_in * self.model.restrict(&dm) * &self.c_v;
                 Some(StepTerms { bhc, bh, bdc })
             })
-            .collect();
-        Ok(SpeedSdm {
-            sdm: self,
-            spindle_rpm,
-            period_s,
-            dt_s,
-            terms,
-            free: (&self.a0 * dt_s).exp(),
-        })
+            .collect()
     }
 
     /// Stability at one speed and depth.
@@ -258,8 +279,15 @@ impl SpeedSdm<'_> {
         let a_m = depth_mm * 1e-3;
         let pd = sdm.tool.process_damping_n_per_m * a_m
             / cutting_speed_m_per_s(&sdm.tool, self.spindle_rpm);
-        let cut_steps: Vec<Option<Step>> = self
-            .terms
+        let terms = if self.terms.is_empty() {
+            // Helical teeth: disks at most one step angle apart in lag, for this depth.
+            let step_rad = self.omega_rad_per_s * self.dt_s;
+            let disks = Disks::new(&sdm.tool, a_m, step_rad);
+            Cow::Owned(sdm.step_terms(self.omega_rad_per_s, self.dt_s, &disks))
+        } else {
+            Cow::Borrowed(self.terms.as_slice())
+        };
+        let cut_steps: Vec<Option<Step>> = terms
             .iter()
             .map(|t| {
                 t.as_ref().map(|t| {
@@ -355,6 +383,30 @@ impl SpeedSdm<'_> {
             }
         }
         self.bisect(lo, hi, hi_st, tol_mm).map(Some)
+    }
+
+    /// The lowest critical depth at this speed: the first unstable depth of an even scan of
+    /// `scan` depths over (0, `max_depth_mm`], refined by bisection against the depth before it
+    /// to `tol_mm`; `None` when every scanned depth is stable. Unlike the tracer it cannot step
+    /// over an unstable island wider than the scan's spacing under a higher boundary.
+    pub fn lowest_critical_depth(
+        &self,
+        max_depth_mm: f64,
+        scan: usize,
+        tol_mm: f64,
+    ) -> Result<Option<LobePoint>, DynamicsError> {
+        positive("max_depth_mm", max_depth_mm)?;
+        positive("tol_mm", tol_mm)?;
+        let mut lo = 0.0;
+        for k in 1..=scan.max(1) {
+            let a = max_depth_mm * k as f64 / scan.max(1) as f64;
+            let st = self.stability(a)?;
+            if !st.is_stable() {
+                return self.bisect(lo, a, st, tol_mm).map(Some);
+            }
+            lo = a;
+        }
+        Ok(None)
     }
 
     /// Bisection between a stable `lo` and an unstable `hi` (with its stability) to `tol_mm`.

@@ -44,9 +44,23 @@ pub enum DynamicsError {
     /// Neither direction has a mode.
     #[error("at least one mode in x or y is required")]
     NoModes,
-    /// A helix angle other than 0 was given; the models assume straight teeth.
-    #[error("helix angle {0} deg is not supported (straight teeth only)")]
-    UnsupportedHelix(f64),
+    /// The helix angle is outside [0, 90) degrees.
+    #[error("helix angle must be in [0, 90) deg, got {0}")]
+    HelixOutOfRange(f64),
+    /// The steady (tooth-periodic) forced vibration of a cut does not exist: an undamped mode
+    /// is excited at one of its natural frequencies.
+    #[error("the cut has no steady vibration (an undamped mode resonates with the tooth passing)")]
+    NoSteadyState,
+    /// A count is too large.
+    #[error("{name} must be <= {max}, got {value}")]
+    TooManySteps {
+        /// Name of the count.
+        name: &'static str,
+        /// Largest accepted value.
+        max: usize,
+        /// The value given.
+        value: usize,
+    },
     /// A discretisation count is too small.
     #[error("{name} must be >= {min}, got {value}")]
     TooFewSteps {
@@ -85,14 +99,15 @@ pub(crate) fn non_negative(name: &'static str, v: f64) -> Result<(), DynamicsErr
     }
 }
 
-/// An end mill with straight (or helical, unsupported) teeth and linear cutting-force coefficients.
+/// An end mill with straight or helical teeth and linear cutting-force coefficients.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Tool {
     /// Number of teeth N (uniform pitch).
     pub teeth: u32,
     /// Diameter D in mm.
     pub diameter_mm: f64,
-    /// Helix angle in degrees; only 0 is supported.
+    /// Helix angle β in degrees, in [0, 90) (default 0: straight teeth). A point of a tooth at
+    /// height z above the tip lags the tip by the angle 2 z tanβ / D.
     pub helix_deg: f64,
     /// Tangential specific cutting force K_t in N/m².
     pub kt_n_per_m2: f64,
@@ -121,21 +136,29 @@ impl Tool {
         }
     }
 
-    /// Checks counts, signs and finiteness; a non-zero helix is rejected.
+    /// Checks counts, signs, finiteness and the helix range [0, 90) deg.
     pub fn validate(&self) -> Result<(), DynamicsError> {
         if self.teeth == 0 {
             return Err(DynamicsError::NoTeeth);
         }
         positive("diameter_mm", self.diameter_mm)?;
         finite("helix_deg", self.helix_deg)?;
-        if self.helix_deg != 0.0 {
-            return Err(DynamicsError::UnsupportedHelix(self.helix_deg));
+        if !(0.0..90.0).contains(&self.helix_deg) {
+            return Err(DynamicsError::HelixOutOfRange(self.helix_deg));
         }
         non_negative("kt_n_per_m2", self.kt_n_per_m2)?;
         non_negative("kn_n_per_m2", self.kn_n_per_m2)?;
         non_negative("kte_n_per_m", self.kte_n_per_m)?;
         non_negative("kne_n_per_m", self.kne_n_per_m)?;
         non_negative("process_damping_n_per_m", self.process_damping_n_per_m)
+    }
+
+    /// Lag angle per metre of height k_β = 2 tanβ / D in rad/m (0 for straight teeth).
+    pub fn lag_rad_per_m(&self) -> f64 {
+        if self.helix_deg == 0.0 {
+            return 0.0;
+        }
+        2.0 * self.helix_deg.to_radians().tan() / (self.diameter_mm * 1e-3)
     }
 
     /// Tooth-passing period τ = 60/(N·n) in s, which is also the regenerative delay.

@@ -12,6 +12,8 @@
 //! [`ForceModel::Process`] uses all terms and drops a tooth's force when h ≤ 0 (it left the
 //! cut); [`ForceModel::Linear`] keeps only the regenerative and process-damping terms (no feed,
 //! no edge forces, no loss of contact) — the linear delay equation that ZOA and SDM analyse.
+//! With a helix the sum runs over the axial disks of [`crate::forces::Disks`] as well (each of
+//! height a_p/K at its own lag, neighbours at most one step angle ωΔt apart).
 //!
 //! Instability criterion: in the linear model the vibration starts from a small initial
 //! displacement and its amplitude A_k = √Σ(q² + (q̇/ω)²) is sampled once per tooth period
@@ -22,7 +24,9 @@
 
 use std::f64::consts::PI;
 
-use crate::forces::{cutting_speed_m_per_s, Engagement};
+use nalgebra::{DMatrix, DVector};
+
+use crate::forces::{cutting_speed_m_per_s, Disks, Engagement};
 use crate::params::{
     non_negative, positive, validate_speed, DynamicsError, Milling, TipModes, Tool,
 };
@@ -136,13 +140,15 @@ impl Simulation {
 }
 
 /// Cut-dependent constants of the force.
-#[derive(Debug, Clone, Copy)]
-struct Loads {
-    depth_m: f64,
+#[derive(Debug, Clone)]
+pub(crate) struct Loads {
+    /// Height of one disk a_p/K in m (the whole depth for straight teeth).
+    disk_depth_m: f64,
     feed_m: f64,
-    /// C·a_p/v_c.
+    /// C·(a_p/K)/v_c, per disk.
     process_damping_n_s_per_m: f64,
     model: ForceModel,
+    disks: Disks,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -207,6 +213,21 @@ impl TimeDomain {
         })
     }
 
+    /// The options given to [`TimeDomain::new`].
+    pub fn options(&self) -> &TimeOptions {
+        &self.options
+    }
+
+    /// Natural frequencies of the modes in Hz.
+    pub fn frequencies_hz(&self) -> Vec<f64> {
+        self.modes.iter().map(|m| m.omega / (2.0 * PI)).collect()
+    }
+
+    /// Number of modes (the state has twice as many entries).
+    pub(crate) fn mode_count(&self) -> usize {
+        self.modes.len()
+    }
+
     fn tip(&self, s: &[f64]) -> ([f64; 2], [f64; 2]) {
         let n = self.modes.len();
         let (mut p, mut v) = ([0.0; 2], [0.0; 2]);
@@ -217,39 +238,49 @@ impl TimeDomain {
         (p, v)
     }
 
-    /// Cutting force on the tool [F_x, F_y] in N.
+    /// Cutting force on the tool [F_x, F_y] in N, summed over disks and teeth.
     fn force(&self, phi: f64, p: [f64; 2], v: [f64; 2], delayed: [f64; 2], k: &Loads) -> [f64; 2] {
-        let (a_m, feed_m, pd) = (k.depth_m, k.feed_m, k.process_damping_n_s_per_m);
+        let (a_m, feed_m, pd) = (k.disk_depth_m, k.feed_m, k.process_damping_n_s_per_m);
         let t = &self.tool;
         let mut f = [0.0; 2];
-        for j in 0..t.teeth {
-            let pj = phi + 2.0 * PI * f64::from(j) / f64::from(t.teeth);
-            if self.window.screen(pj) == 0.0 {
-                continue;
-            }
-            let (s, c) = pj.sin_cos();
-            let dh = (p[0] - delayed[0]) * s + (p[1] - delayed[1]) * c;
-            let (ft, fn_) = match k.model {
-                ForceModel::Linear => (t.kt_n_per_m2 * a_m * dh, t.kn_n_per_m2 * a_m * dh),
-                ForceModel::Process => {
-                    let h = feed_m * s + dh;
-                    if h <= 0.0 {
-                        continue;
-                    }
-                    (
-                        a_m * (t.kt_n_per_m2 * h + t.kte_n_per_m),
-                        a_m * (t.kn_n_per_m2 * h + t.kne_n_per_m),
-                    )
+        for lag in k.disks.lags_rad() {
+            for j in 0..t.teeth {
+                let pj = phi + 2.0 * PI * f64::from(j) / f64::from(t.teeth) - lag;
+                if self.window.screen(pj) == 0.0 {
+                    continue;
                 }
-            };
-            let fn_ = fn_ + pd * (v[0] * s + v[1] * c);
-            f[0] += -ft * c - fn_ * s;
-            f[1] += ft * s - fn_ * c;
+                let (s, c) = pj.sin_cos();
+                let dh = (p[0] - delayed[0]) * s + (p[1] - delayed[1]) * c;
+                let (ft, fn_) = match k.model {
+                    ForceModel::Linear => (t.kt_n_per_m2 * a_m * dh, t.kn_n_per_m2 * a_m * dh),
+                    ForceModel::Process => {
+                        let h = feed_m * s + dh;
+                        if h <= 0.0 {
+                            continue;
+                        }
+                        (
+                            a_m * (t.kt_n_per_m2 * h + t.kte_n_per_m),
+                            a_m * (t.kn_n_per_m2 * h + t.kne_n_per_m),
+                        )
+                    }
+                };
+                let fn_ = fn_ + pd * (v[0] * s + v[1] * c);
+                f[0] += -ft * c - fn_ * s;
+                f[1] += ft * s - fn_ * c;
+            }
         }
         f
     }
 
-    fn deriv(&self, phi: f64, s: &[f64], delayed: [f64; 2], k: &Loads, out: &mut [f64]) {
+    /// State derivative; returns the cutting force [F_x, F_y] in N.
+    fn deriv(
+        &self,
+        phi: f64,
+        s: &[f64],
+        delayed: [f64; 2],
+        k: &Loads,
+        out: &mut [f64],
+    ) -> [f64; 2] {
         let n = self.modes.len();
         let (p, v) = self.tip(s);
         let f = self.force(phi, p, v, delayed, k);
@@ -258,9 +289,11 @@ impl TimeDomain {
             out[n + k] = -m.omega * m.omega * s[k] - 2.0 * m.zeta * m.omega * s[n + k]
                 + f[m.axis] / m.mass_kg;
         }
+        f
     }
 
-    fn amplitude(&self, s: &[f64]) -> f64 {
+    /// Vibration amplitude √Σ(q² + (q̇/ω)²) in m of a modal state.
+    pub(crate) fn amplitude(&self, s: &[f64]) -> f64 {
         let n = self.modes.len();
         self.modes
             .iter()
@@ -279,87 +312,33 @@ impl TimeDomain {
         feed_per_tooth_mm: f64,
         model: ForceModel,
     ) -> Result<Simulation, DynamicsError> {
-        validate_speed(spindle_rpm)?;
-        non_negative("axial_depth_mm", depth_mm)?;
-        non_negative("feed_per_tooth_mm", feed_per_tooth_mm)?;
-        let m = self.options.steps_per_tooth;
-        let period_s = self.tool.tooth_period_s(spindle_rpm);
-        let dt = period_s / m as f64;
-        let omega = 2.0 * PI * spindle_rpm / 60.0;
-        let a_m = depth_mm * 1e-3;
-        let feed_m = feed_per_tooth_mm * 1e-3;
-        let loads = Loads {
-            depth_m: a_m,
-            feed_m,
-            process_damping_n_s_per_m: self.tool.process_damping_n_per_m * a_m
-                / cutting_speed_m_per_s(&self.tool, spindle_rpm),
-            model,
-        };
-        let n = self.modes.len();
-        let mut s = vec![0.0; 2 * n];
+        let mut run = Integrator::new(self, spindle_rpm, depth_mm, feed_per_tooth_mm, model)?;
+        let (m, n) = (run.m, self.modes.len());
         if model == ForceModel::Linear {
-            s[..n].fill(self.options.initial_displacement_m);
+            run.s[..n].fill(self.options.initial_displacement_m);
         }
-        // Ring buffer of tip displacement and velocity over one delay (m + 1 samples).
-        let mut hist_p = vec![[0.0; 2]; m + 1];
-        let mut hist_v = vec![[0.0; 2]; m + 1];
-        let (mut k1, mut k2, mut k3, mut k4) = (
-            vec![0.0; 2 * n],
-            vec![0.0; 2 * n],
-            vec![0.0; 2 * n],
-            vec![0.0; 2 * n],
-        );
-        let mut tmp = vec![0.0; 2 * n];
+        run.start();
         let mut out = Simulation {
-            period_s,
+            period_s: run.period_s,
             displacement_m: Vec::with_capacity(self.options.tooth_periods + 1),
             amplitude_m: Vec::with_capacity(self.options.tooth_periods + 1),
             steps: 0,
-            step_s: dt,
+            step_s: run.dt,
             tail_m: Vec::with_capacity(self.options.tooth_periods * m / 4 + 1),
         };
         let tail_start = self.options.tooth_periods * m - self.options.tooth_periods * m / 4;
-        let (p0, v0) = self.tip(&s);
-        hist_p[m] = p0;
-        hist_v[m] = v0;
-        out.displacement_m.push(p0);
-        out.amplitude_m.push(self.amplitude(&s));
+        out.displacement_m.push(run.tip().0);
+        out.amplitude_m.push(self.amplitude(&run.s));
         for i in 0..self.options.tooth_periods * m {
-            // Slot of sample i − m (the oldest) is (i mod (m+1)); sample i−m+1 is the next slot.
-            let old = i % (m + 1);
-            let newer = (i + 1) % (m + 1);
-            let (d0, d1) = (hist_p[old], hist_p[newer]);
-            let (w0, w1) = (hist_v[old], hist_v[newer]);
-            let mid = [
-                0.5 * (d0[0] + d1[0]) + dt * (w0[0] - w1[0]) / 8.0,
-                0.5 * (d0[1] + d1[1]) + dt * (w0[1] - w1[1]) / 8.0,
-            ];
-            // Teeth are identical, so the angle is taken within one tooth pitch: the same
-            // angles recur bit for bit every tooth period (a tooth entering exactly on a step
-            // boundary is then treated the same way at every pass).
-            let phi = omega * dt * (i % m) as f64;
-            let half = 0.5 * omega * dt;
-            self.deriv(phi, &s, d0, &loads, &mut k1);
-            axpy(&s, &k1, 0.5 * dt, &mut tmp);
-            self.deriv(phi + half, &tmp, mid, &loads, &mut k2);
-            axpy(&s, &k2, 0.5 * dt, &mut tmp);
-            self.deriv(phi + half, &tmp, mid, &loads, &mut k3);
-            axpy(&s, &k3, dt, &mut tmp);
-            self.deriv(phi + 2.0 * half, &tmp, d1, &loads, &mut k4);
-            for r in 0..2 * n {
-                s[r] += dt / 6.0 * (k1[r] + 2.0 * k2[r] + 2.0 * k3[r] + k4[r]);
-            }
-            // Sample i + 1 replaces the oldest one (i − m), which is no longer needed.
-            let (p, v) = self.tip(&s);
-            hist_p[old] = p;
-            hist_v[old] = v;
+            run.step();
+            let p = run.tip().0;
             out.steps += 1;
             if i >= tail_start {
                 out.tail_m.push(p);
             }
             if (i + 1) % m == 0 {
                 out.displacement_m.push(p);
-                out.amplitude_m.push(self.amplitude(&s));
+                out.amplitude_m.push(self.amplitude(&run.s));
             }
         }
         Ok(out)
@@ -411,18 +390,226 @@ impl TimeDomain {
             / (2.0 * PI);
         let f_max = self.modes.iter().map(|m| m.omega).fold(0.0, f64::max) / (2.0 * PI);
         let f = sim.dominant_frequency_hz(0.5 * f_min, 2.0 * f_max);
-        let half_harmonic = f * sim.period_s - 0.5;
-        let kind = if (half_harmonic - half_harmonic.round()).abs() < 0.005 * f * sim.period_s {
-            BoundaryKind::Flip
-        } else {
-            BoundaryKind::Hopf
-        };
+        let kind = kind_of_frequency(f, sim.period_s);
         Ok(Some(LobePoint {
             spindle_rpm,
             critical_depth_mm: 0.5 * (lo + hi),
             chatter_frequency_hz: f,
             kind,
         }))
+    }
+}
+
+/// Flip when a vibration at `frequency_hz` sits at an odd multiple of half the tooth-passing
+/// frequency 1/τ (within 0.5 % of the frequency), else Hopf.
+pub(crate) fn kind_of_frequency(frequency_hz: f64, period_s: f64) -> BoundaryKind {
+    let half_harmonic = frequency_hz * period_s - 0.5;
+    if (half_harmonic - half_harmonic.round()).abs() < 0.005 * frequency_hz * period_s {
+        BoundaryKind::Flip
+    } else {
+        BoundaryKind::Hopf
+    }
+}
+
+/// RK4 integration of one cut: modal state, delay buffer of one tooth period and scratch.
+/// The delay τ is m steps; the spindle angle is taken within one tooth pitch.
+pub(crate) struct Integrator<'a> {
+    td: &'a TimeDomain,
+    loads: Loads,
+    /// Steps per tooth period.
+    pub(crate) m: usize,
+    /// Step Δt in s.
+    pub(crate) dt: f64,
+    /// Tooth period τ in s.
+    pub(crate) period_s: f64,
+    omega: f64,
+    /// Modal state [q; q̇] at the current step.
+    pub(crate) s: Vec<f64>,
+    hist_p: Vec<[f64; 2]>,
+    hist_v: Vec<[f64; 2]>,
+    k: [Vec<f64>; 4],
+    tmp: Vec<f64>,
+    /// Steps taken.
+    pub(crate) i: usize,
+}
+
+impl<'a> Integrator<'a> {
+    /// A cut at rest with the undeformed surface as history. Helical teeth are cut into disks
+    /// that lag by at most one step angle ωΔt.
+    pub(crate) fn new(
+        td: &'a TimeDomain,
+        spindle_rpm: f64,
+        depth_mm: f64,
+        feed_per_tooth_mm: f64,
+        model: ForceModel,
+    ) -> Result<Self, DynamicsError> {
+        validate_speed(spindle_rpm)?;
+        non_negative("axial_depth_mm", depth_mm)?;
+        non_negative("feed_per_tooth_mm", feed_per_tooth_mm)?;
+        let m = td.options.steps_per_tooth;
+        let period_s = td.tool.tooth_period_s(spindle_rpm);
+        let dt = period_s / m as f64;
+        let omega = 2.0 * PI * spindle_rpm / 60.0;
+        let a_m = depth_mm * 1e-3;
+        let disks = Disks::new(&td.tool, a_m, omega * dt);
+        let count = disks.count() as f64;
+        let loads = Loads {
+            disk_depth_m: a_m / count,
+            feed_m: feed_per_tooth_mm * 1e-3,
+            process_damping_n_s_per_m: td.tool.process_damping_n_per_m * a_m
+                / cutting_speed_m_per_s(&td.tool, spindle_rpm)
+                / count,
+            model,
+            disks,
+        };
+        let dim = 2 * td.modes.len();
+        Ok(Self {
+            td,
+            loads,
+            m,
+            dt,
+            period_s,
+            omega,
+            s: vec![0.0; dim],
+            hist_p: vec![[0.0; 2]; m + 1],
+            hist_v: vec![[0.0; 2]; m + 1],
+            k: std::array::from_fn(|_| vec![0.0; dim]),
+            tmp: vec![0.0; dim],
+            i: 0,
+        })
+    }
+
+    /// Number of disks of the helical flute (1 for straight teeth).
+    pub(crate) fn disk_count(&self) -> usize {
+        self.loads.disks.count()
+    }
+
+    /// Current tip displacement and velocity [x, y] in m and m/s.
+    pub(crate) fn tip(&self) -> ([f64; 2], [f64; 2]) {
+        self.td.tip(&self.s)
+    }
+
+    /// Stores the current state as sample 0 of the delay buffer (call before the first step).
+    pub(crate) fn start(&mut self) {
+        let (p, v) = self.tip();
+        let slot = (self.i + self.m) % (self.m + 1);
+        self.hist_p[slot] = p;
+        self.hist_v[slot] = v;
+    }
+
+    /// Sets the history of the last tooth period, sample j = −m + r from `past[r]`
+    /// (r = 0..m, tip displacement and velocity), at step 0.
+    pub(crate) fn set_history(&mut self, past_p: &[[f64; 2]], past_v: &[[f64; 2]]) {
+        // Sample j sits in slot (j + m) mod (m + 1).
+        self.hist_p[..self.m].copy_from_slice(&past_p[..self.m]);
+        self.hist_v[..self.m].copy_from_slice(&past_v[..self.m]);
+    }
+
+    /// One RK4 step; returns the cutting force [F_x, F_y] in N at the start of the step.
+    pub(crate) fn step(&mut self) -> [f64; 2] {
+        let (m, dt, i) = (self.m, self.dt, self.i);
+        // Slot of sample i − m (the oldest) is (i mod (m+1)); sample i−m+1 is the next slot.
+        let old = i % (m + 1);
+        let newer = (i + 1) % (m + 1);
+        let (d0, d1) = (self.hist_p[old], self.hist_p[newer]);
+        let (w0, w1) = (self.hist_v[old], self.hist_v[newer]);
+        let mid = [
+            0.5 * (d0[0] + d1[0]) + dt * (w0[0] - w1[0]) / 8.0,
+            0.5 * (d0[1] + d1[1]) + dt * (w0[1] - w1[1]) / 8.0,
+        ];
+        // Teeth are identical, so the angle is taken within one tooth pitch: the same
+        // angles recur bit for bit every tooth period (a tooth entering exactly on a step
+        // boundary is then treated the same way at every pass).
+        let phi = self.omega * dt * (i % m) as f64;
+        let half = 0.5 * self.omega * dt;
+        let (td, loads, s, tmp) = (self.td, &self.loads, &mut self.s, &mut self.tmp);
+        let [k1, k2, k3, k4] = &mut self.k;
+        let force = td.deriv(phi, s, d0, loads, k1);
+        axpy(s, k1, 0.5 * dt, tmp);
+        td.deriv(phi + half, tmp, mid, loads, k2);
+        axpy(s, k2, 0.5 * dt, tmp);
+        td.deriv(phi + half, tmp, mid, loads, k3);
+        axpy(s, k3, dt, tmp);
+        td.deriv(phi + 2.0 * half, tmp, d1, loads, k4);
+        for r in 0..s.len() {
+            s[r] += dt / 6.0 * (k1[r] + 2.0 * k2[r] + 2.0 * k3[r] + k4[r]);
+        }
+        // Sample i + 1 replaces the oldest one (i − m), which is no longer needed.
+        let (p, v) = td.tip(s);
+        self.hist_p[old] = p;
+        self.hist_v[old] = v;
+        self.i += 1;
+        force
+    }
+
+    /// One RK4 step of the cut without regeneration (the delayed displacement is the current
+    /// one, Δ = 0: the static chip f_z sinφ, edge forces and process damping) from `s` at step
+    /// index `i`, in place.
+    fn steady_step(&mut self, s: &mut [f64], i: usize) {
+        let (td, loads, dt) = (self.td, &self.loads, self.dt);
+        let phi = self.omega * dt * (i % self.m) as f64;
+        let half = 0.5 * self.omega * dt;
+        let tmp = &mut self.tmp;
+        let [k1, k2, k3, k4] = &mut self.k;
+        let d = |phi: f64, x: &[f64], out: &mut [f64]| {
+            let p = td.tip(x).0;
+            td.deriv(phi, x, p, loads, out);
+        };
+        d(phi, s, k1);
+        axpy(s, k1, 0.5 * dt, tmp);
+        d(phi + half, tmp, k2);
+        axpy(s, k2, 0.5 * dt, tmp);
+        d(phi + half, tmp, k3);
+        axpy(s, k3, dt, tmp);
+        d(phi + 2.0 * half, tmp, k4);
+        for r in 0..s.len() {
+            s[r] += dt / 6.0 * (k1[r] + 2.0 * k2[r] + 2.0 * k3[r] + k4[r]);
+        }
+    }
+
+    /// The steady cut: the tooth-periodic forced vibration s*(t) = s*(t + τ) of the
+    /// discretised structure under the static chip load (no regeneration). The map over one
+    /// tooth period is affine, s ↦ M s + g; its fixed point s* = (I − M)⁻¹ g is found from
+    /// 2n + 1 one-period runs. Puts the integrator on it (state s*, history one period of the
+    /// orbit) and returns s* and the orbit's tip displacements at the m steps of one period.
+    pub(crate) fn steady_state(&mut self) -> Result<(Vec<f64>, Vec<[f64; 2]>), DynamicsError> {
+        let dim = self.s.len();
+        let period_map = |me: &mut Self, s0: &[f64]| {
+            let mut s = s0.to_vec();
+            for i in 0..me.m {
+                me.steady_step(&mut s, i);
+            }
+            s
+        };
+        let g = period_map(self, &vec![0.0; dim]);
+        let mut i_minus_m = DMatrix::identity(dim, dim);
+        for c in 0..dim {
+            let mut e = vec![0.0; dim];
+            e[c] = 1.0;
+            let col = period_map(self, &e);
+            for r in 0..dim {
+                i_minus_m[(r, c)] -= col[r] - g[r];
+            }
+        }
+        let fixed = i_minus_m
+            .lu()
+            .solve(&DVector::from_column_slice(&g))
+            .filter(|x| x.iter().all(|v| v.is_finite()))
+            .ok_or(DynamicsError::NoSteadyState)?;
+        let fixed: Vec<f64> = fixed.iter().copied().collect();
+        let mut s = fixed.clone();
+        let (mut orbit_p, mut orbit_v) = (Vec::with_capacity(self.m), Vec::with_capacity(self.m));
+        for i in 0..self.m {
+            let (p, v) = self.td.tip(&s);
+            orbit_p.push(p);
+            orbit_v.push(v);
+            self.steady_step(&mut s, i);
+        }
+        self.s.copy_from_slice(&fixed);
+        self.i = 0;
+        self.set_history(&orbit_p, &orbit_v);
+        self.start();
+        Ok((fixed, orbit_p))
     }
 }
 

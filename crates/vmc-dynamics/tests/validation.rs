@@ -49,12 +49,17 @@ fn tool_errors() {
             value: -1.0
         }
     );
+    for helix in [-1.0, 90.0, 120.0] {
+        let mut t = tool();
+        t.helix_deg = helix;
+        assert_eq!(
+            sdm_err(&t, &modes(), 0.5),
+            DynamicsError::HelixOutOfRange(helix)
+        );
+    }
     let mut t = tool();
     t.helix_deg = 30.0;
-    assert_eq!(
-        sdm_err(&t, &modes(), 0.5),
-        DynamicsError::UnsupportedHelix(30.0)
-    );
+    assert!(t.validate().is_ok());
     let mut t = tool();
     t.process_damping_n_per_m = -5.0;
     assert!(matches!(
@@ -181,6 +186,72 @@ fn option_errors() {
             value: 2
         }
     );
+    let cut = Cut {
+        spindle_rpm: 9000.0,
+        immersion: 0.5,
+        milling: Milling::Up,
+        feed_per_tooth_mm: 0.1,
+        axial_depth_mm: 1.0,
+    };
+    for (c, want) in [
+        (
+            Cut {
+                feed_per_tooth_mm: 0.0,
+                ..cut
+            },
+            DynamicsError::NonPositive {
+                name: "feed_per_tooth_mm",
+                value: 0.0,
+            },
+        ),
+        (
+            Cut {
+                axial_depth_mm: 0.0,
+                ..cut
+            },
+            DynamicsError::NonPositive {
+                name: "axial_depth_mm",
+                value: 0.0,
+            },
+        ),
+        (
+            Cut {
+                spindle_rpm: 0.0,
+                ..cut
+            },
+            DynamicsError::ZeroSpeed(0.0),
+        ),
+    ] {
+        let err = simulate_cut(&tool(), &modes(), &c, &CutOptions::default()).unwrap_err();
+        assert_eq!(err, want);
+    }
+    for (periods, want) in [
+        (
+            15,
+            DynamicsError::TooFewSteps {
+                name: "tooth_periods",
+                min: 16,
+                value: 15,
+            },
+        ),
+        (
+            200_000,
+            DynamicsError::TooManySteps {
+                name: "tooth_periods",
+                max: 100_000,
+                value: 200_000,
+            },
+        ),
+    ] {
+        let opts = CutOptions {
+            tooth_periods: periods,
+            ..CutOptions::default()
+        };
+        assert_eq!(
+            simulate_cut(&tool(), &modes(), &cut, &opts).unwrap_err(),
+            want
+        );
+    }
     let opts = TimeOptions {
         tooth_periods: 3,
         ..TimeOptions::default()

@@ -1,0 +1,142 @@
+//! Arguments of `cut`: one cut in the time domain.
+
+use std::path::PathBuf;
+
+use anyhow::{anyhow, bail, Result};
+
+use super::{ForceArg, MillingArg};
+use crate::commands;
+use crate::dynamics::cut::{CutOptions, MAX_TOOTH_PERIODS};
+use crate::dynamics::params::{validate_immersion, validate_speed};
+use crate::dynamics::{Cut, Milling};
+use crate::milling::{ToolDynamics, DEFAULT_TOOL_PATH};
+
+/// Fewest tooth periods the verdict needs (four quarters of at least four).
+const MIN_TOOTH_PERIODS: usize = 16;
+
+/// Arguments of `cut`.
+#[derive(clap::Args)]
+pub struct CutArgs {
+    /// Tool file (TOML: teeth, diameter, helix, cutting coefficients, tool-tip modes); default:
+    /// the one-degree-of-freedom benchmark of the field (machines/benchmarks/insperger-1dof.toml).
+    #[arg(long)]
+    pub tool: Option<PathBuf>,
+    /// Spindle speed, rpm (> 0).
+    #[arg(long, allow_negative_numbers = true)]
+    pub rpm: f64,
+    /// Axial depth of cut a_p, mm (> 0).
+    #[arg(long, allow_negative_numbers = true)]
+    pub depth_mm: f64,
+    /// Radial immersion a_e/D, in (0, 1] (1 = slotting).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub immersion: f64,
+    /// Feed per tooth f_z, mm (> 0).
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
+    pub feed_per_tooth_mm: f64,
+    /// Milling direction.
+    #[arg(long, value_enum, default_value = "down")]
+    pub milling: MillingArg,
+    /// Simulated spindle revolutions; default: 400 tooth periods (200 revolutions of a
+    /// two-tooth cutter).
+    #[arg(long, conflicts_with = "duration_s", allow_negative_numbers = true)]
+    pub revolutions: Option<f64>,
+    /// Simulated time, s (instead of --revolutions).
+    #[arg(long, allow_negative_numbers = true)]
+    pub duration_s: Option<f64>,
+    /// Write the time series as CSV (time_s, x_um, y_um, fx_n, fy_n).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write a Rerun recording: vibration and forces over time, the spectra, the report.
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rrd: Option<PathBuf>,
+    #[command(flatten)]
+    pub force: ForceArg,
+}
+
+impl CutArgs {
+    /// The validated config.
+    ///
+    /// # Errors
+    /// An unreadable or invalid tool file, a speed, depth, feed or immersion out of range, a
+    /// horizon under 16 or over 100 000 tooth periods.
+    pub fn config(self) -> Result<commands::cut::CutConfig> {
+        let (tool, tool_source) = match &self.tool {
+            Some(path) => (ToolDynamics::load(path)?, path.display().to_string()),
+            None => (ToolDynamics::benchmark(), DEFAULT_TOOL_PATH.to_string()),
+        };
+        validate_speed(self.rpm).map_err(|e| anyhow!("--rpm: {e}"))?;
+        positive("--depth-mm", self.depth_mm, "mm")?;
+        positive("--feed-per-tooth-mm", self.feed_per_tooth_mm, "mm")?;
+        validate_immersion(self.immersion).map_err(|e| anyhow!("--immersion: {e}"))?;
+        let teeth = f64::from(tool.tool.teeth);
+        let period_s = tool.tool.tooth_period_s(self.rpm);
+        let periods = match (self.revolutions, self.duration_s) {
+            (Some(r), _) => {
+                positive("--revolutions", r, "")?;
+                r * teeth
+            }
+            (None, Some(d)) => {
+                positive("--duration-s", d, "s")?;
+                d / period_s
+            }
+            (None, None) => CutOptions::default().tooth_periods as f64,
+        };
+        let periods = periods.round();
+        let what = match (self.revolutions, self.duration_s) {
+            (Some(r), _) => format!("--revolutions {r}"),
+            (None, Some(d)) => format!("--duration-s {d}"),
+            (None, None) => String::new(),
+        };
+        if periods < MIN_TOOTH_PERIODS as f64 {
+            bail!(
+                "{what} is {periods} tooth periods at {} rpm; at least {MIN_TOOTH_PERIODS} are needed ({:.4} s, {:.1} revolutions)",
+                self.rpm,
+                MIN_TOOTH_PERIODS as f64 * period_s,
+                MIN_TOOTH_PERIODS as f64 / teeth
+            );
+        }
+        if periods > MAX_TOOTH_PERIODS as f64 {
+            bail!(
+                "{what} is {periods} tooth periods at {} rpm; at most {MAX_TOOTH_PERIODS} are simulated ({:.3} s, {:.0} revolutions)",
+                self.rpm,
+                MAX_TOOTH_PERIODS as f64 * period_s,
+                MAX_TOOTH_PERIODS as f64 / teeth
+            );
+        }
+        Ok(commands::cut::CutConfig {
+            tool,
+            tool_source,
+            cut: Cut {
+                spindle_rpm: self.rpm,
+                immersion: self.immersion,
+                milling: match self.milling {
+                    MillingArg::Up => Milling::Up,
+                    MillingArg::Down => Milling::Down,
+                },
+                feed_per_tooth_mm: self.feed_per_tooth_mm,
+                axial_depth_mm: self.depth_mm,
+            },
+            options: CutOptions {
+                tooth_periods: periods as usize,
+                ..CutOptions::default()
+            },
+            out: self.out,
+            rrd: self.rrd,
+            force: self.force.force,
+        })
+    }
+}
+
+/// Refuses a value that is not a finite number > 0.
+fn positive(option: &str, v: f64, unit: &str) -> Result<()> {
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        let unit = if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {unit}")
+        };
+        bail!("{option} must be > 0{unit}, got {v}")
+    }
+}
