@@ -14,6 +14,7 @@ pub mod cli;
 pub mod collision;
 pub mod collision_spec;
 pub mod commands;
+pub mod cutting;
 pub mod errors;
 pub mod files;
 pub mod gcode;
