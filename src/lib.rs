@@ -10,6 +10,7 @@ pub use vmc_predict as predict;
 
 pub mod benchmark;
 pub mod calibration;
+pub mod chatter;
 pub mod cli;
 pub mod collision;
 pub mod collision_spec;
