@@ -4,6 +4,7 @@
 //! Options that several commands share are one flattened group each ([`MachineArg`],
 //! [`SensorsArg`], [`ForceArg`], [`RrdArgs`]), so a flag means the same everywhere.
 
+mod chatter;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -16,6 +17,7 @@ use crate::predict::predictor::ModelKind;
 use crate::record;
 use crate::sim::{SimConfig, SimConfigError};
 
+pub use chatter::ChatterArgs;
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
 /// `vmc-twin`: the whole command line.
@@ -61,6 +63,10 @@ pub enum Command {
     /// radial immersion and up or down milling (semi-discretisation, zero-order analytic or
     /// time-domain simulation).
     Lobes(LobesArgs),
+    /// Which cuts of a milling program will chatter? For every feed move in material: the
+    /// engagement from a Z-map of the stock, the critical depth at its speed and immersion, the
+    /// margin and a verdict; exit status 1 if a cut is unstable.
+    Chatter(ChatterArgs),
     /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
     /// `rs274`, to compare with a controller.
     Interpret(InterpretArgs),
