@@ -19,7 +19,14 @@ fn the_example_pocket_has_stable_and_unstable_cuts_and_fails() {
     let repo = repo_file("");
     let o = vmc(
         &repo,
-        &["chatter", PROGRAM, "--stock", STOCK, "--out", csv.to_str().unwrap()],
+        &[
+            "chatter",
+            PROGRAM,
+            "--stock",
+            STOCK,
+            "--out",
+            csv.to_str().unwrap(),
+        ],
     );
     let (out, err) = (text(&o.stdout), text(&o.stderr));
     assert_eq!(o.status.code(), Some(1), "stdout:\n{out}\nstderr:\n{err}");
@@ -38,7 +45,10 @@ fn the_example_pocket_has_stable_and_unstable_cuts_and_fails() {
     };
     // The first pass is a full slot: 1 mm deep where 0.33 mm is the limit at 10 000 rpm.
     let slot = cut(10);
-    assert!(slot.contains("a_e/D 1.000 slot") && slot.ends_with("unstable"), "{slot}");
+    assert!(
+        slot.contains("a_e/D 1.000 slot") && slot.ends_with("unstable"),
+        "{slot}"
+    );
     assert!(slot.contains("a_p,lim   0.328 mm"), "{slot}");
     // The step-over into the end wall meets material ahead: unstable.
     assert!(cut(14).contains(" entry ") && cut(14).ends_with("unstable"));
@@ -47,7 +57,10 @@ fn the_example_pocket_has_stable_and_unstable_cuts_and_fails() {
         let l = cut(line);
         assert!(l.contains(" down ") && l.ends_with("stable"), "{l}");
     }
-    assert!(out.contains("12 stable, 0 marginal, 13 unstable, 1 plunge(s)"), "{out}");
+    assert!(
+        out.contains("12 stable, 0 marginal, 13 unstable, 1 plunge(s)"),
+        "{out}"
+    );
     let table = std::fs::read_to_string(&csv).unwrap();
     let rows: Vec<&str> = table.lines().collect();
     assert_eq!(rows.len(), 27);
@@ -59,12 +72,31 @@ fn the_example_pocket_has_stable_and_unstable_cuts_and_fails() {
     // The CSV is not overwritten without --force; with it, the same bytes (deterministic).
     let again = vmc(
         &repo,
-        &["chatter", PROGRAM, "--stock", STOCK, "--out", csv.to_str().unwrap()],
+        &[
+            "chatter",
+            PROGRAM,
+            "--stock",
+            STOCK,
+            "--out",
+            csv.to_str().unwrap(),
+        ],
     );
-    assert!(text(&again.stderr).contains("exists"), "{}", text(&again.stderr));
+    assert!(
+        text(&again.stderr).contains("exists"),
+        "{}",
+        text(&again.stderr)
+    );
     vmc(
         &repo,
-        &["chatter", PROGRAM, "--stock", STOCK, "--out", csv.to_str().unwrap(), "--force"],
+        &[
+            "chatter",
+            PROGRAM,
+            "--stock",
+            STOCK,
+            "--out",
+            csv.to_str().unwrap(),
+            "--force",
+        ],
     );
     assert_eq!(std::fs::read_to_string(&csv).unwrap(), table);
 }
@@ -79,7 +111,10 @@ fn a_program_of_stable_cuts_exits_with_status_0() {
     )
     .unwrap();
     let stock = repo_file(STOCK);
-    let o = vmc(dir.path(), &["chatter", "edge.ngc", "--stock", stock.to_str().unwrap()]);
+    let o = vmc(
+        dir.path(),
+        &["chatter", "edge.ngc", "--stock", stock.to_str().unwrap()],
+    );
     let out = text(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{out}\n{}", text(&o.stderr));
     assert!(out.contains("edge.ngc: line    3: G1 "), "{out}");

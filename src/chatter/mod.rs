@@ -294,12 +294,7 @@ pub fn check(
         .flat_map(|e| &e.contacts)
         .map(|c| c.axial_depth_mm)
         .fold(0.0, f64::max);
-    let mut table = StabilityTable::new(
-        tool,
-        options.sdm,
-        options.immersion_bin,
-        4.0 * deepest_mm,
-    );
+    let mut table = StabilityTable::new(tool, options.sdm, options.immersion_bin, 4.0 * deepest_mm);
     let keys: Vec<Key> = engaged
         .iter()
         .flat_map(|e| e.contacts.iter().map(move |c| (e, c)))
@@ -374,11 +369,12 @@ fn engage(
                 feed_mm_per_min,
             } => {
                 let motion = if *clockwise { "G2" } else { "G3" };
-                let arc = ArcGeometry::new(at, *end_mm, *center_mm, *plane, *clockwise, *extra_turns)
-                    .ok_or(ChatterError::DegenerateArc {
-                        line: m.line,
-                        motion,
-                    })?;
+                let arc =
+                    ArcGeometry::new(at, *end_mm, *center_mm, *plane, *clockwise, *extra_turns)
+                        .ok_or(ChatterError::DegenerateArc {
+                            line: m.line,
+                            motion,
+                        })?;
                 (*end_mm, Geometry::Arc(arc), motion, *feed_mm_per_min)
             }
             _ => continue,
@@ -417,11 +413,7 @@ fn engage(
 }
 
 /// The stability questions of a sample: (key, measured a_e/D, engagement); none for a plunge.
-fn candidates(
-    table: &StabilityTable<'_>,
-    e: &Engaged,
-    c: &Contact,
-) -> Vec<(Key, f64, Engagement)> {
+fn candidates(table: &StabilityTable<'_>, e: &Engaged, c: &Contact) -> Vec<(Key, f64, Engagement)> {
     let ContactKind::Side(arc) = c.kind else {
         return Vec::new();
     };
@@ -447,7 +439,11 @@ fn candidates(
     match side {
         Side::Both => vec![(key(1.0, Milling::Down), 1.0, Engagement::Slot)],
         Side::Left => vec![(key(left, left_milling), left, as_engagement(left_milling))],
-        Side::Right => vec![(key(right, right_milling), right, as_engagement(right_milling))],
+        Side::Right => vec![(
+            key(right, right_milling),
+            right,
+            as_engagement(right_milling),
+        )],
         // Material ahead only: the arc lies inside both the window from the left edge and the
         // one from the right edge, and the narrower covers it more tightly; when they are
         // within a bin of each other (head on), both are judged and the worse kept.

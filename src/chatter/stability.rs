@@ -73,7 +73,13 @@ impl<'a> StabilityTable<'a> {
     }
 
     /// The key of a cut: speed, a_e/D (rounded up to its bin), milling, feed angle (rad, from +X).
-    pub fn key(&self, spindle_rpm: f64, immersion: f64, milling: Milling, feed_angle_rad: f64) -> Key {
+    pub fn key(
+        &self,
+        spindle_rpm: f64,
+        immersion: f64,
+        milling: Milling,
+        feed_angle_rad: f64,
+    ) -> Key {
         // A hair under the bin edge stays in its bin (0.15/0.025 is 6.000000000000001).
         let bins = (1.0 / self.bin_width).ceil() as u32;
         let immersion_bin = ((immersion / self.bin_width - 1e-9).ceil().max(1.0) as u32).min(bins);
@@ -209,7 +215,10 @@ mod tests {
         assert!((k(0.001) - 0.025).abs() < 1e-12);
         assert!((k(1.0) - 1.0).abs() < 1e-12);
         // The benchmark tip is flexible in X only: the direction counts, modulo 180°.
-        let d = |deg: f64| t.key(10_000.0, 0.5, Milling::Up, deg.to_radians()).direction_bin;
+        let d = |deg: f64| {
+            t.key(10_000.0, 0.5, Milling::Up, deg.to_radians())
+                .direction_bin
+        };
         assert_eq!(d(0.0), d(180.0));
         assert_eq!(d(-90.0), d(90.0));
         assert_eq!(d(2.4), d(0.0));

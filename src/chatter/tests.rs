@@ -51,12 +51,20 @@ fn a_deep_slot_chatters_and_a_light_side_cut_does_not() {
         matches!(side.engagement, Engagement::Down | Engagement::Entry),
         "{side:?}"
     );
-    assert!((side.immersion - 1.0 / 16.0).abs() < 0.04, "{}", side.immersion);
+    assert!(
+        (side.immersion - 1.0 / 16.0).abs() < 0.04,
+        "{}",
+        side.immersion
+    );
     assert_eq!(side.verdict, Verdict::Stable, "{side:?}");
     // 1 mm deep: the slot from X5 on (55 × 16 mm², and its round end but for the 26.1 mm²
     // beyond X0) and the strip Y 28…29 from X 14 − 2.78 to X60.
     let want = 55.0 * 16.0 + std::f64::consts::PI * 32.0 - 26.1 + 48.8;
-    assert!((r.removed_mm3 / want - 1.0).abs() < 0.03, "{} vs {want}", r.removed_mm3);
+    assert!(
+        (r.removed_mm3 / want - 1.0).abs() < 0.03,
+        "{} vs {want}",
+        r.removed_mm3
+    );
 }
 
 #[test]
@@ -133,7 +141,10 @@ fn bad_programs_are_refused_with_one_clear_message() {
         },
     )
     .unwrap_err();
-    assert_eq!(bad_bin.to_string(), "the immersion bin must be in (0, 1], got 0");
+    assert_eq!(
+        bad_bin.to_string(),
+        "the immersion bin must be in (0, 1], got 0"
+    );
 }
 
 #[test]
@@ -143,7 +154,15 @@ fn the_csv_has_a_row_per_cut_with_units_in_the_header() {
     let lines: Vec<&str> = csv.lines().collect();
     assert!(lines[0].starts_with("line,move,spindle_rpm,feed_mm_per_min,immersion_ae_over_d,"));
     assert_eq!(lines.len(), 3);
-    assert!(lines[1].starts_with("3,G1,10000,500,1.0000,plunge,1.0000,,false,,plunge,5.0000,20.0000,"), "{}", lines[1]);
-    assert!(lines[2].starts_with("4,G1,10000,500,1.0000,slot,1.0000,"), "{}", lines[2]);
+    assert!(
+        lines[1].starts_with("3,G1,10000,500,1.0000,plunge,1.0000,,false,,plunge,5.0000,20.0000,"),
+        "{}",
+        lines[1]
+    );
+    assert!(
+        lines[2].starts_with("4,G1,10000,500,1.0000,slot,1.0000,"),
+        "{}",
+        lines[2]
+    );
     assert!(lines[2].contains(",unstable,"));
 }

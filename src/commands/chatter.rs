@@ -47,7 +47,10 @@ pub fn load_moves(path: &std::path::Path) -> Result<Vec<interp::CanonMove>, Prog
         err,
     })?;
     let cfg = InterpConfig {
-        subroutine_dirs: vec![path.parent().unwrap_or(std::path::Path::new("")).to_path_buf()],
+        subroutine_dirs: vec![path
+            .parent()
+            .unwrap_or(std::path::Path::new(""))
+            .to_path_buf()],
         ..InterpConfig::default()
     };
     interp::run_program(&text, &cfg).map_err(|err| ProgramError::Gcode { file, err })

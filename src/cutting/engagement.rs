@@ -319,7 +319,8 @@ impl Sweep {
 
     fn contact(&self, s_mm: f64, p: [f64; 3], t: [f64; 3]) -> Option<Contact> {
         let t_xy = t[0].hypot(t[1]);
-        if !(t_xy >= PLUNGE_TANGENT) {
+        // A NaN tangent (never from a valid path) is a plunge too.
+        if t_xy.is_nan() || t_xy < PLUNGE_TANGENT {
             return self.plunge(s_mm, p);
         }
         let f = [t[0] / t_xy, t[1] / t_xy];

@@ -9,7 +9,7 @@
 //! by the caller's [`ToolPath`].
 //!
 //! Units: mm and rad. The module is pure: no files, no terminal, no G-code; the chatter check
-//! ([`crate::chatter`]) feeds it the paths of a program.
+//! feeds it the paths of a program.
 
 pub mod engagement;
 pub mod zmap;

@@ -27,7 +27,11 @@ fn critical_mm(sdm: &MillingSdm, rpm: f64) -> f64 {
 #[test]
 fn feeding_along_y_on_an_x_mode_is_feeding_along_x_on_a_y_mode() {
     let opts = SdmOptions::default();
-    for (immersion, milling) in [(0.25, Milling::Up), (0.5, Milling::Down), (1.0, Milling::Down)] {
+    for (immersion, milling) in [
+        (0.25, Milling::Up),
+        (0.5, Milling::Down),
+        (1.0, Milling::Down),
+    ] {
         let turned = MillingSdm::with_feed_angle(
             &tool(),
             &TipModes::x_only(vec![mode()]),
@@ -52,7 +56,10 @@ fn feeding_along_y_on_an_x_mode_is_feeding_along_x_on_a_y_mode() {
             let (a, b) = (critical_mm(&turned, rpm), critical_mm(&swapped, rpm));
             // A quarter turn is half a tooth pitch of this 2-tooth cutter, 20 of the 40 steps:
             // the two discretisations coincide up to the bisection tolerance (1e-4 mm).
-            assert!((a - b).abs() < 2e-4, "{immersion} {milling:?} {rpm}: {a} vs {b}");
+            assert!(
+                (a - b).abs() < 2e-4,
+                "{immersion} {milling:?} {rpm}: {a} vs {b}"
+            );
         }
     }
 }

@@ -63,7 +63,10 @@ fn a_straight_slot_through_full_stock_is_full_immersion_at_the_cut_depth() {
     // The slot volume: 60 mm × 10 mm × 2 mm, plus the two half-discs at the ends do not
     // exist (the tool passes right through): 1200 mm³, to a cell on each wall.
     let removed = 24_000.0 - s.finish().volume_mm3();
-    assert!((removed - 1200.0).abs() < 60.0 * 2.0 * GRID_MM * 2.0, "{removed}");
+    assert!(
+        (removed - 1200.0).abs() < 60.0 * 2.0 * GRID_MM * 2.0,
+        "{removed}"
+    );
 }
 
 #[test]
@@ -191,16 +194,17 @@ fn material_ahead_only_is_neither_side_and_a_plunge_is_a_plunge() {
     let contacts = s.cut(&line([-10.0, 20.0, -2.0], [2.0, 20.0, -2.0]));
     let first = arc_of(&contacts[0]);
     assert_eq!(first.side, Side::Neither);
-    assert!(first.entry_rad > 0.5 && first.exit_rad < PI - 0.5, "{first:?}");
+    assert!(
+        first.entry_rad > 0.5 && first.exit_rad < PI - 0.5,
+        "{first:?}"
+    );
     // A plunge into fresh stock beside it.
     let plunge = s.cut(&line([30.0, 20.0, 5.0], [30.0, 20.0, -4.0]));
     let last = plunge.last().unwrap();
     assert_eq!(last.kind, ContactKind::Plunge);
     assert!((last.axial_depth_mm - 4.0).abs() < 1e-9);
     // Air above the stock: nothing.
-    assert!(s
-        .cut(&line([0.0, 0.0, 1.0], [60.0, 40.0, 1.0]))
-        .is_empty());
+    assert!(s.cut(&line([0.0, 0.0, 1.0], [60.0, 40.0, 1.0])).is_empty());
 }
 
 #[test]
