@@ -190,3 +190,30 @@ fn bad_input_gets_one_clear_message() {
     let tool = with(CUT, BOX, &["--tool", "t.toml"]);
     assert!(tool.starts_with("t.toml: cannot read tool file"), "{tool}");
 }
+
+#[test]
+fn cutter_compensation_offsets_the_path_by_the_tool_radius() {
+    // A contour along the block's edges: with G42 (tool right of this counter-clockwise path,
+    // outside the block) the Ø16 cutter only grazes the block; with G41 it cuts inside.
+    let contour = |side: &str| {
+        format!(
+            "G0 X-20 Y-20 Z5\nM3 S10000\nG0 Z-1\n{side} D1\nG1 X0 Y0 F600\nG1 X100\nG1 Y80\nG1 X0\nG1 Y0\nG40\nG1 X-20 Y-20\nM5\nM2\n"
+        )
+    };
+    let stock = repo_file(STOCK);
+    let dir = TempDir::new("comp");
+    for (side, cuts) in [("G42", false), ("G41", true)] {
+        std::fs::write(dir.path().join("c.ngc"), contour(side)).unwrap();
+        let o = vmc(
+            dir.path(),
+            &["chatter", "c.ngc", "--stock", stock.to_str().unwrap()],
+        );
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1));
+        assert_eq!(
+            err.contains("the program never touches the stock"),
+            !cuts,
+            "{side}: {err}"
+        );
+    }
+}

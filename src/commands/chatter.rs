@@ -35,12 +35,19 @@ pub struct ChatterConfig {
     pub force: bool,
 }
 
+/// Tool numbers given the tool file's diameter for cutter compensation (G41/G42 D).
+const TOOL_NUMBERS: u32 = 1000;
+
 /// Interprets the program (coordinates as programmed: no machine work offsets; subroutine
-/// files next to it).
+/// files next to it; every tool number 0…999 is the cutter of `diameter_mm`, so that G41/G42
+/// offset the path by its radius).
 ///
 /// # Errors
 /// An unreadable file, a syntax or semantic error (with its line).
-pub fn load_moves(path: &std::path::Path) -> Result<Vec<interp::CanonMove>, ProgramError> {
+pub fn load_moves(
+    path: &std::path::Path,
+    diameter_mm: f64,
+) -> Result<Vec<interp::CanonMove>, ProgramError> {
     let file = path.display().to_string();
     let text = files::read_text(path).map_err(|err| ProgramError::Io {
         file: file.clone(),
@@ -51,6 +58,7 @@ pub fn load_moves(path: &std::path::Path) -> Result<Vec<interp::CanonMove>, Prog
             .parent()
             .unwrap_or(std::path::Path::new(""))
             .to_path_buf()],
+        tool_diameters_mm: (0..TOOL_NUMBERS).map(|t| (t, diameter_mm)).collect(),
         ..InterpConfig::default()
     };
     interp::run_program(&text, &cfg).map_err(|err| ProgramError::Gcode { file, err })
@@ -66,7 +74,7 @@ pub fn chatter(cfg: &ChatterConfig, out: &mut dyn Write) -> Result<()> {
         files::check_writable(path, cfg.force)?;
     }
     let file = cfg.program.display().to_string();
-    let moves = load_moves(&cfg.program)?;
+    let moves = load_moves(&cfg.program, cfg.tool.tool.diameter_mm)?;
     let report = chatter::check(&moves, &cfg.stock.stock, &cfg.tool, &cfg.options)
         .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
     write_header(cfg, &report, out)?;
