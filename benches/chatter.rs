@@ -8,9 +8,9 @@
 //!   of every sample, the critical depths (computed once per stability key, so the deeper levels
 //!   reuse them) and the verdicts.
 //!
-//! Figures, release build, 2-core machine shared with other builds (median of criterion's
-//! samples): ×1 ≈ 24 ms, ×4 ≈ 50 ms, ×16 ≈ 160 ms — after the first level, about 9 ms per level
-//! of 26 moves (≈ 0.35 ms per move, 2 400 samples), the stability part (18 keys, 212 SDM
+//! Figures, release build, 2-core machine while two other builds ran (criterion medians):
+//! ×1 30 ms, ×4 68 ms, ×16 208 ms — after the first level about 12 ms per level of 26 moves
+//! (5 µs per sample of the Z-map and engagement), the stability part (18 keys, 212 SDM
 //! evaluations) paid once.
 
 use criterion::{criterion_group, criterion_main, Criterion};

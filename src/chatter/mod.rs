@@ -67,6 +67,10 @@ impl Default for ChatterOptions {
     }
 }
 
+/// Most samples of a check (about 12 km of cutting path at the default 0.25 mm step for a
+/// 16 mm cutter, minutes of work).
+pub const MAX_SAMPLES: usize = 50_000_000;
+
 /// Grid spacing over tool diameter when none is given.
 pub const DEFAULT_GRID_PER_DIAMETER: f64 = 1.0 / 32.0;
 
@@ -109,6 +113,14 @@ pub enum ChatterError {
         motion: &'static str,
         /// First tool-tip position in material (mm).
         at_mm: [f64; 3],
+    },
+    /// The cutting path in reach of the stock needs too many samples.
+    #[error("line {line}: the cutting path within reach of the stock needs more than {max} samples: use a larger grid spacing or a shorter program")]
+    TooManySamples {
+        /// Program line where the limit is passed.
+        line: usize,
+        /// The limit.
+        max: usize,
     },
     /// An arc whose radius is degenerate.
     #[error("line {line}: {motion} has a degenerate radius")]
@@ -279,7 +291,7 @@ pub fn check(
         .unwrap_or(tool.tool.diameter_mm * DEFAULT_GRID_PER_DIAMETER);
     let mut sweep = Sweep::new(stock, grid, tool.tool.diameter_mm)?;
     let volume_mm3 = sweep.zmap().volume_mm3();
-    let (engaged, feed_moves, samples) = engage(moves, options.start_mm, &mut sweep)?;
+    let (engaged, feed_moves, samples) = engage(moves, options.start_mm, stock, &mut sweep)?;
     if feed_moves == 0 {
         return Err(ChatterError::NoCuttingMoves);
     }
@@ -341,8 +353,14 @@ fn validate(o: &ChatterOptions) -> Result<(), ChatterError> {
 fn engage(
     moves: &[CanonMove],
     start_mm: [f64; 3],
+    stock: &StockBox,
     sweep: &mut Sweep,
 ) -> Result<(Vec<Engaged>, usize, usize), ChatterError> {
+    // Where the tool tip can meet material: the box grown by the radius in X and Y, anywhere
+    // below its top (the flutes are as long as needed).
+    let r = sweep.radius_mm();
+    let reach_lo = [stock.min_mm[0] - r, stock.min_mm[1] - r, f64::NEG_INFINITY];
+    let reach_hi = [stock.max_mm[0] + r, stock.max_mm[1] + r, stock.max_mm[2]];
     let mut at = start_mm;
     let (mut rpm, mut dir) = (0.0, SpindleDir::Off);
     let (mut out, mut feed_moves, mut samples) = (Vec::new(), 0, 0);
@@ -380,15 +398,30 @@ fn engage(
             _ => continue,
         };
         feed_moves += 1;
-        let path = MovePath {
-            start_mm: at,
-            geometry,
-        };
+        let start_mm = at;
         at = end_mm;
-        if path.geometry.length_mm() == 0.0 {
+        // Only the part of the move within reach of the material is sampled.
+        let path = match geometry {
+            Geometry::Arc(arc) => {
+                let (lo, hi) = arc.bounds_mm();
+                let meets = (0..3).all(|k| lo[k] <= reach_hi[k] && hi[k] >= reach_lo[k]);
+                meets.then_some(MovePath { start_mm, geometry })
+            }
+            _ => clip_line(start_mm, end_mm, reach_lo, reach_hi).map(|(a, b)| MovePath {
+                start_mm: a,
+                geometry: Geometry::line(a, b),
+            }),
+        };
+        let Some(path) = path.filter(|p| p.geometry.length_mm() > 0.0) else {
             continue;
-        }
+        };
         samples += ((path.geometry.length_mm() / sweep.step_mm()).ceil() as usize).max(1) + 1;
+        if samples > MAX_SAMPLES {
+            return Err(ChatterError::TooManySamples {
+                line: m.line,
+                max: MAX_SAMPLES,
+            });
+        }
         let contacts = sweep.cut(&path);
         let Some(first) = contacts.first() else {
             continue;
@@ -410,6 +443,25 @@ fn engage(
         });
     }
     Ok((out, feed_moves, samples))
+}
+
+/// The part of the segment a → b inside the box [lo, hi] (slab method), if any.
+fn clip_line(a: [f64; 3], b: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
+    let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+    for k in 0..3 {
+        let d = b[k] - a[k];
+        if d == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return None;
+            }
+            continue;
+        }
+        let (u, v) = ((lo[k] - a[k]) / d, (hi[k] - a[k]) / d);
+        t0 = t0.max(u.min(v));
+        t1 = t1.min(u.max(v));
+    }
+    let at = |t: f64| [0, 1, 2].map(|k| a[k] + t * (b[k] - a[k]));
+    (t0 <= t1).then(|| (at(t0), at(t1)))
 }
 
 /// The stability questions of a sample: (key, measured a_e/D, engagement); none for a plunge.
