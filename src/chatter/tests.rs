@@ -166,3 +166,19 @@ fn the_csv_has_a_row_per_cut_with_units_in_the_header() {
     );
     assert!(lines[2].contains(",unstable,"));
 }
+
+#[test]
+fn a_segment_is_clipped_to_the_reach_of_the_stock() {
+    let (lo, hi) = ([0.0, 0.0, f64::NEG_INFINITY], [10.0, 10.0, 0.0]);
+    let (a, b) = clip_line([-10.0, 5.0, -1.0], [30.0, 5.0, -1.0], lo, hi).unwrap();
+    assert_eq!((a, b), ([0.0, 5.0, -1.0], [10.0, 5.0, -1.0]));
+    // Above the top, beside the box, or parallel outside: nothing.
+    assert!(clip_line([-10.0, 5.0, 1.0], [30.0, 5.0, 1.0], lo, hi).is_none());
+    assert!(clip_line([-10.0, 20.0, -1.0], [30.0, 11.0, -1.0], lo, hi).is_none());
+    // A plunge from above ends in the box: from the top down.
+    let (a, b) = clip_line([5.0, 5.0, 50.0], [5.0, 5.0, -3.0], lo, hi).unwrap();
+    assert_eq!((a[2], b[2]), (0.0, -3.0));
+    // A move of a billion millimetres across the block costs no more than the block.
+    let r = run("M3 S10000\nG0 X-999999999 Y20 Z-1\nG1 X999999999 F500\nM2").unwrap();
+    assert!(r.samples < 1000, "{}", r.samples);
+}
