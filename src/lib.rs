@@ -10,10 +10,12 @@ pub use vmc_predict as predict;
 
 pub mod benchmark;
 pub mod calibration;
+pub mod chatter;
 pub mod cli;
 pub mod collision;
 pub mod collision_spec;
 pub mod commands;
+pub mod cutting;
 pub mod errors;
 pub mod files;
 pub mod gcode;

@@ -41,6 +41,7 @@ fn run(command: Command) -> Result<()> {
         Command::Check(args) => commands::check::check(&args.config()?, out),
         Command::Lobes(args) => commands::lobes::lobes(&args.config()?, out),
         Command::Cut(args) => commands::cut::cut(&args.config()?, out),
+        Command::Chatter(args) => commands::chatter::chatter(&args.config()?, out),
         Command::Interpret(args) => commands::interpret::interpret(&args.config()?, out),
         Command::Bench(args) => commands::bench::bench(&args.config()?, out),
     }

@@ -108,9 +108,35 @@ def cooldown(name, hours):
         f.write("\n".join(lines) + "\n")
 
 
+def pocket_chatter():
+    """The chatter check's example (vmc-twin chatter, stock pocket_chatter.stock.toml): a pocket
+    whose first pass is a full slot and whose side steps meet the end wall ahead (unstable at
+    this depth and speed with the default tool), between climb passes 2 mm wide (stable)."""
+    lines = [
+        "(A 56 x 40 mm pocket, 1 mm deep, in a 100 x 80 x 20 mm block whose top is Z0:)",
+        "(pocket_chatter.stock.toml. Cleared with the machine's default tool, D16 mm, 2 teeth,)",
+        "(at 10000 rpm by one-way climb passes along -X, 2 mm apart: a full slot first, then)",
+        "(passes at a_e/D = 2/16, each entered by a 2 mm sideways step at the pocket's end.)",
+        "G21 G90 G17 G94",
+        "G0 Z5",
+        "G0 X72 Y28",
+        "M3 S10000",
+        "G1 Z-1 F300 (plunge)",
+        "G1 X28 F800 (first pass: a full slot)",
+    ]
+    for y in range(28, 52, 2):
+        lines += ["G0 Z5", f"G0 X72 Y{y}", "G0 Z-1",
+                  f"G1 Y{y + 2} F400 (step over at the end wall)",
+                  "G1 X28 F800 (climb pass, 2 mm wide)"]
+    lines += ["G0 Z5", "M5", "M2"]
+    with open(os.path.join(HERE, "pocket_chatter.ngc"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
 if __name__ == "__main__":
     face_diagonals()
     body_diagonals()
     warmup("warmup_4h_8000rpm.ngc", "Warm-up: 4 h at 8000 rpm with axis motion", 8000, 4, 4000)
     warmup("warmup_2h_4000rpm.ngc", "Warm-up: 2 h at 4000 rpm with axis motion", 4000, 2, 3000)
     cooldown("cooldown_4h.ngc", 4)
+    pocket_chatter()

@@ -4,6 +4,7 @@
 //! Options that several commands share are one flattened group each ([`MachineArg`],
 //! [`SensorsArg`], [`ForceArg`], [`RrdArgs`]), so a flag means the same everywhere.
 
+mod chatter;
 mod cut;
 mod thermal;
 
@@ -17,6 +18,7 @@ use crate::predict::predictor::ModelKind;
 use crate::record;
 use crate::sim::{SimConfig, SimConfigError};
 
+pub use chatter::ChatterArgs;
 pub use cut::CutArgs;
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
@@ -67,6 +69,10 @@ pub enum Command {
     /// spectrum, the chatter frequency and the verdict (stable or chatter), with the
     /// semi-discretisation critical depth at that speed.
     Cut(CutArgs),
+    /// Which cuts of a milling program will chatter? For every feed move in material: the
+    /// engagement from a Z-map of the stock, the critical depth at its speed and immersion, the
+    /// margin and a verdict; exit status 1 if a cut is unstable.
+    Chatter(ChatterArgs),
     /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
     /// `rs274`, to compare with a controller.
     Interpret(InterpretArgs),

@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod calibrate;
 pub mod campaign;
+pub mod chatter;
 pub mod check;
 pub mod cut;
 pub mod interpret;

@@ -83,6 +83,24 @@ impl Engagement {
     }
 }
 
+/// Windows in another frame of the feed plane.
+impl Engagement {
+    /// The same window seen from axes turned by `angle_rad` (counter-clockwise from +x): for a
+    /// feed direction at `angle_rad` from the tip's x axis, a tooth at feed-frame angle φ sits at
+    /// φ − `angle_rad` in the tip's frame, so the window shifts by −`angle_rad`. H(φ + π) = H(φ)
+    /// and D(φ + π) = D(φ) (both are products of two unit vectors of φ), and a shift of the
+    /// window is a shift of time, so the result is taken modulo π: entry in [0, π), exit below
+    /// 2π, the range the screen and the step means handle.
+    pub fn rotated(&self, angle_rad: f64) -> Self {
+        let entry = self.entry_rad - angle_rad;
+        let shift = (entry / PI).floor() * PI;
+        Self {
+            entry_rad: entry - shift,
+            exit_rad: self.exit_rad - angle_rad - shift,
+        }
+    }
+}
+
 /// ∫ sin², ∫ cos², ∫ sin·cos over [u, v].
 fn trig_integrals(u: f64, v: f64) -> (f64, f64, f64) {
     let d2 = ((2.0 * v).sin() - (2.0 * u).sin()) / 4.0;
@@ -273,5 +291,19 @@ mod tests {
         assert!((up.exit_rad - PI / 2.0).abs() < 1e-12 && up.entry_rad == 0.0);
         let down = Engagement::new(0.05, Milling::Down).unwrap();
         assert!((down.entry_rad - (-0.9f64).acos()).abs() < 1e-12 && down.exit_rad == PI);
+    }
+
+    #[test]
+    fn a_rotated_window_keeps_its_width_and_stays_in_range() {
+        let w = Engagement::new(0.3, Milling::Down).unwrap();
+        for angle in [-7.0, -PI / 2.0, 0.0, 0.4, PI, 5.0] {
+            let r = w.rotated(angle);
+            assert!((0.0..PI).contains(&r.entry_rad), "{angle}: {r:?}");
+            assert!(r.exit_rad < 2.0 * PI);
+            assert!(((r.exit_rad - r.entry_rad) - (w.exit_rad - w.entry_rad)).abs() < 1e-12);
+            // The shift is −angle modulo π.
+            let k = (r.entry_rad - (w.entry_rad - angle)) / PI;
+            assert!((k - k.round()).abs() < 1e-9, "{angle}: {k}");
+        }
     }
 }

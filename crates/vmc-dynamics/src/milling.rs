@@ -430,3 +430,24 @@ impl SpeedSdm<'_> {
         Ok(self.point(0.5 * (lo + hi), &hi_st))
     }
 }
+
+/// Feed directions other than the tip's x axis.
+impl MillingSdm {
+    /// Like [`MillingSdm::new`] for a feed direction at `feed_angle_rad` (counter-clockwise)
+    /// from the x axis of the tip modes, as when the modes are given in a machine's X/Y and the
+    /// tool feeds along any direction of the plane: the engagement window is turned by
+    /// [`Engagement::rotated`] into the frame of the modes.
+    pub fn with_feed_angle(
+        tool: &Tool,
+        modes: &TipModes,
+        immersion: f64,
+        milling: Milling,
+        feed_angle_rad: f64,
+        options: SdmOptions,
+    ) -> Result<Self, DynamicsError> {
+        crate::params::finite("feed_angle_rad", feed_angle_rad)?;
+        let mut sdm = Self::new(tool, modes, immersion, milling, options)?;
+        sdm.window = sdm.window.rotated(feed_angle_rad);
+        Ok(sdm)
+    }
+}
