@@ -36,7 +36,7 @@ pub(super) fn check_io(line: usize, col: usize, m: u32, d: &Decoded) -> Result<(
     }
 }
 
-/// G10 needs L2 or L20 and P0…P6 (P7–P9, G59.1–G59.3, are not supported).
+/// G10 needs L2 or L20 and P0…P9 (0: the active coordinate system); R is its XY rotation.
 pub(super) fn check_g10(line: usize, col: usize, d: &Decoded) -> Result<(), GcodeError> {
     let l = match d.l {
         Some(l) if l.value == 2.0 || l.value == 20.0 => l,
@@ -69,20 +69,6 @@ pub(super) fn check_g10(line: usize, col: usize, d: &Decoded) -> Result<(), Gcod
             l.value, p.value
         );
         return Err(GcodeError::invalid(line, p.col, msg));
-    }
-    if p.value > 6.0 {
-        let msg = format!(
-            "G10 P{} (extra coordinate system) is not supported",
-            p.value
-        );
-        return Err(GcodeError::unsupported(line, p.col, msg));
-    }
-    if let Some(w) = d.r.filter(|r| r.value != 0.0) {
-        return Err(GcodeError::unsupported(
-            line,
-            w.col,
-            "G10 R (coordinate system rotation) is not supported",
-        ));
     }
     if let Some(w) = d.ijk.iter().flatten().next() {
         return Err(GcodeError::invalid(

@@ -431,6 +431,7 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         431 => (8, A::ToolLength(ToolLength::Given)),
         490 => (8, A::ToolLength(ToolLength::Off)),
         540..=590 if code.is_multiple_of(10) => (12, A::CoordSystem(((code - 540) / 10) as usize)),
+        591..=593 => (12, A::CoordSystem((code - 591) as usize + 6)),
         _ => return Err(g_unsupported(code)),
     })
 }
@@ -445,7 +446,6 @@ fn g_unsupported(code: u32) -> Rejected {
         382..=385 => "probing",
         432 => "additional tool length offset",
         520 => "local coordinate offset",
-        591..=593 => "extra coordinate system",
         700 | 710..=712 | 720..=722 | 760 => "lathe cycle",
         960 | 970 => "spindle speed mode",
         _ => return Rejected::Unknown,
@@ -509,7 +509,7 @@ mod tests {
 
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
-        for text in ["G43.2", "G76 Z1", "G59.1", "G33", "M98", "M19", "G38.2"] {
+        for text in ["G43.2", "G76 Z1", "G33", "M98", "M19", "G38.2"] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
             assert!(

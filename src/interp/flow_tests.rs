@@ -171,7 +171,59 @@ fn g10_l2_and_l20_set_work_offsets() {
     ] {
         assert_eq!(err(src).kind, GcodeErrorKind::Invalid, "{src}");
     }
-    assert!(err("G10 L2 P7 X1").is_unsupported());
+    // G59.1…G59.3 are P7…P9.
+    assert_eq!(xs("G10 L2 P7 X3\nG59.1 G0 X1"), vec![4.0]);
+}
+
+/// Machine end points (mm) of the straight moves of a program.
+fn ends(src: &str) -> Vec<[f64; 3]> {
+    run_program(src, &InterpConfig::default())
+        .unwrap_or_else(|e| panic!("program rejected: {e}"))
+        .into_iter()
+        .filter_map(|m| match m.kind {
+            CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } => Some(end_mm),
+            _ => None,
+        })
+        .collect()
+}
+
+fn assert_close(got: &[[f64; 3]], want: &[[f64; 3]]) {
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        // 1e-9 mm: rounding of the rotation only.
+        assert!(
+            g.iter().zip(w).all(|(a, b)| (a - b).abs() < 1e-9),
+            "{got:?} vs {want:?}"
+        );
+    }
+}
+
+#[test]
+fn a_rotated_work_offset_turns_program_points_about_its_origin() {
+    // X1 in a system at X10 turned 90°: machine (10, 1); G91 Y1 moves along program Y (-X).
+    assert_close(
+        &ends("G10 L2 P1 X10 R90\nG0 X1 Y0\nG91 G0 Y1"),
+        &[[10.0, 1.0, 0.0], [9.0, 1.0, 0.0]],
+    );
+    // G92 shifts before the turn; L20 with a rotation sets X and Y of the offset.
+    assert_close(
+        &ends("G10 L2 P1 R90\nG92 X1\nG0 X2\nG10 L20 P1 X0\nG0 X1 Y0"),
+        &[[0.0, 1.0, 0.0], [0.0, 2.0, 0.0]],
+    );
+    // A drilling cycle runs in the turned frame: hole at program (1, 0) = machine (0, 1).
+    assert_close(
+        &ends("G10 L2 P1 R90\nG0 Z5\nG81 X1 Y0 Z-1 R1 F100\nM2"),
+        &[
+            [0.0, 0.0, 5.0],
+            [0.0, 1.0, 5.0],
+            [0.0, 1.0, 1.0],
+            [0.0, 1.0, -1.0],
+            [0.0, 1.0, 1.0],
+        ],
+    );
+    // An arc outside XY in a turned system has no canonical plane: refused, located.
+    let e = err("G10 L2 P1 R30\nG18 G2 X2 Z0 R1 F100");
+    assert!(e.is_unsupported() && e.line == 2, "{e}");
 }
 
 #[test]
