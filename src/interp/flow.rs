@@ -492,21 +492,25 @@ impl Runner {
                 frame.return_to
             }
             OKind::Call => {
-                let Some(&start) = prog.subs.get(&key(&o.name)) else {
+                let name = match &o.name {
+                    OName::Computed(e) => OName::Number(self.params.eval(e, l.line, o.col)?),
+                    other => other.clone(),
+                };
+                let Some(&start) = prog.subs.get(&key(&name)) else {
                     // The definition may lie beyond a syntax error.
                     if let Some(e) = &prog.tail_error {
                         return Err(e.clone());
                     }
-                    return Err(match o.name {
+                    return Err(match name {
                         OName::Named(_) => GcodeError::unsupported(
                             l.line,
                             o.col,
-                            format!("{} call: subroutine not in this file nor in a subroutine folder (InterpConfig::subroutine_dirs)", o.name),
+                            format!("{name} call: subroutine not in this file nor in a subroutine folder (InterpConfig::subroutine_dirs)"),
                         ),
-                        OName::Number(_) => GcodeError::invalid(
+                        _ => GcodeError::invalid(
                             l.line,
                             o.col,
-                            format!("{} call: no such subroutine", o.name),
+                            format!("{name} call: no such subroutine"),
                         ),
                     });
                 };

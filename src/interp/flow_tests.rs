@@ -348,3 +348,12 @@ fn a_call_runs_the_subroutine_file_of_that_name_from_the_subroutine_folders() {
     assert!(e.is_unsupported(), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_call_may_compute_the_subroutine_number() {
+    let src = "#2=10\nO[#2*10] call\n#<s>=200\nO#<s> call\nM2\n\
+               O100 sub\nG0 X1\nO100 endsub\nO200 sub\nG0 X2\nO200 endsub";
+    assert_eq!(xs(src), vec![1.0, 2.0]);
+    assert_eq!(err("O[3] call\nM2").kind, GcodeErrorKind::Invalid);
+    assert!(err("O[1] sub\nO[1] endsub").is_unsupported());
+}
