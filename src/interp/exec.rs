@@ -10,7 +10,7 @@ use super::decode::{
 };
 use super::expr::Params;
 use super::feed;
-use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir};
+use super::{CanonKind, CanonMove, InterpConfig, OrientDirection, PauseKind, Plane, SpindleDir};
 use crate::gcode::{Block, GcodeError};
 
 mod block_checks;
@@ -18,11 +18,11 @@ use block_checks::motion_col;
 mod frame;
 pub(super) use frame::COORD_SYSTEMS;
 mod modal_state;
+mod tool_table;
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
 #[derive(Debug, Clone)]
 pub struct Interpreter {
-    cfg: InterpConfig,
     /// Current tool position, machine coordinates, mm.
     pos_mm: [f64; 3],
     plane: Plane,
@@ -58,6 +58,8 @@ pub struct Interpreter {
     feed_mode: FeedMode,
     /// States saved by M70/M73, per call level.
     contexts: modal_state::Contexts,
+    /// Tool lengths and diameters (G10 L1/L10/L11 change them).
+    tools: tool_table::ToolTable,
     /// Cutter radius compensation; `pos_mm` stays the programmed (uncompensated) position.
     comp: CutterComp,
 }
@@ -77,8 +79,8 @@ impl Interpreter {
         Self {
             work_offsets_mm,
             rotations_deg: [0.0; COORD_SYSTEMS],
+            tools: tool_table::ToolTable::new(&cfg),
             pos_mm: cfg.start_mm,
-            cfg,
             plane: Plane::Xy,
             units: Units::Mm,
             distance: Distance::Absolute,
@@ -219,6 +221,20 @@ impl Interpreter {
             self.spindle.0 = dir;
         }
         self.report_spindle(&mut emit);
+        if d.orient.is_some() {
+            // The orientation itself stops the spindle: no separate stop is reported.
+            self.spindle.0 = SpindleDir::Off;
+            self.spindle_reported = self.spindle;
+            emit(CanonKind::SpindleOrient {
+                angle_deg: d.r.map_or(0.0, |r| r.value),
+                direction: match d.p.map(|p| p.value as u8) {
+                    Some(1) => OrientDirection::Clockwise,
+                    Some(2) => OrientDirection::CounterClockwise,
+                    _ => OrientDirection::Shortest,
+                },
+                timeout_s: d.q.map(|q| q.value),
+            });
+        }
         if d.coolant.iter().any(Option::is_some) {
             if d.coolant[2].is_some() {
                 self.coolant = (false, false);
@@ -274,6 +290,16 @@ impl Interpreter {
                 self.set_axis_offsets(&d);
                 self.axis_offset_saved_mm = self.axis_offset_mm;
             }
+            Some((NonModal::LocalOffsets, _)) => {
+                // Absolute values whatever the distance mode; they become the stored G92
+                // offset too (G92.2/G92.3 suspend and restore them).
+                for (axis, word) in d.axes.iter().enumerate() {
+                    if let Some(w) = word {
+                        self.axis_offset_mm[axis] = w.value * self.scale();
+                    }
+                }
+                self.axis_offset_saved_mm = self.axis_offset_mm;
+            }
             Some((NonModal::ResetAxisOffsets, _)) => {
                 self.axis_offset_mm = [0.0; 3];
                 self.axis_offset_saved_mm = [0.0; 3];
@@ -283,7 +309,13 @@ impl Interpreter {
                 self.axis_offset_mm = self.axis_offset_saved_mm;
             }
             Some((NonModal::SetHome(i), _)) => self.homes_mm[i] = self.pos_mm,
-            Some((NonModal::SetCoordData, _)) => self.set_coord_data(&d),
+            Some((NonModal::SetCoordData, col)) => {
+                if d.l.is_some_and(|l| [1.0, 10.0, 11.0].contains(&l.value)) {
+                    self.set_tool_data(&d, block.line, col)?;
+                } else {
+                    self.set_coord_data(&d);
+                }
+            }
             Some((NonModal::Home(i), _)) => {
                 // Through the intermediate point (current position where no axis is given),
                 // then to the stored position along the given axes (all if none is given).
@@ -415,16 +447,8 @@ impl Interpreter {
         mode: CompMode,
         col: usize,
     ) -> Result<(), GcodeError> {
-        let cfg = &self.cfg;
-        let diameter_of = |tool: u32| {
-            if cfg.tool_diameters_mm.is_empty() {
-                return Some(0.0);
-            }
-            cfg.tool_diameters_mm
-                .iter()
-                .find(|t| t.0 == tool)
-                .map(|t| t.1)
-        };
+        let tools = &self.tools;
+        let diameter_of = |tool: u32| tools.diameter_mm(tool);
         let radius = selected_radius(
             block,
             d,
@@ -460,16 +484,9 @@ impl Interpreter {
         }
     }
 
-    /// Length of tool `tool` from the table; `Some(0)` for every tool when the table is empty.
+    /// Length of tool `tool` from the table (see `tool_table`).
     fn tool_length_mm(&self, tool: u32) -> Option<f64> {
-        if self.cfg.tool_lengths_mm.is_empty() {
-            return Some(0.0);
-        }
-        self.cfg
-            .tool_lengths_mm
-            .iter()
-            .find(|t| t.0 == tool)
-            .map(|t| t.1)
+        self.tools.length_mm(tool)
     }
 
     fn report_spindle(&mut self, emit: &mut impl FnMut(CanonKind)) {

@@ -357,3 +357,66 @@ fn a_call_may_compute_the_subroutine_number() {
     assert_eq!(err("O[3] call\nM2").kind, GcodeErrorKind::Invalid);
     assert!(err("O[1] sub\nO[1] endsub").is_unsupported());
 }
+
+#[test]
+fn g52_sets_the_g92_offset_to_its_values_whatever_the_distance_mode() {
+    // G52 X2: program X0 is machine X2; G91 G52 X1 sets it to 1, not 3.
+    assert_eq!(
+        xs("G52 X2\nG0 X0\nG91 G52 X1\nG90 G0 X0\nG92.2\nG0 X0\nG92.3\nG0 X0"),
+        vec![2.0, 1.0, 0.0, 1.0]
+    );
+}
+
+#[test]
+fn m19_orients_the_spindle_and_leaves_it_stopped() {
+    let moves = run_program("S100 M3\nM19 R45 Q2 P1\nM2", &InterpConfig::default()).unwrap();
+    assert!(moves.iter().any(|m| m.kind
+        == CanonKind::SpindleOrient {
+            angle_deg: 45.0,
+            direction: OrientDirection::Clockwise,
+            timeout_s: Some(2.0),
+        }));
+    // Stopped: right-hand tapping needs M3 again.
+    assert_eq!(err("S100 M3\nM19\nG84 X1 Z-1 R1 F10").line, 3);
+    for bad in ["M19 R-1", "M19 Q0", "M19 P3", "M3 M19"] {
+        assert_eq!(err(bad).kind, GcodeErrorKind::Invalid, "{bad}");
+    }
+}
+
+#[test]
+fn g10_l1_l10_l11_write_tool_lengths_that_g43_then_uses() {
+    let z = |src: &str| -> Vec<f64> {
+        let cfg = InterpConfig {
+            tool_lengths_mm: vec![(1, 50.0)],
+            ..InterpConfig::default()
+        };
+        run_program(src, &cfg)
+            .unwrap_or_else(|e| panic!("{src}: {e}"))
+            .into_iter()
+            .filter_map(|m| match m.kind {
+                CanonKind::Traverse { end_mm } => Some(end_mm[2]),
+                _ => None,
+            })
+            .collect()
+    };
+    assert_eq!(z("G10 L1 P1 Z10\nG43 H1\nG0 Z0"), vec![10.0]);
+    // At machine Z5, L10 Z1 makes the length 4 (with G92 Z shift 1: 3).
+    assert_eq!(z("G0 Z5\nG10 L10 P1 Z1\nG43 H1\nG0 Z0"), vec![5.0, 4.0]);
+    assert_eq!(
+        z("G0 Z5\nG92 Z4\nG10 L10 P1 Z1\nG43 H1\nG0 Z0"),
+        vec![5.0, 4.0]
+    );
+    // L11 measures in G59.3 (Z-2 here), without G92.
+    assert_eq!(
+        z("G10 L2 P9 Z-2\nG0 Z5\nG92 Z0\nG10 L11 P1 Z1\nG92.1\nG43 H1\nG0 Z0"),
+        vec![5.0, 6.0]
+    );
+    let cfg = InterpConfig {
+        tool_lengths_mm: vec![(1, 50.0)],
+        ..InterpConfig::default()
+    };
+    let e = run_program("G10 L1 P7 Z1", &cfg).unwrap_err();
+    assert!(e.msg.contains("tool 7 not found"), "{e}");
+    assert!(err("G10 L1 P1 X1").is_unsupported());
+    assert_eq!(err("G10 L1 P0 Z1").kind, GcodeErrorKind::Invalid);
+}
