@@ -58,6 +58,9 @@ pub(super) fn check_g10(line: usize, col: usize, d: &Decoded) -> Result<(), Gcod
             ))
         }
     };
+    if let Some(r) = d.r.filter(|_| l.value == 20.0) {
+        return Err(GcodeError::invalid(line, r.col, "R not allowed in G10 L20"));
+    }
     let Some(p) = d.p else {
         return Err(GcodeError::invalid(
             line,

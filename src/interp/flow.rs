@@ -281,19 +281,33 @@ impl Runner {
         if let Some(o) = &l.oword {
             return self.oword(prog, pc, l, o, out);
         }
+        // The line is read left to right: a named parameter a setting targets exists (0 if
+        // it is new) for everything after its `#<…>` on the line, as in LinuxCNC; all values
+        // are still read before any setting applies.
         let mut words = Vec::with_capacity(l.words.len());
-        for w in &l.words {
-            let value = self.params.eval(&w.value, l.line, w.col)?;
-            words.push(Word {
-                letter: w.letter,
-                value,
-                col: w.col,
-            });
-        }
         let mut settings: Vec<(Target, f64)> = Vec::with_capacity(l.assigns.len());
-        for a in &l.assigns {
-            let t = self.params.target(&a.target, l.line, a.col)?;
-            settings.push((t, self.params.eval(&a.value, l.line, a.col)?));
+        let (mut wi, mut ai) = (0, 0);
+        while wi < l.words.len() || ai < l.assigns.len() {
+            let word_first = match (l.words.get(wi), l.assigns.get(ai)) {
+                (Some(w), Some(a)) => w.col < a.col,
+                (w, _) => w.is_some(),
+            };
+            if word_first {
+                let w = &l.words[wi];
+                wi += 1;
+                let value = self.params.eval(&w.value, l.line, w.col)?;
+                words.push(Word {
+                    letter: w.letter,
+                    value,
+                    col: w.col,
+                });
+            } else {
+                let a = &l.assigns[ai];
+                ai += 1;
+                let t = self.params.target(&a.target, l.line, a.col)?;
+                self.params.define(&t);
+                settings.push((t, self.params.eval(&a.value, l.line, a.col)?));
+            }
         }
         for (t, v) in settings {
             self.params.assign(t, v);

@@ -113,9 +113,9 @@ impl Interpreter {
             }
             return;
         }
-        // L20: where the current point is in system `index` (its offsets and rotation, this
-        // block's G92 and tool length), with the given coordinates replaced.
-        let old = (self.coord_index, self.work_offsets_mm, self.rotations_deg);
+        // L20 (R is refused with it): where the current point is in system `index` (its
+        // offsets and rotation, G92 and the tool length), with the given coordinates replaced.
+        let active = self.coord_index;
         self.coord_index = index;
         let mut p_mm = self.program_from_machine(self.pos_mm);
         for (axis, word) in d.axes.iter().enumerate() {
@@ -123,21 +123,18 @@ impl Interpreter {
                 p_mm[axis] = w.value * k;
             }
         }
-        if let Some(r) = d.r {
-            self.rotations_deg[index] = r.value;
-        }
         let q = [0, 1, 2].map(|a| p_mm[a] + self.axis_offset_mm[a]);
         let rotated = rotate_xy(q, self.rotations_deg[index]);
         // In a rotated system, X and Y of the offset both follow from the point's X and Y.
-        let rotated_xy = self.rotations_deg[index] != 0.0 || old.2[index] != 0.0;
-        let xy_given = d.axes[0].is_some() || d.axes[1].is_some() || d.r.is_some();
+        let rotated_xy = self.rotations_deg[index] != 0.0;
+        let xy_given = d.axes[0].is_some() || d.axes[1].is_some();
         for (axis, word) in d.axes.iter().enumerate() {
             if word.is_some() || (axis < 2 && rotated_xy && xy_given) {
                 self.work_offsets_mm[index][axis] =
                     self.pos_mm[axis] - rotated[axis] - self.tlo_mm(axis);
             }
         }
-        self.coord_index = old.0;
+        self.coord_index = active;
     }
 
     /// End point of a move, machine coordinates, mm. Uses the block's units/distance modes,

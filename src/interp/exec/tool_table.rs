@@ -4,7 +4,7 @@
 //! LinuxCNC's G10 tool forms do. Lengths and diameters in mm.
 //!
 //! A table left empty in the configuration is open: every tool has length (or diameter) 0
-//! until a G10 sets it.
+//! until a G10 sets it. Tool 0 (no tool) has length and diameter 0 unless listed.
 
 use super::super::decode::Decoded;
 use super::super::InterpConfig;
@@ -22,10 +22,11 @@ pub(super) struct ToolTable {
     diameters_open: bool,
 }
 
+/// A tool's value; tool 0 (no tool in the spindle) has 0 unless the table lists it.
 fn find(table: &[(u32, f64)], open: bool, tool: u32) -> Option<f64> {
     match table.iter().find(|t| t.0 == tool) {
         Some(t) => Some(t.1),
-        None => open.then_some(0.0),
+        None => (open || tool == 0).then_some(0.0),
     }
 }
 
