@@ -74,7 +74,9 @@ impl Tally {
         match outcome {
             Outcome::Matched => self.matched += 1,
             Outcome::BothRefuse => self.both_refuse += 1,
-            Outcome::Mismatch(d) => self.failures.push(format!("program {index}: mismatch: {d}")),
+            Outcome::Mismatch(d) => self
+                .failures
+                .push(format!("program {index}: mismatch: {d}")),
             Outcome::OnlyRs274Refuses(why) => self
                 .failures
                 .push(format!("program {index}: rs274 refuses ({why}), we accept")),
@@ -186,7 +188,11 @@ fn generated_programs_move_as_rs274_does() {
     for i in 0..count {
         let reference = rs274_of(&bin, dir.path(), i);
         let outcome = judge(&generator::program(SEED, i), &reference);
-        if let (Some(keep), Outcome::Mismatch(_) | Outcome::OnlyRs274Refuses(_) | Outcome::OnlyWeRefuse(_)) = (&keep, &outcome) {
+        if let (
+            Some(keep),
+            Outcome::Mismatch(_) | Outcome::OnlyRs274Refuses(_) | Outcome::OnlyWeRefuse(_),
+        ) = (&keep, &outcome)
+        {
             std::fs::create_dir_all(keep).expect("create VMC_FUZZ_KEEP folder");
             std::fs::write(keep.join(format!("{i}.ngc")), generator::program(SEED, i))
                 .expect("write kept program");
@@ -207,7 +213,13 @@ fn regenerate_stored_rs274_outputs() {
             Ok(calls) => {
                 let _ = writeln!(out, "=== {i} accepted");
                 for call in calls.lines().filter(|c| kept(c)) {
-                    let _ = writeln!(out, "{}", call.trim_start_matches("N..... "));
+                    // Without the sequence-number column and the A, B, C coordinates (0 here).
+                    let call = call.trim_start_matches("N..... ");
+                    let call = call
+                        .strip_suffix(", 0.0000, 0.0000, 0.0000)")
+                        .filter(|_| call.contains("STRAIGHT_") || call.contains("ARC_FEED("))
+                        .map_or_else(|| call.to_string(), |c| format!("{c})"));
+                    let _ = writeln!(out, "{call}");
                 }
             }
             Err(why) => {

@@ -42,7 +42,10 @@ pub struct Interpreter {
     feed_mm_per_min: f64,
     spindle: (SpindleDir, f64),
     spindle_reported: (SpindleDir, f64),
+    /// The tool T selected last (the next M6 loads it).
     selected_tool: u32,
+    /// The tool in the spindle (M6, M61): G43 without H and G41/G42 without D use it.
+    spindle_tool: u32,
     ended: bool,
     /// (mist, flood).
     coolant: (bool, bool),
@@ -92,6 +95,7 @@ impl Interpreter {
             spindle: (SpindleDir::Off, 0.0),
             spindle_reported: (SpindleDir::Off, 0.0),
             selected_tool: 0,
+            spindle_tool: 0,
             ended: false,
             coolant: (false, false),
             axis_offset_saved_mm: [0.0; 3],
@@ -213,6 +217,7 @@ impl Interpreter {
             }
             self.spindle.0 = SpindleDir::Off;
             self.report_spindle(&mut emit);
+            self.spindle_tool = self.selected_tool;
             emit(CanonKind::ToolChange {
                 tool: self.selected_tool,
             });
@@ -250,7 +255,7 @@ impl Interpreter {
             self.modal_state_code(m, block.line, col, &mut emit)?;
         }
         if d.set_tool.is_some() {
-            self.selected_tool = d.q.map_or(0, |q| q.value as u32);
+            self.spindle_tool = d.q.map_or(0, |q| q.value as u32);
         }
         if let Some((m, _)) = d.io {
             emit(CanonKind::Io {
@@ -273,7 +278,7 @@ impl Interpreter {
         }
         match d.tool_length {
             Some((ToolLength::Table, _)) => {
-                let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+                let tool = d.h.map_or(self.spindle_tool, |h| h.value as u32);
                 self.tool_offset_mm = self.tool_length_mm(tool).unwrap_or(0.0);
             }
             Some((ToolLength::Given, _)) => {
@@ -454,7 +459,7 @@ impl Interpreter {
             d,
             col,
             mode,
-            self.selected_tool,
+            self.spindle_tool,
             self.scale(),
             diameter_of,
         )?;

@@ -54,13 +54,15 @@
 //! - G52: the G92 offset set to the given values (absolute whatever G90/G91), stored as G92's.
 //! - G64 R (a planner option of newer LinuxCNC versions): accepted, no effect here.
 //! - M7/M8/M9 ([`CanonKind::Coolant`]), M0/M1/M60 ([`CanonKind::Pause`]), M48–M53 and
-//!   M62–M68 ([`CanonKind::Io`]): no motion. M61 Q sets the current tool without a change.
+//!   M62–M68 ([`CanonKind::Io`]): no motion. M61 Q sets the tool in the spindle without a
+//!   change.
 //! - G61, G61.1, G64 (P, Q): accepted; the planner stops exactly at the end of every move
 //!   whatever the mode, so they change nothing.
-//! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
+//! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the spindle's
 //!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
 //! - G41 / G42 D (cutter radius compensation left / right of the path, D a tool number whose
-//!   diameter comes from [`InterpConfig::tool_diameters_mm`]; D0 or no D: the current tool),
+//!   diameter comes from [`InterpConfig::tool_diameters_mm`]; D0 or no D: the tool in the
+//!   spindle, loaded by M6 — a T word alone only selects),
 //!   G41.1 / G42.1 D (D the diameter, in program units; negative: the other side), G40 (off),
 //!   in the G17 or G18 plane, with LinuxCNC's paths and refusals (see `cutter_comp`): entry
 //!   move offset perpendicular at its end, outside corners rounded at the tool radius, inside

@@ -43,6 +43,9 @@ pub struct RefFrame {
     g92_mm: [f64; 3],
     rotation_deg: f64,
     tlo_mm: f64,
+    /// How far the printed G5x, G92 and tool length values may be from the true ones, mm:
+    /// half a unit of their 4th decimal, in the units they were printed in.
+    rounding_mm: [f64; 3],
 }
 
 impl RefFrame {
@@ -60,6 +63,21 @@ impl RefFrame {
             y + self.g5x_mm[1],
             q[2] + self.g5x_mm[2] + self.tlo_mm,
         ]
+    }
+}
+
+impl RefFrame {
+    /// The tolerance of a point `p_mm` (program coordinates) on the machine: `own_mm` (its own
+    /// printing) plus the rounding of the printed offsets and of the rotation (4 decimals of a
+    /// degree, at the point's distance from the origin).
+    fn tolerance_mm(&self, own_mm: f64, p_mm: [f64; 3]) -> f64 {
+        let reach_mm = (p_mm[0] + self.g92_mm[0]).hypot(p_mm[1] + self.g92_mm[1]);
+        let rotation_rad = if self.rotation_deg == 0.0 {
+            0.0
+        } else {
+            0.5e-4_f64.to_radians()
+        };
+        own_mm + self.rounding_mm.iter().sum::<f64>() + reach_mm * rotation_rad
     }
 }
 
@@ -83,12 +101,15 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
         if let Some(rest) = line.split("USE_TOOL_LENGTH_OFFSET(").nth(1) {
             let z = rest.split([' ', ',']).filter(|t| !t.is_empty()).nth(2);
             frame.tlo_mm = z.and_then(|z| z.parse::<f64>().ok()).unwrap_or(0.0) * mm_per_unit;
+            frame.rounding_mm[2] = 0.5e-4 * mm_per_unit;
         } else if line.contains("SET_G5X_OFFSET(") {
             let a = args(line);
             frame.g5x_mm = [a[1], a[2], a[3]].map(|v| v * mm_per_unit);
+            frame.rounding_mm[0] = 0.5e-4 * mm_per_unit;
         } else if line.contains("SET_G92_OFFSET(") {
             let a = args(line);
             frame.g92_mm = [a[0], a[1], a[2]].map(|v| v * mm_per_unit);
+            frame.rounding_mm[1] = 0.5e-4 * mm_per_unit;
         } else if line.contains("SET_XY_ROTATION(") {
             frame.rotation_deg = args(line)[0];
         } else if line.contains("USE_LENGTH_UNITS(CANON_UNITS_INCHES)") {
@@ -105,7 +126,9 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
             plane = Plane::Yz;
         } else if line.contains("STRAIGHT_TRAVERSE(") || line.contains("STRAIGHT_FEED(") {
             let a = args(line);
-            let p = frame.machine_from_program([a[0], a[1], a[2]].map(|v| v * mm_per_unit));
+            let p_mm = [a[0], a[1], a[2]].map(|v| v * mm_per_unit);
+            let tol = frame.tolerance_mm(tol, p_mm);
+            let p = frame.machine_from_program(p_mm);
             let m = if line.contains("STRAIGHT_TRAVERSE(") {
                 RefMove::Traverse(p)
             } else {
@@ -122,6 +145,7 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
             centre[i1] = a[2];
             centre[i2] = a[3];
             centre[ia] = a[5];
+            let tol = frame.tolerance_mm(tol, end.map(|v| v * mm_per_unit));
             let end = frame.machine_from_program(end.map(|v| v * mm_per_unit));
             let centre = frame.machine_from_program(centre.map(|v| v * mm_per_unit));
             let lengths = [end[i1], end[i2], centre[i1], centre[i2], end[ia]];
@@ -210,7 +234,6 @@ pub fn fixture_config() -> InterpConfig {
         ..InterpConfig::default()
     }
 }
-
 
 /// The `rs274` binary: `$RS274` if set, else `rs274` on the PATH; `None` if it cannot run.
 pub fn rs274_binary() -> Option<PathBuf> {

@@ -124,7 +124,11 @@ pub fn program(seed: u64, index: u64) -> String {
     }
     // Work offsets, some rotated.
     for p in 1..=rng.below(4) + 1 {
-        let p = if rng.chance(0.2) { 6 + rng.below(3) + 1 } else { p };
+        let p = if rng.chance(0.2) {
+            6 + rng.below(3) + 1
+        } else {
+            p
+        };
         let r = if rng.chance(0.35) {
             format!(" R{}", n(rng.range(-90.0, 90.0)))
         } else {
@@ -141,7 +145,12 @@ pub fn program(seed: u64, index: u64) -> String {
             n(st.len(rng.range(-50.0, 50.0)))
         );
     }
-    let _ = writeln!(out, "F{} S{} M3", n(st.len(rng.range(100.0, 2000.0))), 1000 + rng.below(9000));
+    let _ = writeln!(
+        out,
+        "F{} S{} M3",
+        n(st.len(rng.range(100.0, 2000.0))),
+        1000 + rng.below(9000)
+    );
     let steps = 6 + rng.below(14);
     for _ in 0..steps {
         step(&mut rng, &mut st, &mut out, &mut subs);
@@ -233,21 +242,27 @@ fn arc(rng: &mut Rng, st: &mut State, out: &mut String) {
     let a0 = rng.range(0.0, std::f64::consts::TAU);
     let sweep = rng.range(0.3, 6.0);
     let cw = rng.chance(0.5);
-    let centre = [
-        start[a1] - radius * a0.cos(),
-        start[a2] - radius * a0.sin(),
-    ];
+    let centre = [start[a1] - radius * a0.cos(), start[a2] - radius * a0.sin()];
     let a_end = if cw { a0 - sweep } else { a0 + sweep };
     let end = [
         round3(centre[0] + radius * a_end.cos()),
         round3(centre[1] + radius * a_end.sin()),
     ];
-    let helix = rng.chance(0.3).then(|| round3(start[ax] + st.len(rng.range(-5.0, 5.0))));
+    let helix = rng
+        .chance(0.3)
+        .then(|| round3(start[ax] + st.len(rng.range(-5.0, 5.0))));
     let inc = rng.chance(0.3);
     let g = if cw { "G2" } else { "G3" };
     let mut line = format!("G{plane} {} {g}", if inc { "G91" } else { "G90" });
     let coord = |v: f64, s: f64| if inc { n(v - s) } else { n(v) };
-    let _ = write!(line, " {}{} {}{}", letters[a1], coord(end[0], start[a1]), letters[a2], coord(end[1], start[a2]));
+    let _ = write!(
+        line,
+        " {}{} {}{}",
+        letters[a1],
+        coord(end[0], start[a1]),
+        letters[a2],
+        coord(end[1], start[a2])
+    );
     if let Some(h) = helix {
         let _ = write!(line, " {la}{}", coord(h, start[ax]));
     }
@@ -280,7 +295,9 @@ fn arc(rng: &mut Rng, st: &mut State, out: &mut String) {
 
 fn offsets(rng: &mut Rng, st: &mut State, out: &mut String) {
     if rng.chance(0.5) {
-        let coords = ["G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"];
+        let coords = [
+            "G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3",
+        ];
         let i = rng.below(9) as usize;
         let _ = writeln!(out, "{}", coords[i]);
         st.coord = i;
@@ -313,7 +330,11 @@ fn g92(rng: &mut Rng, st: &mut State, out: &mut String) {
             n(st.len(rng.range(-50.0, 50.0))),
             n(st.len(rng.range(-50.0, 50.0)))
         ),
-        2 => format!("G52 X{} Z{}", n(st.len(rng.range(-20.0, 20.0))), n(st.len(rng.range(-5.0, 5.0)))),
+        2 => format!(
+            "G52 X{} Z{}",
+            n(st.len(rng.range(-20.0, 20.0))),
+            n(st.len(rng.range(-5.0, 5.0)))
+        ),
         3 => rng.pick(&["G92.1", "G92.2"]).to_string(),
         _ => "G92.3".to_string(),
     };
@@ -336,13 +357,33 @@ fn cycle(rng: &mut Rng, st: &mut State, out: &mut String) {
     }
     let x = st.len(rng.range(-60.0, 60.0));
     let y = st.len(rng.range(-60.0, 60.0));
-    let _ = writeln!(out, "{ret} {code} X{} Y{} Z{} R{}{words}", n(x), n(y), n(z), n(r));
+    let _ = writeln!(
+        out,
+        "{ret} {code} X{} Y{} Z{} R{}{words}",
+        n(x),
+        n(y),
+        n(z),
+        n(r)
+    );
     for _ in 0..rng.below(3) {
-        let _ = writeln!(out, "X{} Y{}", n(st.len(rng.range(-60.0, 60.0))), n(st.len(rng.range(-60.0, 60.0))));
+        let _ = writeln!(
+            out,
+            "X{} Y{}",
+            n(st.len(rng.range(-60.0, 60.0))),
+            n(st.len(rng.range(-60.0, 60.0)))
+        );
     }
     if rng.chance(0.3) {
         // Incremental repeats along X.
-        let _ = writeln!(out, "G91 X{} Y0 L{}", n(st.len(rng.range(2.0, 10.0))), 2 + rng.below(3));
+        // In G91, R is measured from the initial level and Z from R.
+        let _ = writeln!(
+            out,
+            "G91 X{} Y0 R{} Z{} L{}",
+            n(st.len(rng.range(2.0, 10.0))),
+            n(st.len(rng.range(-3.0, 0.0))),
+            n(st.len(rng.range(-10.0, -1.0))),
+            2 + rng.below(3)
+        );
         let _ = writeln!(out, "G90");
     }
     let _ = writeln!(out, "G80");
@@ -354,13 +395,25 @@ fn cycle(rng: &mut Rng, st: &mut State, out: &mut String) {
 fn compensated_contour(rng: &mut Rng, st: &mut State, out: &mut String) {
     let _ = writeln!(out, "G17 G90");
     let (w, h) = (st.len(rng.range(30.0, 70.0)), st.len(rng.range(30.0, 70.0)));
-    let (cx, cy) = (st.len(rng.range(-40.0, 40.0)), st.len(rng.range(-40.0, 40.0)));
+    let (cx, cy) = (
+        st.len(rng.range(-40.0, 40.0)),
+        st.len(rng.range(-40.0, 40.0)),
+    );
     let z = st.len(rng.range(-5.0, 5.0));
-    let (x0, x1, y0, y1) = (round3(cx - w / 2.0), round3(cx + w / 2.0), round3(cy - h / 2.0), round3(cy + h / 2.0));
+    let (x0, x1, y0, y1) = (
+        round3(cx - w / 2.0),
+        round3(cx + w / 2.0),
+        round3(cy - h / 2.0),
+        round3(cy + h / 2.0),
+    );
     let away = st.len(20.0);
     let left = rng.chance(0.5);
     let _ = writeln!(out, "G0 X{} Y{} Z{}", n(x0 - away), n(y0 - away), n(z));
-    let d = if rng.chance(0.5) { " D1".to_string() } else { String::new() };
+    let d = if rng.chance(0.5) {
+        " D1".to_string()
+    } else {
+        String::new()
+    };
     let bulge = round3(w.max(h) * 1.5);
     if left {
         // Clockwise: up the left side, right along the top (an arc), down, back left.
@@ -404,10 +457,22 @@ fn expr(rng: &mut Rng, depth: u32) -> String {
         1 => format!("[{} - {}]", expr(rng, depth - 1), expr(rng, depth - 1)),
         2 => format!("[{} * {}]", expr(rng, depth - 1), n(rng.range(-2.0, 2.0))),
         3 => format!("[{} / {}]", expr(rng, depth - 1), n(rng.range(1.0, 4.0))),
-        4 => format!("[{} * SIN[{}]]", n(rng.range(1.0, 20.0)), expr(rng, depth - 1)),
-        5 => format!("[{} * COS[{}]]", n(rng.range(1.0, 20.0)), expr(rng, depth - 1)),
+        4 => format!(
+            "[{} * SIN[{}]]",
+            n(rng.range(1.0, 20.0)),
+            expr(rng, depth - 1)
+        ),
+        5 => format!(
+            "[{} * COS[{}]]",
+            n(rng.range(1.0, 20.0)),
+            expr(rng, depth - 1)
+        ),
         6 => format!("ABS[{}]", expr(rng, depth - 1)),
-        _ => format!("[ATAN[{}]/[{}] / 10]", expr(rng, depth - 1), n(rng.range(1.0, 5.0))),
+        _ => format!(
+            "[ATAN[{}]/[{}] / 10]",
+            expr(rng, depth - 1),
+            n(rng.range(1.0, 5.0))
+        ),
     }
 }
 
@@ -463,7 +528,12 @@ fn control_flow(rng: &mut Rng, st: &mut State, out: &mut String) {
         0 => {
             let _ = writeln!(out, "#3 = 0");
             let _ = writeln!(out, "o{label} while [#3 LT {count}]");
-            let _ = writeln!(out, "  G1 X[#3 * {}] Y{}", n(st.len(rng.range(1.0, 10.0))), n(st.len(rng.range(-30.0, 30.0))));
+            let _ = writeln!(
+                out,
+                "  G1 X[#3 * {}] Y{}",
+                n(st.len(rng.range(1.0, 10.0))),
+                n(st.len(rng.range(-30.0, 30.0)))
+            );
             let _ = writeln!(out, "  #3 = [#3 + 1]");
             let _ = writeln!(out, "o{label} endwhile");
         }
@@ -479,7 +549,12 @@ fn control_flow(rng: &mut Rng, st: &mut State, out: &mut String) {
         }
         _ => {
             let _ = writeln!(out, "o{label} repeat [{count}]");
-            let _ = writeln!(out, "  G91 G1 X{} Y{}", n(st.len(rng.range(-5.0, 5.0))), n(st.len(rng.range(-5.0, 5.0))));
+            let _ = writeln!(
+                out,
+                "  G91 G1 X{} Y{}",
+                n(st.len(rng.range(-5.0, 5.0))),
+                n(st.len(rng.range(-5.0, 5.0)))
+            );
             let _ = writeln!(out, "o{label} endrepeat");
             let _ = writeln!(out, "G90");
         }
@@ -489,6 +564,10 @@ fn control_flow(rng: &mut Rng, st: &mut State, out: &mut String) {
 }
 
 fn units(rng: &mut Rng, st: &mut State, out: &mut String) {
+    // The tool length offset is cancelled first: LinuxCNC keeps an active one in the old
+    // units across G20/G21, so that the next G43/G43.1/G49 shifts the position by a mix of
+    // both (an inconsistency not reproduced here).
+    let _ = writeln!(out, "G49");
     let inch = rng.chance(0.5);
     let _ = writeln!(out, "{}", if inch { "G20" } else { "G21" });
     st.unit_mm = if inch { 25.4 } else { 1.0 };
@@ -515,7 +594,11 @@ fn home(rng: &mut Rng, st: &mut State, out: &mut String) {
         0 => "G28.1".to_string(),
         1 => "G30.1".to_string(),
         2 => format!("G28 Z{}", n(st.len(rng.range(0.0, 20.0)))),
-        _ => format!("G30 X{} Y{}", n(st.len(rng.range(-20.0, 20.0))), n(st.len(rng.range(-20.0, 20.0)))),
+        _ => format!(
+            "G30 X{} Y{}",
+            n(st.len(rng.range(-20.0, 20.0))),
+            n(st.len(rng.range(-20.0, 20.0)))
+        ),
     };
     let _ = writeln!(out, "G90 {line}");
     st.incremental = false;

@@ -177,7 +177,7 @@ impl Interpreter {
             (Some(h), _) => return Err(inv(&h, "H word without G43 to use it")),
         }
         if let Some((ToolLength::Table, col)) = d.tool_length {
-            let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+            let tool = d.h.map_or(self.spindle_tool, |h| h.value as u32);
             if self.tool_length_mm(tool).is_none() {
                 let msg = format!("G43: tool {tool} is not in the tool table");
                 return Err(GcodeError::invalid(line, col, msg));
