@@ -17,7 +17,9 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use vmc_twin::interp::{run_program, CanonKind, CanonMove, GcodeError, InterpConfig, Plane};
+mod common;
+use common::rs274::{compare, fixture_config, ours, parse_expected};
+use vmc_twin::interp::{run_program, CanonMove, GcodeError, InterpConfig};
 
 /// The corpus: `$VMC_LINUXCNC_CORPUS` if set, else the copy vendored in `tests/data/linuxcnc`
 /// (taken unchanged from LinuxCNC's interpreter tests, see tests/data/linuxcnc/SOURCE.md).
@@ -59,142 +61,6 @@ fn files_with_ext(dir: &Path, ext: &str, recursive: bool, out: &mut Vec<PathBuf>
     }
 }
 
-/// One motion of the reference output, lengths converted to mm.
-#[derive(Debug, Clone, PartialEq)]
-enum RefMove {
-    Traverse([f64; 3]),
-    Feed([f64; 3]),
-    /// first_end, second_end, first_centre, second_centre, axis_end (mm), rotation, plane.
-    Arc([f64; 5], i64, Plane),
-}
-
-/// A reference move with its comparison tolerance (1e-4 program unit, in mm).
-type Tolerant = (RefMove, f64);
-
-fn args(line: &str) -> Vec<f64> {
-    let open = line.find('(').expect("canonical call has '('");
-    let close = line.rfind(')').expect("canonical call has ')'");
-    line[open + 1..close]
-        .split(',')
-        .map(|a| {
-            a.trim()
-                .parse::<f64>()
-                .unwrap_or_else(|_| panic!("bad number in {line:?}"))
-        })
-        .collect()
-}
-
-fn parse_expected(text: &str) -> Vec<Tolerant> {
-    let (mut mm_per_unit, mut plane) = (1.0, Plane::Xy);
-    // rs274 prints tool-tip positions; ours are those of the spindle (tip + tool length).
-    let mut tlo_mm = 0.0;
-    let mut moves = Vec::new();
-    for line in text.lines() {
-        let tol = 1e-4 * mm_per_unit;
-        if let Some(rest) = line.split("USE_TOOL_LENGTH_OFFSET(").nth(1) {
-            let z = rest.split([' ', ',']).filter(|t| !t.is_empty()).nth(2);
-            tlo_mm = z.and_then(|z| z.parse::<f64>().ok()).unwrap_or(0.0) * mm_per_unit;
-        } else if line.contains("USE_LENGTH_UNITS(CANON_UNITS_INCHES)") {
-            mm_per_unit = 25.4;
-        } else if line.contains("USE_LENGTH_UNITS(CANON_UNITS_MM)") {
-            mm_per_unit = 1.0;
-        } else if line.contains("USE_LENGTH_UNITS(") {
-            panic!("unexpected length units: {line}");
-        } else if line.contains("SELECT_PLANE(CANON_PLANE_XY)") {
-            plane = Plane::Xy;
-        } else if line.contains("SELECT_PLANE(CANON_PLANE_XZ)") {
-            plane = Plane::Zx;
-        } else if line.contains("SELECT_PLANE(CANON_PLANE_YZ)") {
-            plane = Plane::Yz;
-        } else if line.contains("STRAIGHT_TRAVERSE(") || line.contains("STRAIGHT_FEED(") {
-            let a = args(line);
-            let p = [a[0], a[1], a[2] + tlo_mm / mm_per_unit].map(|v| v * mm_per_unit);
-            let m = if line.contains("STRAIGHT_TRAVERSE(") {
-                RefMove::Traverse(p)
-            } else {
-                RefMove::Feed(p)
-            };
-            moves.push((m, tol));
-        } else if line.contains("ARC_FEED(") {
-            let a = args(line);
-            let mut lengths = [a[0], a[1], a[2], a[3], a[5]].map(|v| v * mm_per_unit);
-            let z_slots: &[usize] = match plane {
-                Plane::Xy => &[4],
-                Plane::Zx => &[0, 2],
-                Plane::Yz => &[1, 3],
-            };
-            for &i in z_slots {
-                lengths[i] += tlo_mm;
-            }
-            moves.push((RefMove::Arc(lengths, a[4] as i64, plane), tol));
-        }
-    }
-    moves
-}
-
-/// Our motions in the reference's form.
-fn ours(moves: &[CanonMove]) -> Vec<RefMove> {
-    moves
-        .iter()
-        .filter_map(|m| match m.kind {
-            CanonKind::Traverse { end_mm } => Some(RefMove::Traverse(end_mm)),
-            CanonKind::Feed { end_mm, .. } => Some(RefMove::Feed(end_mm)),
-            CanonKind::Arc {
-                end_mm,
-                center_mm,
-                plane,
-                clockwise,
-                extra_turns,
-                ..
-            } => {
-                let (a1, a2, ax) = match plane {
-                    Plane::Xy => (0, 1, 2),
-                    Plane::Zx => (2, 0, 1),
-                    Plane::Yz => (1, 2, 0),
-                };
-                let turns = 1 + i64::from(extra_turns);
-                let rotation = if clockwise { -turns } else { turns };
-                let lengths = [
-                    end_mm[a1],
-                    end_mm[a2],
-                    center_mm[a1],
-                    center_mm[a2],
-                    end_mm[ax],
-                ];
-                Some(RefMove::Arc(lengths, rotation, plane))
-            }
-            _ => None,
-        })
-        .collect()
-}
-
-fn same(ours: &RefMove, reference: &Tolerant) -> bool {
-    let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= reference.1);
-    match (ours, &reference.0) {
-        (RefMove::Traverse(a), RefMove::Traverse(b)) | (RefMove::Feed(a), RefMove::Feed(b)) => {
-            close(a, b)
-        }
-        (RefMove::Arc(a, ra, pa), RefMove::Arc(b, rb, pb)) => ra == rb && pa == pb && close(a, b),
-        _ => false,
-    }
-}
-
-/// `None` if the sequences agree, else a description of the first difference.
-fn compare(ours: &[RefMove], reference: &[Tolerant]) -> Option<String> {
-    for (i, (o, r)) in ours.iter().zip(reference).enumerate() {
-        if !same(o, r) {
-            return Some(format!("move {i}: ours {o:?}, reference {:?}", r.0));
-        }
-    }
-    (ours.len() != reference.len()).then(|| {
-        format!(
-            "ours has {} moves, reference {}",
-            ours.len(),
-            reference.len()
-        )
-    })
-}
-
 /// The program(s) of a case directory: `test.ngc` if present, else all `.ngc` files.
 fn case_programs(dir: &Path) -> Vec<PathBuf> {
     let test = dir.join("test.ngc");
@@ -225,7 +91,7 @@ fn case_dirs(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// Reference cases whose output our interpreter reproduces exactly (a floor: it may only rise).
-const MATCHED_FLOOR: usize = 36;
+const MATCHED_FLOOR: usize = 55;
 /// Example programs (`nc_files`) accepted (a floor).
 const NC_ACCEPTED_FLOOR: usize = 148;
 
@@ -287,6 +153,79 @@ const REFERENCE_GOES_ON_AFTER_AN_ERROR: &[(&str, &str)] = &[
     ("oword-unwind", "division by zero"),
 ];
 
+/// Cases whose `expected` holds the output of several runs, one per program (LinuxCNC's test
+/// script runs each in turn): the index of each program's run.
+const SEPARATE_RUNS: &[(&str, &[(&str, usize)])] = &[
+    (
+        "m98m99/06-error-mixed-sub-styles",
+        &[
+            ("O...-called-with-O..._call.ngc", 0),
+            ("O...-ended-with-O..._endsub.ngc", 1),
+            ("O...-sub-called-with-M98.ngc", 2),
+            ("O...-sub-ended-with-M99.ngc", 3),
+        ],
+    ),
+    // Runs 0–3 read INI files (Fanuc-style subroutines on, then disabled); 4 and 5 run
+    // without one, as we do.
+    (
+        "m98m99/09-disable-fanuc-subs",
+        &[("test-fanuc.ngc", 4), ("test-rs274ngc.ngc", 5)],
+    ),
+    (
+        "m98m99/11-main-program-oword",
+        &[
+            ("test-legal-end-main-with-m2.ngc", 0),
+            ("test-legal-end-main-with-m02.ngc", 1),
+            ("test-legal-end-main-with-m30.ngc", 2),
+            ("test-legal-end-main-with-percent.ngc", 3),
+            ("test-illegal-end-main-with-eof.ngc", 4),
+            ("test-illegal-no-m30-before-osub.ngc", 5),
+            ("test-illegal-sub-after-percent.ngc", 6),
+        ],
+    ),
+    (
+        "m98m99/13-named-program",
+        &[("test-named.ngc", 0), ("test-numbered.ngc", 1)],
+    ),
+];
+
+/// Splits an `expected` holding several runs at each start-up sequence of the interpreter
+/// (`USE_LENGTH_UNITS`, `SET_G5X_OFFSET`, `SET_G92_OFFSET`, `SET_XY_ROTATION`,
+/// `SET_FEED_REFERENCE`). Lines that are not canonical calls just before a start-up sequence
+/// (a title the test script printed) are left out; elsewhere they are the run's error message.
+fn split_runs(text: &str) -> Vec<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let is_call = |l: &str| l.contains("N.....");
+    let starts_run = |i: usize| {
+        let calls: Vec<&str> = lines[i..].iter().take(5).copied().collect();
+        let names = [
+            "USE_LENGTH_UNITS(",
+            "SET_G5X_OFFSET(",
+            "SET_G92_OFFSET(",
+            "SET_XY_ROTATION(",
+            "SET_FEED_REFERENCE(",
+        ];
+        calls.len() == 5 && calls.iter().zip(names).all(|(l, n)| l.contains(n))
+    };
+    let mut runs: Vec<Vec<&str>> = Vec::new();
+    let mut pending: Vec<&str> = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        if starts_run(i) {
+            // `pending` (titles since the last call) precedes this run: dropped.
+            pending.clear();
+            runs.push(vec![line]);
+        } else if is_call(line) {
+            if let Some(run) = runs.last_mut() {
+                run.append(&mut pending);
+                run.push(line);
+            }
+        } else {
+            pending.push(line);
+        }
+    }
+    runs.into_iter().map(|r| r.join("\n")).collect()
+}
+
 #[test]
 fn linuxcnc_reference_cases_match_or_are_rejected_as_unsupported() {
     let interp = corpus_dir().join("interp");
@@ -299,10 +238,11 @@ fn linuxcnc_reference_cases_match_or_are_rejected_as_unsupported() {
     );
     let (mut matched, mut unsupported, mut skipped, mut refused_by_both) = (0, 0, 0, 0);
     let mut failures = Vec::new();
+    let mut unsupported_cases: std::collections::BTreeMap<String, Vec<String>> = Default::default();
+    let mut messages_only = Vec::new();
     for dir in &dirs {
         let programs = case_programs(dir);
         let expected_text = read_lossy(&dir.join("expected"));
-        let reference = parse_expected(&expected_text);
         let name = dir
             .strip_prefix(&interp)
             .unwrap_or(dir)
@@ -311,23 +251,55 @@ fn linuxcnc_reference_cases_match_or_are_rejected_as_unsupported() {
         let goes_on = REFERENCE_GOES_ON_AFTER_AN_ERROR
             .iter()
             .find(|(case, _)| *case == name);
-        let reference_failed = reference_stopped_with_an_error(&expected_text)
-            || !expected_text.contains("PROGRAM_END()")
-            || goes_on.is_some();
+        let runs = SEPARATE_RUNS.iter().find(|(case, _)| *case == name);
+        let all_runs = split_runs(&expected_text);
         for program in &programs {
+            let file = program
+                .file_name()
+                .and_then(|f| f.to_str())
+                .unwrap_or_default();
+            // The run of this program in an `expected` that holds several.
+            let run_text = match runs {
+                Some((_, table)) => {
+                    let index = table
+                        .iter()
+                        .find(|(f, _)| *f == file)
+                        .unwrap_or_else(|| panic!("{name}: no run listed for {file}"))
+                        .1;
+                    assert!(index < all_runs.len(), "{name}: no run {index}");
+                    Some(all_runs[index].as_str())
+                }
+                None => None,
+            };
+            let text = run_text.unwrap_or(&expected_text);
+            if !text.contains("USE_LENGTH_UNITS(") {
+                // Only the program's `(debug, …)` messages were kept: no moves to compare.
+                messages_only.push(name.clone());
+                continue;
+            }
+            let reference = parse_expected(text);
+            let reference_failed = reference_stopped_with_an_error(text)
+                || !text.contains("PROGRAM_END()")
+                || goes_on.is_some();
             match run(program) {
-                Err(e) if e.is_unsupported() => unsupported += 1,
+                Err(e) if e.is_unsupported() => {
+                    unsupported += 1;
+                    unsupported_cases
+                        .entry(reason(&e))
+                        .or_default()
+                        .push(name.clone());
+                }
                 Err(e) if goes_on.is_some_and(|(_, why)| !e.msg.contains(why)) => {
                     failures.push(format!("{name}: rejected for another reason: {e}"));
                 }
                 // LinuxCNC refused it too.
                 Err(_) if reference_failed => refused_by_both += 1,
-                Err(e) => failures.push(format!("{name}: rejected as invalid: {e}")),
+                Err(e) => failures.push(format!("{name}/{file}: rejected as invalid: {e}")),
                 // Several programs share one `expected`: we cannot tell which produced it.
-                Ok(_) if programs.len() > 1 => skipped += 1,
+                Ok(_) if programs.len() > 1 && run_text.is_none() => skipped += 1,
                 Ok(moves) => match compare(&ours(&moves), &reference) {
                     None => matched += 1,
-                    Some(diff) => failures.push(format!("{name}: mismatch: {diff}")),
+                    Some(diff) => failures.push(format!("{name}/{file}: mismatch: {diff}")),
                 },
             }
         }
@@ -342,6 +314,18 @@ fn linuxcnc_reference_cases_match_or_are_rejected_as_unsupported() {
          accepted-but-ambiguous {skipped}",
         failures.len() - mismatched
     );
+    println!(
+        "  expected output holds messages only, not compared ({}): {}",
+        messages_only.len(),
+        messages_only.join(", ")
+    );
+    for (why, names) in &unsupported_cases {
+        println!(
+            "  unsupported ({}): {why}: {}",
+            names.len(),
+            names.join(", ")
+        );
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     assert!(
         matched >= MATCHED_FLOOR,
@@ -463,23 +447,6 @@ const NC_DIVERGENT: &[(&str, &str)] = &[(
     "G43 in a block without Z: rs274 keeps the tool tip where it is (the axis would move by the \
      length at the next move), we keep the spindle where it is until the next Z move",
 )];
-
-/// The tool table of `tests/data/linuxcnc/tool.tbl` (inches there) in mm. `rs274` prints
-/// tool-tip positions and reports the length offset in a call of its own, which
-/// `parse_expected` adds back.
-fn fixture_config() -> InterpConfig {
-    InterpConfig {
-        tool_lengths_mm: vec![(1, 150.0), (2, 100.0), (3, 80.0), (4, 120.0)],
-        // As rs274 reads the table: the inch values times 25.4.
-        tool_diameters_mm: vec![
-            (1, 0.472441 * 25.4),
-            (2, 0.236220 * 25.4),
-            (3, 0.118110 * 25.4),
-            (4, 0.787402 * 25.4),
-        ],
-        ..InterpConfig::default()
-    }
-}
 
 /// An error message without its position and numbers: programs refused for one reason group.
 fn reason(e: &GcodeError) -> String {

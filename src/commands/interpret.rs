@@ -13,7 +13,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::interp::{self, CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir};
+use crate::interp::{
+    self, CanonKind, CanonMove, InterpConfig, OrientDirection, PauseKind, Plane, SpindleDir,
+};
 
 /// What to interpret, validated.
 pub struct InterpretConfig {
@@ -187,6 +189,21 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                     _ => "PROGRAM_STOP()",
                 };
                 call(out, text.to_string())?;
+            }
+            CanonKind::SpindleOrient {
+                angle_deg,
+                direction,
+                timeout_s,
+            } => {
+                let p = match direction {
+                    OrientDirection::Shortest => 0,
+                    OrientDirection::Clockwise => 1,
+                    OrientDirection::CounterClockwise => 2,
+                };
+                call(out, format!("ORIENT_SPINDLE(0, {angle_deg:.4}, {p})"))?;
+                if let Some(q) = timeout_s {
+                    call(out, format!("SPINDLE.0.WAIT_ORIENT_COMPLETE({q:.4})"))?;
+                }
             }
             CanonKind::Io { m, p, e, l, q } => {
                 let n = |v: &Option<f64>| v.map_or(0.0, |v| v);

@@ -146,6 +146,9 @@ pub enum OName {
     Number(f64),
     /// A name.
     Named(String),
+    /// A number computed when the statement runs: `o[#2 * 10] call`, `o#<sub> call` (only
+    /// with `call`).
+    Computed(Box<Expr>),
 }
 
 impl std::fmt::Display for OName {
@@ -153,6 +156,7 @@ impl std::fmt::Display for OName {
         match self {
             OName::Number(n) => write!(f, "o{n}"),
             OName::Named(s) => write!(f, "o<{s}>"),
+            OName::Computed(_) => write!(f, "o[…]"),
         }
     }
 }

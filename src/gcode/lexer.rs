@@ -176,9 +176,7 @@ impl Lexer<'_> {
             match self.number() {
                 Ok(n) => OName::Number(n),
                 Err(_) if matches!(self.peek(), Some('[' | '#')) => {
-                    return Err(
-                        self.unsupported(start, "O-word with a computed number is not supported")
-                    )
+                    OName::Computed(Box::new(self.value()?))
                 }
                 Err(why) => return Err(self.invalid(start, format!("O word: {why}"))),
             }
@@ -216,6 +214,14 @@ impl Lexer<'_> {
                 return Err(self.invalid(kw_start, format!("unknown O-word keyword {other:?}")))
             }
         };
+        if matches!(name, OName::Computed(_)) && kind != OKind::Call {
+            return Err(self.unsupported(
+                start,
+                format!(
+                    "O-word with a computed number is supported with call only, not {keyword:?}"
+                ),
+            ));
+        }
         let mut args = Vec::new();
         loop {
             match self.skip_blanks_and_peek() {

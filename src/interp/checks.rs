@@ -36,26 +36,31 @@ pub(super) fn check_io(line: usize, col: usize, m: u32, d: &Decoded) -> Result<(
     }
 }
 
-/// G10 needs L2 or L20 and P0…P6 (P7–P9, G59.1–G59.3, are not supported).
+/// G10 needs L2 or L20 and P0…P9 (0: the active coordinate system; R is its XY rotation), or
+/// L1/L10/L11 and P a tool number (Z its length, R its radius; X and Y tool offsets are not
+/// supported: the machine's tools are offset along Z only).
 pub(super) fn check_g10(line: usize, col: usize, d: &Decoded) -> Result<(), GcodeError> {
     let l = match d.l {
         Some(l) if l.value == 2.0 || l.value == 20.0 => l,
-        Some(l) if [1.0, 10.0, 11.0].contains(&l.value) => {
-            let msg = format!("G10 L{} (tool table) is not supported", l.value);
-            return Err(GcodeError::unsupported(line, l.col, msg));
-        }
+        Some(l) if [1.0, 10.0, 11.0].contains(&l.value) => return check_g10_tool(line, col, d),
         Some(l) => {
-            let msg = format!("G10 L{} is not a valid G10 form (L2 or L20)", l.value);
+            let msg = format!(
+                "G10 L{} is not a valid G10 form (L1, L2, L10, L11 or L20)",
+                l.value
+            );
             return Err(GcodeError::invalid(line, l.col, msg));
         }
         None => {
             return Err(GcodeError::invalid(
                 line,
                 col,
-                "G10 needs an L word (L2 or L20)",
+                "G10 needs an L word (L1, L2, L10, L11 or L20)",
             ))
         }
     };
+    if let Some(r) = d.r.filter(|_| l.value == 20.0) {
+        return Err(GcodeError::invalid(line, r.col, "R not allowed in G10 L20"));
+    }
     let Some(p) = d.p else {
         return Err(GcodeError::invalid(
             line,
@@ -70,26 +75,46 @@ pub(super) fn check_g10(line: usize, col: usize, d: &Decoded) -> Result<(), Gcod
         );
         return Err(GcodeError::invalid(line, p.col, msg));
     }
-    if p.value > 6.0 {
-        let msg = format!(
-            "G10 P{} (extra coordinate system) is not supported",
-            p.value
-        );
-        return Err(GcodeError::unsupported(line, p.col, msg));
-    }
-    if let Some(w) = d.r.filter(|r| r.value != 0.0) {
-        return Err(GcodeError::unsupported(
-            line,
-            w.col,
-            "G10 R (coordinate system rotation) is not supported",
-        ));
-    }
-    if let Some(w) = d.ijk.iter().flatten().next() {
+    if let Some(w) = d.ijk.iter().flatten().chain(&d.q).next() {
         return Err(GcodeError::invalid(
             line,
             w.col,
-            format!("{} word with G10", w.letter),
+            format!("{} word with G10 L{}", w.letter, l.value),
         ));
+    }
+    Ok(())
+}
+
+/// G10 L1/L10/L11: P a whole tool number; Z and R only (R with L1: a radius ≥ 0).
+fn check_g10_tool(line: usize, col: usize, d: &Decoded) -> Result<(), GcodeError> {
+    let l = d.l.map_or(1.0, |l| l.value);
+    let Some(p) = d.p else {
+        let msg = format!("G10 L{l} needs a P word (tool number)");
+        return Err(GcodeError::invalid(line, col, msg));
+    };
+    if p.value < 1.0 || p.value.fract() != 0.0 {
+        let msg = format!("G10 L{l} P{}: P must be a tool number >= 1", p.value);
+        return Err(GcodeError::invalid(line, p.col, msg));
+    }
+    if let Some(w) = [d.axes[0], d.axes[1]].into_iter().flatten().next() {
+        let msg = format!(
+            "G10 L{l} {} (a tool offset across the spindle) is not supported",
+            w.letter
+        );
+        return Err(GcodeError::unsupported(line, w.col, msg));
+    }
+    if let Some(w) = d.ijk.iter().flatten().chain(&d.q).next() {
+        let msg = format!("G10 L{l} {} (lathe tool angles) is not supported", w.letter);
+        return Err(GcodeError::unsupported(line, w.col, msg));
+    }
+    if let Some(r) = d.r {
+        if r.value < 0.0 {
+            return Err(GcodeError::invalid(
+                line,
+                r.col,
+                "G10 tool radius R must not be negative",
+            ));
+        }
     }
     Ok(())
 }

@@ -131,6 +131,7 @@ pub(super) fn check_block(
         }
         Some((
             NonModal::SetAxisOffsets
+            | NonModal::LocalOffsets
             | NonModal::ResetAxisOffsets
             | NonModal::SuspendAxisOffsets
             | NonModal::RestoreAxisOffsets,

@@ -279,12 +279,34 @@ pub(super) fn run(
         Retract::InitialLevel => initial.max(r_mm),
     };
 
+    // Peck levels as LinuxCNC computes them: in program units, down from R by Q while above
+    // the bottom (the rounding of that sum decides whether a last peck lands on the bottom).
+    let pecks_mm = if matches!(cycle, Cycle::G73 | Cycle::G83) {
+        let off = input.offset_mm[ax];
+        let (r_u, bottom_u) = if input.incremental {
+            let r_u = (initial - off) / k + r_word;
+            (r_u, r_u + bottom_word)
+        } else {
+            (r_word, bottom_word)
+        };
+        let q_u = q.unwrap_or(r_u - bottom_u).max(f64::MIN_POSITIVE);
+        let mut levels = Vec::new();
+        let mut depth_u = r_u - q_u;
+        while depth_u > bottom_u {
+            levels.push(depth_u * k + off);
+            depth_u -= q_u;
+        }
+        levels
+    } else {
+        Vec::new()
+    };
     let mut pos = input.pos_mm;
     let mut cx = Expander {
         out,
         pos: &mut pos,
         ax,
         feed: input.feed_mm_per_min,
+        pecks_mm,
     };
     if initial < r_mm {
         cx.traverse(r_mm);
@@ -320,15 +342,7 @@ pub(super) fn run(
             cx.back_bore(shift, top, bottom_mm, clear_mm, input.spindle);
             continue;
         }
-        cx.body(
-            cycle,
-            r_mm,
-            bottom_mm,
-            clear_mm,
-            p,
-            q.map(|q| q * k),
-            input.spindle,
-        );
+        cx.body(cycle, r_mm, bottom_mm, clear_mm, p, input.spindle);
     }
     state.ijk = ijk.or(state.ijk);
 
@@ -348,6 +362,8 @@ struct Expander<'a> {
     pos: &'a mut [f64; 3],
     ax: usize,
     feed: f64,
+    /// G73/G83: the levels the pecks feed to (above the bottom), mm.
+    pecks_mm: Vec<f64>,
 }
 
 impl Expander<'_> {
@@ -433,7 +449,6 @@ impl Expander<'_> {
         bottom: f64,
         clear: f64,
         p: Option<f64>,
-        q: Option<f64>,
         spindle: (SpindleDir, f64),
     ) {
         let p = p.unwrap_or(0.0);
@@ -449,9 +464,7 @@ impl Expander<'_> {
                 self.traverse(clear);
             }
             Cycle::G73 | Cycle::G83 => {
-                let q = q.unwrap_or(r - bottom).max(f64::MIN_POSITIVE);
-                let mut depth = r - q;
-                while depth > bottom {
+                for depth in self.pecks_mm.clone() {
                     self.feed(depth);
                     if cycle == Cycle::G73 {
                         self.traverse(depth + PECK_CLEARANCE_MM);
@@ -459,7 +472,6 @@ impl Expander<'_> {
                         self.traverse(r);
                         self.traverse(depth + PECK_CLEARANCE_MM);
                     }
-                    depth -= q;
                 }
                 self.feed(bottom);
                 self.traverse(clear);

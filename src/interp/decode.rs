@@ -78,6 +78,8 @@ pub(super) enum NonModal {
     MachineCoords,
     /// G92.
     SetAxisOffsets,
+    /// G52: the G92 offset set to the given values (a local coordinate offset).
+    LocalOffsets,
     /// G92.1.
     ResetAxisOffsets,
     /// G92.2: G92 offset off, stored values kept.
@@ -206,6 +208,8 @@ pub(super) struct Decoded {
     pub io: Option<(u32, usize)>,
     /// Column of M61 (set current tool).
     pub set_tool: Option<usize>,
+    /// M19 (spindle orientation): its column.
+    pub orient: Option<usize>,
     pub q: Option<Word>,
 }
 
@@ -295,6 +299,10 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     610 => {
                         d.set_tool = Some(w.col);
                         6
+                    }
+                    190 => {
+                        d.orient = Some(w.col);
+                        7
                     }
                     60 => {
                         d.tool_change = Some(w.col);
@@ -400,6 +408,7 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         40 => (0, A::NonModal(NonModal::Dwell)),
         530 => (0, A::NonModal(NonModal::MachineCoords)),
         920 => (0, A::NonModal(NonModal::SetAxisOffsets)),
+        520 => (0, A::NonModal(NonModal::LocalOffsets)),
         921 => (0, A::NonModal(NonModal::ResetAxisOffsets)),
         922 => (0, A::NonModal(NonModal::SuspendAxisOffsets)),
         923 => (0, A::NonModal(NonModal::RestoreAxisOffsets)),
@@ -431,6 +440,7 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         431 => (8, A::ToolLength(ToolLength::Given)),
         490 => (8, A::ToolLength(ToolLength::Off)),
         540..=590 if code.is_multiple_of(10) => (12, A::CoordSystem(((code - 540) / 10) as usize)),
+        591..=593 => (12, A::CoordSystem((code - 591) as usize + 6)),
         _ => return Err(g_unsupported(code)),
     })
 }
@@ -444,8 +454,6 @@ fn g_unsupported(code: u32) -> Rejected {
         330 | 331 => "spindle-synchronised motion",
         382..=385 => "probing",
         432 => "additional tool length offset",
-        520 => "local coordinate offset",
-        591..=593 => "extra coordinate system",
         700 | 710..=712 | 720..=722 | 760 => "lathe cycle",
         960 | 970 => "spindle speed mode",
         _ => return Rejected::Unknown,
@@ -459,7 +467,6 @@ fn m_unsupported(code: u32) -> Rejected {
         return Rejected::Unknown;
     }
     let what = match code / 10 {
-        19 => "spindle orientation",
         98 | 99 => "subroutine call/return",
         100..=199 => "user-defined M code",
         _ => return Rejected::Unknown,
@@ -509,7 +516,7 @@ mod tests {
 
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
-        for text in ["G43.2", "G76 Z1", "G59.1", "G33", "M98", "M19", "G38.2"] {
+        for text in ["G43.2", "G76 Z1", "G33", "M98", "G38.2"] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
             assert!(

@@ -10,25 +10,31 @@ use super::decode::{
 };
 use super::expr::Params;
 use super::feed;
-use super::{CanonKind, CanonMove, InterpConfig, PauseKind, Plane, SpindleDir};
+use super::{CanonKind, CanonMove, InterpConfig, OrientDirection, PauseKind, Plane, SpindleDir};
 use crate::gcode::{Block, GcodeError};
 
 mod block_checks;
 use block_checks::motion_col;
+mod frame;
+pub(super) use frame::COORD_SYSTEMS;
 mod modal_state;
+mod tool_table;
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
 #[derive(Debug, Clone)]
 pub struct Interpreter {
-    cfg: InterpConfig,
     /// Current tool position, machine coordinates, mm.
     pos_mm: [f64; 3],
     plane: Plane,
     units: Units,
     distance: Distance,
     arc_distance: Distance,
-    /// Active work offset G54…G59 as 0…5.
+    /// Active work offset G54…G59, G59.1…G59.3 as 0…8.
     coord_index: usize,
+    /// Work offsets G54…G59.3 (index 0…8), machine coordinates, mm.
+    work_offsets_mm: [[f64; 3]; COORD_SYSTEMS],
+    /// XY rotation of each work coordinate system about its origin (G10 L2/L20 R), degrees.
+    rotations_deg: [f64; COORD_SYSTEMS],
     /// G92 offset, mm.
     axis_offset_mm: [f64; 3],
     /// `None` after G80 and at start.
@@ -36,7 +42,10 @@ pub struct Interpreter {
     feed_mm_per_min: f64,
     spindle: (SpindleDir, f64),
     spindle_reported: (SpindleDir, f64),
+    /// The tool T selected last (the next M6 loads it).
     selected_tool: u32,
+    /// The tool in the spindle (M6, M61): G43 without H and G41/G42 without D use it.
+    spindle_tool: u32,
     ended: bool,
     /// (mist, flood).
     coolant: (bool, bool),
@@ -52,6 +61,8 @@ pub struct Interpreter {
     feed_mode: FeedMode,
     /// States saved by M70/M73, per call level.
     contexts: modal_state::Contexts,
+    /// Tool lengths and diameters (G10 L1/L10/L11 change them).
+    tools: tool_table::ToolTable,
     /// Cutter radius compensation; `pos_mm` stays the programmed (uncompensated) position.
     comp: CutterComp,
 }
@@ -66,9 +77,13 @@ enum MotionStep {
 impl Interpreter {
     /// A fresh interpreter in LinuxCNC's start-up state (see the parent module).
     pub fn new(cfg: InterpConfig) -> Self {
+        let mut work_offsets_mm = [[0.0; 3]; COORD_SYSTEMS];
+        work_offsets_mm[..cfg.work_offsets_mm.len()].copy_from_slice(&cfg.work_offsets_mm);
         Self {
+            work_offsets_mm,
+            rotations_deg: [0.0; COORD_SYSTEMS],
+            tools: tool_table::ToolTable::new(&cfg),
             pos_mm: cfg.start_mm,
-            cfg,
             plane: Plane::Xy,
             units: Units::Mm,
             distance: Distance::Absolute,
@@ -80,6 +95,7 @@ impl Interpreter {
             spindle: (SpindleDir::Off, 0.0),
             spindle_reported: (SpindleDir::Off, 0.0),
             selected_tool: 0,
+            spindle_tool: 0,
             ended: false,
             coolant: (false, false),
             axis_offset_saved_mm: [0.0; 3],
@@ -98,16 +114,19 @@ impl Interpreter {
     }
 
     /// Reads the parameters that mirror the modal state (LinuxCNC's numbers, in mm): G28
-    /// position #5161–#5163, G30 #5181–#5183, stored G92 offset #5211–#5213, G54…G59
-    /// #5221–#5223 … #5321–#5323.
+    /// position #5161–#5163, G30 #5181–#5183, stored G92 offset #5211–#5213, G54…G59.3
+    /// #5221–#5223 … #5381–#5383 and their rotations #5230 … #5390.
     pub(super) fn sync_params_in(&mut self, params: &Params) {
         for a in 0..3 {
             self.homes_mm[0][a] = params.get(5161 + a);
             self.homes_mm[1][a] = params.get(5181 + a);
             self.axis_offset_saved_mm[a] = params.get(5211 + a);
-            for (i, offset) in self.cfg.work_offsets_mm.iter_mut().enumerate() {
+            for (i, offset) in self.work_offsets_mm.iter_mut().enumerate() {
                 offset[a] = params.get(5221 + 20 * i + a);
             }
+        }
+        for (i, r) in self.rotations_deg.iter_mut().enumerate() {
+            *r = params.get(5230 + 20 * i);
         }
     }
 
@@ -117,9 +136,12 @@ impl Interpreter {
             params.set(5161 + a, self.homes_mm[0][a]);
             params.set(5181 + a, self.homes_mm[1][a]);
             params.set(5211 + a, self.axis_offset_saved_mm[a]);
-            for (i, offset) in self.cfg.work_offsets_mm.iter().enumerate() {
+            for (i, offset) in self.work_offsets_mm.iter().enumerate() {
                 params.set(5221 + 20 * i + a, offset[a]);
             }
+        }
+        for (i, r) in self.rotations_deg.iter().enumerate() {
+            params.set(5230 + 20 * i, *r);
         }
         params.set(5220, (self.coord_index + 1) as f64);
     }
@@ -195,6 +217,7 @@ impl Interpreter {
             }
             self.spindle.0 = SpindleDir::Off;
             self.report_spindle(&mut emit);
+            self.spindle_tool = self.selected_tool;
             emit(CanonKind::ToolChange {
                 tool: self.selected_tool,
             });
@@ -203,6 +226,20 @@ impl Interpreter {
             self.spindle.0 = dir;
         }
         self.report_spindle(&mut emit);
+        if d.orient.is_some() {
+            // The orientation itself stops the spindle: no separate stop is reported.
+            self.spindle.0 = SpindleDir::Off;
+            self.spindle_reported = self.spindle;
+            emit(CanonKind::SpindleOrient {
+                angle_deg: d.r.map_or(0.0, |r| r.value),
+                direction: match d.p.map(|p| p.value as u8) {
+                    Some(1) => OrientDirection::Clockwise,
+                    Some(2) => OrientDirection::CounterClockwise,
+                    _ => OrientDirection::Shortest,
+                },
+                timeout_s: d.q.map(|q| q.value),
+            });
+        }
         if d.coolant.iter().any(Option::is_some) {
             if d.coolant[2].is_some() {
                 self.coolant = (false, false);
@@ -218,7 +255,7 @@ impl Interpreter {
             self.modal_state_code(m, block.line, col, &mut emit)?;
         }
         if d.set_tool.is_some() {
-            self.selected_tool = d.q.map_or(0, |q| q.value as u32);
+            self.spindle_tool = d.q.map_or(0, |q| q.value as u32);
         }
         if let Some((m, _)) = d.io {
             emit(CanonKind::Io {
@@ -241,7 +278,7 @@ impl Interpreter {
         }
         match d.tool_length {
             Some((ToolLength::Table, _)) => {
-                let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+                let tool = d.h.map_or(self.spindle_tool, |h| h.value as u32);
                 self.tool_offset_mm = self.tool_length_mm(tool).unwrap_or(0.0);
             }
             Some((ToolLength::Given, _)) => {
@@ -258,6 +295,16 @@ impl Interpreter {
                 self.set_axis_offsets(&d);
                 self.axis_offset_saved_mm = self.axis_offset_mm;
             }
+            Some((NonModal::LocalOffsets, _)) => {
+                // Absolute values whatever the distance mode; they become the stored G92
+                // offset too (G92.2/G92.3 suspend and restore them).
+                for (axis, word) in d.axes.iter().enumerate() {
+                    if let Some(w) = word {
+                        self.axis_offset_mm[axis] = w.value * self.scale();
+                    }
+                }
+                self.axis_offset_saved_mm = self.axis_offset_mm;
+            }
             Some((NonModal::ResetAxisOffsets, _)) => {
                 self.axis_offset_mm = [0.0; 3];
                 self.axis_offset_saved_mm = [0.0; 3];
@@ -267,7 +314,13 @@ impl Interpreter {
                 self.axis_offset_mm = self.axis_offset_saved_mm;
             }
             Some((NonModal::SetHome(i), _)) => self.homes_mm[i] = self.pos_mm,
-            Some((NonModal::SetCoordData, _)) => self.set_coord_data(&d),
+            Some((NonModal::SetCoordData, col)) => {
+                if d.l.is_some_and(|l| [1.0, 10.0, 11.0].contains(&l.value)) {
+                    self.set_tool_data(&d, block.line, col)?;
+                } else {
+                    self.set_coord_data(&d);
+                }
+            }
             Some((NonModal::Home(i), _)) => {
                 // Through the intermediate point (current position where no axis is given),
                 // then to the stored position along the given axes (all if none is given).
@@ -371,7 +424,23 @@ impl Interpreter {
             spindle: self.spindle,
         };
         let mut out = Vec::new();
-        self.pos_mm = cycles::run(&input, &mut self.cycle, &mut out)?;
+        if self.rotation_deg() == 0.0 {
+            self.pos_mm = cycles::run(&input, &mut self.cycle, &mut out)?;
+            return Ok(out);
+        }
+        // In a rotated coordinate system the cycle runs in the unrotated frame (the work
+        // offset's axes): its points are then turned about the work offset's origin.
+        let input = CycleInput {
+            pos_mm: self.unrotated_from_machine(self.pos_mm),
+            ..input
+        };
+        let end_mm = cycles::run(&input, &mut self.cycle, &mut out)?;
+        self.pos_mm = self.machine_from_unrotated(end_mm);
+        for kind in &mut out {
+            if let CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } = kind {
+                *end_mm = self.machine_from_unrotated(*end_mm);
+            }
+        }
         Ok(out)
     }
 
@@ -383,25 +452,22 @@ impl Interpreter {
         mode: CompMode,
         col: usize,
     ) -> Result<(), GcodeError> {
-        let cfg = &self.cfg;
-        let diameter_of = |tool: u32| {
-            if cfg.tool_diameters_mm.is_empty() {
-                return Some(0.0);
-            }
-            cfg.tool_diameters_mm
-                .iter()
-                .find(|t| t.0 == tool)
-                .map(|t| t.1)
-        };
+        let tools = &self.tools;
+        let diameter_of = |tool: u32| tools.diameter_mm(tool);
         let radius = selected_radius(
             block,
             d,
             col,
             mode,
-            self.selected_tool,
+            self.spindle_tool,
             self.scale(),
             diameter_of,
         )?;
+        if radius.is_some() && self.plane != Plane::Xy && self.rotation_deg() != 0.0 {
+            let msg = "cutter radius compensation outside the XY plane in a rotated coordinate \
+                       system (G10 L2 R) is not supported";
+            return Err(GcodeError::unsupported(block.line, col, msg));
+        }
         match radius {
             Some((side, radius_mm)) => {
                 let (a1, a2, axis) = plane_axes(self.plane);
@@ -423,32 +489,9 @@ impl Interpreter {
         }
     }
 
-    /// Program-to-machine offset (G5x + G92 + tool length) along `axis`, mm.
-    fn offset_mm(&self, axis: usize) -> f64 {
-        self.cfg.work_offsets_mm[self.coord_index][axis]
-            + self.axis_offset_mm[axis]
-            + self.tlo_mm(axis)
-    }
-
-    /// Tool length offset along `axis`, mm (Z only).
-    fn tlo_mm(&self, axis: usize) -> f64 {
-        if axis == 2 {
-            self.tool_offset_mm
-        } else {
-            0.0
-        }
-    }
-
-    /// Length of tool `tool` from the table; `Some(0)` for every tool when the table is empty.
+    /// Length of tool `tool` from the table (see `tool_table`).
     fn tool_length_mm(&self, tool: u32) -> Option<f64> {
-        if self.cfg.tool_lengths_mm.is_empty() {
-            return Some(0.0);
-        }
-        self.cfg
-            .tool_lengths_mm
-            .iter()
-            .find(|t| t.0 == tool)
-            .map(|t| t.1)
+        self.tools.length_mm(tool)
     }
 
     fn report_spindle(&mut self, emit: &mut impl FnMut(CanonKind)) {
@@ -459,54 +502,6 @@ impl Interpreter {
                 rpm: self.spindle.1,
             });
         }
-    }
-
-    /// G92: offsets such that the current point gets the programmed coordinates.
-    fn set_axis_offsets(&mut self, d: &Decoded) {
-        for (axis, word) in d.axes.iter().enumerate() {
-            if let Some(w) = word {
-                let g5x = self.cfg.work_offsets_mm[self.coord_index][axis];
-                self.axis_offset_mm[axis] =
-                    self.pos_mm[axis] - g5x - self.tlo_mm(axis) - w.value * self.scale();
-            }
-        }
-    }
-
-    /// G10 L2 (offsets given) / L20 (offsets such that the current point has the given
-    /// coordinates) for work offset P (0 = the active one). Values are absolute (G91 ignored).
-    fn set_coord_data(&mut self, d: &Decoded) {
-        let l20 = d.l.is_some_and(|l| l.value == 20.0);
-        let p = d.p.map_or(0, |p| p.value.round() as usize);
-        let index = if p == 0 { self.coord_index } else { p - 1 };
-        for (axis, word) in d.axes.iter().enumerate() {
-            if let Some(w) = word {
-                let v_mm = w.value * self.scale();
-                self.cfg.work_offsets_mm[index][axis] = if l20 {
-                    self.pos_mm[axis] - self.axis_offset_mm[axis] - self.tlo_mm(axis) - v_mm
-                } else {
-                    v_mm
-                };
-            }
-        }
-    }
-
-    /// End point of a move, machine coordinates, mm. Uses the block's units/distance modes,
-    /// which are already applied when this runs.
-    fn target_mm(&self, d: &Decoded, machine: bool) -> [f64; 3] {
-        let mut end = self.pos_mm;
-        for (axis, word) in d.axes.iter().enumerate() {
-            if let Some(w) = word {
-                let v_mm = w.value * self.scale();
-                end[axis] = if machine {
-                    v_mm
-                } else if self.distance == Distance::Incremental {
-                    self.pos_mm[axis] + v_mm
-                } else {
-                    v_mm + self.offset_mm(axis)
-                };
-            }
-        }
-        end
     }
 
     /// The arc of a G2/G3 block. Word-level checks have been done in `check`.
@@ -523,18 +518,17 @@ impl Interpreter {
             .map(|m| m.1)
             .or_else(|| d.first_arc_word().map(|w| w.col))
             .unwrap_or(block.first_col);
+        if self.plane != Plane::Xy && self.rotation_deg() != 0.0 {
+            let msg = "an arc outside the XY plane in a rotated coordinate system (G10 L2 R) \
+                       is not supported";
+            return Err(GcodeError::unsupported(block.line, col, msg));
+        }
         let start = [self.pos_mm[a1], self.pos_mm[a2]];
         let end = [end_mm[a1], end_mm[a2]];
         let k = self.scale();
         let form = match d.r {
             Some(r) => ArcForm::Radius(r.value * k),
-            None => {
-                let center = [a1, a2].map(|axis| match (self.arc_distance, d.ijk[axis]) {
-                    (Distance::Absolute, Some(w)) => w.value * k + self.offset_mm(axis),
-                    (_, w) => self.pos_mm[axis] + w.map_or(0.0, |w| w.value * k),
-                });
-                ArcForm::Center(center)
-            }
+            None => ArcForm::Center(self.arc_centre_mm(d, a1, a2)),
         };
         let c = arc_center(start, end, form, clockwise, self.units == Units::Inch)
             .map_err(|e| GcodeError::invalid(block.line, col, arc_error_msg(&e, k)))?;

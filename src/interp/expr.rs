@@ -156,6 +156,15 @@ impl Params {
         }
     }
 
+    /// Makes a named target exist (value 0) if it does not yet; numbered ones always exist.
+    pub fn define(&mut self, t: &Target) {
+        if let Target::Named(name) = t {
+            if self.named(name).is_none() {
+                self.assign(t.clone(), 0.0);
+            }
+        }
+    }
+
     /// Applies a setting.
     pub fn assign(&mut self, t: Target, v: f64) {
         match t {

@@ -281,19 +281,33 @@ impl Runner {
         if let Some(o) = &l.oword {
             return self.oword(prog, pc, l, o, out);
         }
+        // The line is read left to right: a named parameter a setting targets exists (0 if
+        // it is new) for everything after its `#<…>` on the line, as in LinuxCNC; all values
+        // are still read before any setting applies.
         let mut words = Vec::with_capacity(l.words.len());
-        for w in &l.words {
-            let value = self.params.eval(&w.value, l.line, w.col)?;
-            words.push(Word {
-                letter: w.letter,
-                value,
-                col: w.col,
-            });
-        }
         let mut settings: Vec<(Target, f64)> = Vec::with_capacity(l.assigns.len());
-        for a in &l.assigns {
-            let t = self.params.target(&a.target, l.line, a.col)?;
-            settings.push((t, self.params.eval(&a.value, l.line, a.col)?));
+        let (mut wi, mut ai) = (0, 0);
+        while wi < l.words.len() || ai < l.assigns.len() {
+            let word_first = match (l.words.get(wi), l.assigns.get(ai)) {
+                (Some(w), Some(a)) => w.col < a.col,
+                (w, _) => w.is_some(),
+            };
+            if word_first {
+                let w = &l.words[wi];
+                wi += 1;
+                let value = self.params.eval(&w.value, l.line, w.col)?;
+                words.push(Word {
+                    letter: w.letter,
+                    value,
+                    col: w.col,
+                });
+            } else {
+                let a = &l.assigns[ai];
+                ai += 1;
+                let t = self.params.target(&a.target, l.line, a.col)?;
+                self.params.define(&t);
+                settings.push((t, self.params.eval(&a.value, l.line, a.col)?));
+            }
         }
         for (t, v) in settings {
             self.params.assign(t, v);
@@ -492,21 +506,25 @@ impl Runner {
                 frame.return_to
             }
             OKind::Call => {
-                let Some(&start) = prog.subs.get(&key(&o.name)) else {
+                let name = match &o.name {
+                    OName::Computed(e) => OName::Number(self.params.eval(e, l.line, o.col)?),
+                    other => other.clone(),
+                };
+                let Some(&start) = prog.subs.get(&key(&name)) else {
                     // The definition may lie beyond a syntax error.
                     if let Some(e) = &prog.tail_error {
                         return Err(e.clone());
                     }
-                    return Err(match o.name {
+                    return Err(match name {
                         OName::Named(_) => GcodeError::unsupported(
                             l.line,
                             o.col,
-                            format!("{} call: subroutine not in this file nor in a subroutine folder (InterpConfig::subroutine_dirs)", o.name),
+                            format!("{name} call: subroutine not in this file nor in a subroutine folder (InterpConfig::subroutine_dirs)"),
                         ),
-                        OName::Number(_) => GcodeError::invalid(
+                        _ => GcodeError::invalid(
                             l.line,
                             o.col,
-                            format!("{} call: no such subroutine", o.name),
+                            format!("{name} call: no such subroutine"),
                         ),
                     });
                 };

@@ -171,7 +171,59 @@ fn g10_l2_and_l20_set_work_offsets() {
     ] {
         assert_eq!(err(src).kind, GcodeErrorKind::Invalid, "{src}");
     }
-    assert!(err("G10 L2 P7 X1").is_unsupported());
+    // G59.1…G59.3 are P7…P9.
+    assert_eq!(xs("G10 L2 P7 X3\nG59.1 G0 X1"), vec![4.0]);
+}
+
+/// Machine end points (mm) of the straight moves of a program.
+fn ends(src: &str) -> Vec<[f64; 3]> {
+    run_program(src, &InterpConfig::default())
+        .unwrap_or_else(|e| panic!("program rejected: {e}"))
+        .into_iter()
+        .filter_map(|m| match m.kind {
+            CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } => Some(end_mm),
+            _ => None,
+        })
+        .collect()
+}
+
+fn assert_close(got: &[[f64; 3]], want: &[[f64; 3]]) {
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        // 1e-9 mm: rounding of the rotation only.
+        assert!(
+            g.iter().zip(w).all(|(a, b)| (a - b).abs() < 1e-9),
+            "{got:?} vs {want:?}"
+        );
+    }
+}
+
+#[test]
+fn a_rotated_work_offset_turns_program_points_about_its_origin() {
+    // X1 in a system at X10 turned 90°: machine (10, 1); G91 Y1 moves along program Y (-X).
+    assert_close(
+        &ends("G10 L2 P1 X10 R90\nG0 X1 Y0\nG91 G0 Y1"),
+        &[[10.0, 1.0, 0.0], [9.0, 1.0, 0.0]],
+    );
+    // G92 shifts before the turn; L20 with a rotation sets X and Y of the offset.
+    assert_close(
+        &ends("G10 L2 P1 R90\nG92 X1\nG0 X2\nG10 L20 P1 X0\nG0 X1 Y0"),
+        &[[0.0, 1.0, 0.0], [0.0, 2.0, 0.0]],
+    );
+    // A drilling cycle runs in the turned frame: hole at program (1, 0) = machine (0, 1).
+    assert_close(
+        &ends("G10 L2 P1 R90\nG0 Z5\nG81 X1 Y0 Z-1 R1 F100\nM2"),
+        &[
+            [0.0, 0.0, 5.0],
+            [0.0, 1.0, 5.0],
+            [0.0, 1.0, 1.0],
+            [0.0, 1.0, -1.0],
+            [0.0, 1.0, 1.0],
+        ],
+    );
+    // An arc outside XY in a turned system has no canonical plane: refused, located.
+    let e = err("G10 L2 P1 R30\nG18 G2 X2 Z0 R1 F100");
+    assert!(e.is_unsupported() && e.line == 2, "{e}");
 }
 
 #[test]
@@ -295,4 +347,76 @@ fn a_call_runs_the_subroutine_file_of_that_name_from_the_subroutine_folders() {
     let e = run_program("G21\no<nowhere> call", &cfg).unwrap_err();
     assert!(e.is_unsupported(), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_call_may_compute_the_subroutine_number() {
+    let src = "#2=10\nO[#2*10] call\n#<s>=200\nO#<s> call\nM2\n\
+               O100 sub\nG0 X1\nO100 endsub\nO200 sub\nG0 X2\nO200 endsub";
+    assert_eq!(xs(src), vec![1.0, 2.0]);
+    assert_eq!(err("O[3] call\nM2").kind, GcodeErrorKind::Invalid);
+    assert!(err("O[1] sub\nO[1] endsub").is_unsupported());
+}
+
+#[test]
+fn g52_sets_the_g92_offset_to_its_values_whatever_the_distance_mode() {
+    // G52 X2: program X0 is machine X2; G91 G52 X1 sets it to 1, not 3.
+    assert_eq!(
+        xs("G52 X2\nG0 X0\nG91 G52 X1\nG90 G0 X0\nG92.2\nG0 X0\nG92.3\nG0 X0"),
+        vec![2.0, 1.0, 0.0, 1.0]
+    );
+}
+
+#[test]
+fn m19_orients_the_spindle_and_leaves_it_stopped() {
+    let moves = run_program("S100 M3\nM19 R45 Q2 P1\nM2", &InterpConfig::default()).unwrap();
+    assert!(moves.iter().any(|m| m.kind
+        == CanonKind::SpindleOrient {
+            angle_deg: 45.0,
+            direction: OrientDirection::Clockwise,
+            timeout_s: Some(2.0),
+        }));
+    // Stopped: right-hand tapping needs M3 again.
+    assert_eq!(err("S100 M3\nM19\nG84 X1 Z-1 R1 F10").line, 3);
+    for bad in ["M19 R-1", "M19 Q0", "M19 P3", "M3 M19"] {
+        assert_eq!(err(bad).kind, GcodeErrorKind::Invalid, "{bad}");
+    }
+}
+
+#[test]
+fn g10_l1_l10_l11_write_tool_lengths_that_g43_then_uses() {
+    let z = |src: &str| -> Vec<f64> {
+        let cfg = InterpConfig {
+            tool_lengths_mm: vec![(1, 50.0)],
+            ..InterpConfig::default()
+        };
+        run_program(src, &cfg)
+            .unwrap_or_else(|e| panic!("{src}: {e}"))
+            .into_iter()
+            .filter_map(|m| match m.kind {
+                CanonKind::Traverse { end_mm } => Some(end_mm[2]),
+                _ => None,
+            })
+            .collect()
+    };
+    assert_eq!(z("G10 L1 P1 Z10\nG43 H1\nG0 Z0"), vec![10.0]);
+    // At machine Z5, L10 Z1 makes the length 4 (with G92 Z shift 1: 3).
+    assert_eq!(z("G0 Z5\nG10 L10 P1 Z1\nG43 H1\nG0 Z0"), vec![5.0, 4.0]);
+    assert_eq!(
+        z("G0 Z5\nG92 Z4\nG10 L10 P1 Z1\nG43 H1\nG0 Z0"),
+        vec![5.0, 4.0]
+    );
+    // L11 measures in G59.3 (Z-2 here), without G92.
+    assert_eq!(
+        z("G10 L2 P9 Z-2\nG0 Z5\nG92 Z0\nG10 L11 P1 Z1\nG92.1\nG43 H1\nG0 Z0"),
+        vec![5.0, 6.0]
+    );
+    let cfg = InterpConfig {
+        tool_lengths_mm: vec![(1, 50.0)],
+        ..InterpConfig::default()
+    };
+    let e = run_program("G10 L1 P7 Z1", &cfg).unwrap_err();
+    assert!(e.msg.contains("tool 7 not found"), "{e}");
+    assert!(err("G10 L1 P1 X1").is_unsupported());
+    assert_eq!(err("G10 L1 P0 Z1").kind, GcodeErrorKind::Invalid);
 }

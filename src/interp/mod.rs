@@ -45,15 +45,24 @@
 //!   [`InterpConfig::subroutine_dirs`] (see `sub_files`).
 //! - G28/G30: rapid to the intermediate point (the axis words, in the current modes), then to
 //!   the stored position (#5161… / #5181…, set by G28.1/G30.1, default 0) along the given
-//!   axes, all axes if none is given. G10 L2/L20 P0…P6 set work offsets (R0 only).
+//!   axes, all axes if none is given. G10 L2/L20 P0…P9 set work offsets and their XY
+//!   rotation R (degrees about the offset's origin: `p_machine = Rz(R)·(p + g92) + g5x`);
+//!   G59.1–G59.3 select systems 7–9. In a rotated system arcs and cutter compensation are
+//!   accepted in G17 only (others are unsupported: no canonical plane on the machine).
+//! - M19 R (angle, 0…360°) Q (wait, s) P (0 shortest, 1 clockwise, 2 counter-clockwise):
+//!   spindle orientation ([`CanonKind::SpindleOrient`]); the spindle is stopped afterwards.
+//! - G52: the G92 offset set to the given values (absolute whatever G90/G91), stored as G92's.
+//! - G64 R (a planner option of newer LinuxCNC versions): accepted, no effect here.
 //! - M7/M8/M9 ([`CanonKind::Coolant`]), M0/M1/M60 ([`CanonKind::Pause`]), M48–M53 and
-//!   M62–M68 ([`CanonKind::Io`]): no motion. M61 Q sets the current tool without a change.
+//!   M62–M68 ([`CanonKind::Io`]): no motion. M61 Q sets the tool in the spindle without a
+//!   change.
 //! - G61, G61.1, G64 (P, Q): accepted; the planner stops exactly at the end of every move
 //!   whatever the mode, so they change nothing.
-//! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the selected
+//! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the spindle's
 //!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
 //! - G41 / G42 D (cutter radius compensation left / right of the path, D a tool number whose
-//!   diameter comes from [`InterpConfig::tool_diameters_mm`]; D0 or no D: the current tool),
+//!   diameter comes from [`InterpConfig::tool_diameters_mm`]; D0 or no D: the tool in the
+//!   spindle, loaded by M6 — a T word alone only selects),
 //!   G41.1 / G42.1 D (D the diameter, in program units; negative: the other side), G40 (off),
 //!   in the G17 or G18 plane, with LinuxCNC's paths and refusals (see `cutter_comp`): entry
 //!   move offset perpendicular at its end, outside corners rounded at the tool radius, inside
@@ -202,6 +211,15 @@ pub enum CanonKind {
     Dwell { duration_s: f64 },
     /// Spindle speed or direction change (S with M3/M4/M5 state). `rpm` is the programmed S.
     Spindle { dir: SpindleDir, rpm: f64 },
+    /// M19: the spindle stops at `angle_deg` (its direction state becomes stopped).
+    SpindleOrient {
+        /// Angle from the spindle's zero, degrees (0…360).
+        angle_deg: f64,
+        /// Which way it turns to get there.
+        direction: OrientDirection,
+        /// Q: how long to wait for the orientation to complete, s (`None`: no wait).
+        timeout_s: Option<f64>,
+    },
     /// M6 tool change to tool `tool`.
     ToolChange { tool: u32 },
     /// M2 / M30.
@@ -226,6 +244,17 @@ pub enum CanonKind {
         /// Q word.
         q: Option<f64>,
     },
+}
+
+/// How M19 turns the spindle to its angle (P0, P1, P2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OrientDirection {
+    /// P0 (default): the shorter way.
+    Shortest,
+    /// P1: clockwise.
+    Clockwise,
+    /// P2: counter-clockwise.
+    CounterClockwise,
 }
 
 /// Why a program pauses.

@@ -13,7 +13,7 @@ fn named(l: &Line, kind: OKind) -> Option<&str> {
     match &l.oword {
         Some(o) if o.kind == kind => match &o.name {
             OName::Named(n) => Some(n.as_str()),
-            OName::Number(_) => None,
+            OName::Number(_) | OName::Computed(_) => None,
         },
         _ => None,
     }

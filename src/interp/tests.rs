@@ -484,11 +484,18 @@ const ERROR_CASES: &[(&str, usize, usize, GcodeErrorKind, &str)] = &[
     ),
     ("G1 G0 X1", 1, 4, GcodeErrorKind::Invalid, "G1 and G0"),
     (
-        "M19",
+        "M19 R400",
         1,
+        5,
+        GcodeErrorKind::Invalid,
+        "R value must be within 0..360 with M19",
+    ),
+    (
+        "G64 M19 R90",
         1,
-        GcodeErrorKind::Unsupported,
-        "M19 (spindle orientation)",
+        9,
+        GcodeErrorKind::Invalid,
+        "R word is ambiguous",
     ),
     (
         "G76 X1 Z-1",

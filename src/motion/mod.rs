@@ -466,6 +466,11 @@ impl PlanBuilder<'_> {
                 self.spindle_dir = dir;
                 self.spindle_rpm = if dir == SpindleDir::Off { 0.0 } else { rpm };
             }
+            // Orientation: the spindle stops (its time is not modelled).
+            CanonKind::SpindleOrient { .. } => {
+                self.spindle_dir = SpindleDir::Off;
+                self.spindle_rpm = 0.0;
+            }
             // Messages, coolant and operator pauses take no machine time here.
             CanonKind::Message(_)
             | CanonKind::Coolant { .. }

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests that run the real binary in a temporary folder.
 #![allow(dead_code)] // each test crate uses its own subset
 
+pub mod rs274;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -66,12 +66,16 @@ impl Interpreter {
             return Ok(MotionStep::None);
         }
         if let Some((
-            nm @ (NonModal::SetAxisOffsets | NonModal::Home(_) | NonModal::SetCoordData),
+            nm @ (NonModal::SetAxisOffsets
+            | NonModal::LocalOffsets
+            | NonModal::Home(_)
+            | NonModal::SetCoordData),
             col,
         )) = d.non_modal
         {
             let name = match nm {
                 NonModal::SetAxisOffsets => "G92",
+                NonModal::LocalOffsets => "G52",
                 NonModal::Home(0) => "G28",
                 NonModal::Home(_) => "G30",
                 _ => "G10",
@@ -128,14 +132,21 @@ impl Interpreter {
             return cycles::check_words(line, c, d);
         }
         let g10 = d.non_modal.filter(|n| n.0 == NonModal::SetCoordData);
-        if let (Some(r), Some(_)) = (d.r, d.path_control.filter(|c| c.0 == 640)) {
-            return Err(GcodeError::unsupported(
-                line,
-                r.col,
-                "G64 R (planner option) is not supported",
+        let g64_r = d.path_control.filter(|c| c.0 == 640).and(d.r);
+        if let (Some(r), Some(_)) = (g64_r, d.orient) {
+            return Err(inv(
+                &r,
+                "R word is ambiguous with both G64 and M19 (use separate lines)",
             ));
         }
-        let g10_r = |w: &Word| g10.is_some() && w.letter == 'R';
+        if let Some(r) = g64_r.filter(|r| r.value < 0.0) {
+            return Err(inv(&r, "G64 R (planner option) must not be negative"));
+        }
+        // G64 R: a planner option of newer LinuxCNC versions; our planner does not blend.
+        if let Some(col) = d.orient {
+            return check_orient(line, col, d);
+        }
+        let g10_r = |w: &Word| (g10.is_some() || g64_r.is_some()) && w.letter == 'R';
         if let Some(w) = d.first_arc_word().filter(|w| !arc_move && !g10_r(w)) {
             return Err(inv(
                 &w,
@@ -166,7 +177,7 @@ impl Interpreter {
             (Some(h), _) => return Err(inv(&h, "H word without G43 to use it")),
         }
         if let Some((ToolLength::Table, col)) = d.tool_length {
-            let tool = d.h.map_or(self.selected_tool, |h| h.value as u32);
+            let tool = d.h.map_or(self.spindle_tool, |h| h.value as u32);
             if self.tool_length_mm(tool).is_none() {
                 let msg = format!("G43: tool {tool} is not in the tool table");
                 return Err(GcodeError::invalid(line, col, msg));
@@ -176,7 +187,7 @@ impl Interpreter {
         if let Some(l) = d.l.filter(|_| g10.is_none()) {
             return Err(inv(&l, "L word without G10 to use it"));
         }
-        if let Some(q) = d.q.filter(|_| g64.is_none()) {
+        if let Some(q) = d.q.filter(|_| g64.is_none() && g10.is_none()) {
             return Err(inv(&q, "Q word without G64 to use it"));
         }
         if let Some((_, col)) = g10 {
@@ -310,4 +321,37 @@ pub(super) fn motion_col(block: &Block, d: &Decoded) -> usize {
         .map(|m| m.1)
         .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
         .unwrap_or(block.first_col)
+}
+
+/// M19's words: R the angle within 0…360°, Q a wait > 0 s, P the direction 0, 1 or 2; no
+/// other word that needs a user (as LinuxCNC's messages say).
+fn check_orient(line: usize, col: usize, d: &Decoded) -> Result<(), GcodeError> {
+    let inv = |w: &Word, msg: &str| GcodeError::invalid(line, w.col, msg);
+    if let Some(r) = d.r.filter(|r| !(0.0..=360.0).contains(&r.value)) {
+        return Err(inv(&r, "R value must be within 0..360 with M19"));
+    }
+    if let Some(q) = d.q.filter(|q| q.value <= 0.0) {
+        return Err(inv(&q, "Q word with M19 requires a value > 0"));
+    }
+    if let Some(p) = d.p.filter(|p| ![0.0, 1.0, 2.0].contains(&p.value)) {
+        return Err(inv(&p, "P value must be 0, 1 or 2 with M19"));
+    }
+    if let Some(w) = [d.ijk[0], d.ijk[1], d.ijk[2], d.e, d.l, d.h]
+        .into_iter()
+        .flatten()
+        .next()
+    {
+        return Err(inv(
+            &w,
+            &format!("{} word without a code to use it", w.letter),
+        ));
+    }
+    if d.motion.is_some() || d.has_axis_words() || d.non_modal.is_some() {
+        return Err(GcodeError::invalid(
+            line,
+            col,
+            "M19 takes R, Q and P: not with motion, G4 or other codes that use words",
+        ));
+    }
+    Ok(())
 }
