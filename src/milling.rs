@@ -134,6 +134,18 @@ impl ToolDynamics {
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
+    /// The tool of a `--tool FILE` option (the benchmark tool without one), with where it came
+    /// from, for the report.
+    ///
+    /// # Errors
+    /// See [`ToolFileError`].
+    pub fn from_option(path: Option<&Path>) -> Result<(Self, String), ToolFileError> {
+        Ok(match path {
+            Some(path) => (Self::load(path)?, path.display().to_string()),
+            None => (Self::benchmark(), DEFAULT_TOOL_PATH.to_string()),
+        })
+    }
+
     /// The benchmark tool shipped with the repository ([`DEFAULT_TOOL_PATH`]).
     pub fn benchmark() -> Self {
         // The embedded file is checked by a test.

@@ -9,7 +9,7 @@ use crate::chatter::stock_file::StockSpec;
 use crate::chatter::ChatterOptions;
 use crate::commands::chatter::ChatterConfig;
 use crate::files;
-use crate::milling::{ToolDynamics, DEFAULT_TOOL_PATH};
+use crate::milling::ToolDynamics;
 
 /// Arguments of `chatter`.
 #[derive(clap::Args)]
@@ -43,10 +43,7 @@ impl ChatterArgs {
     /// # Errors
     /// An unreadable or invalid stock or tool file.
     pub fn config(self) -> Result<ChatterConfig> {
-        let (tool, tool_source) = match &self.tool {
-            Some(path) => (ToolDynamics::load(path)?, path.display().to_string()),
-            None => (ToolDynamics::benchmark(), DEFAULT_TOOL_PATH.to_string()),
-        };
+        let (tool, tool_source) = ToolDynamics::from_option(self.tool.as_deref())?;
         let stock_source = self.stock.display().to_string();
         let text = files::read_named(&self.stock, "stock file")?;
         let stock = StockSpec::from_toml_str(&text, &stock_source)?;

@@ -9,7 +9,7 @@ use crate::commands;
 use crate::dynamics::cut::{CutOptions, MAX_TOOTH_PERIODS};
 use crate::dynamics::params::{validate_immersion, validate_speed};
 use crate::dynamics::{Cut, Milling};
-use crate::milling::{ToolDynamics, DEFAULT_TOOL_PATH};
+use crate::milling::ToolDynamics;
 
 /// Fewest tooth periods the verdict needs (four quarters of at least four).
 const MIN_TOOTH_PERIODS: usize = 16;
@@ -60,10 +60,7 @@ impl CutArgs {
     /// An unreadable or invalid tool file, a speed, depth, feed or immersion out of range, a
     /// horizon under 16 or over 100 000 tooth periods.
     pub fn config(self) -> Result<commands::cut::CutConfig> {
-        let (tool, tool_source) = match &self.tool {
-            Some(path) => (ToolDynamics::load(path)?, path.display().to_string()),
-            None => (ToolDynamics::benchmark(), DEFAULT_TOOL_PATH.to_string()),
-        };
+        let (tool, tool_source) = ToolDynamics::from_option(self.tool.as_deref())?;
         validate_speed(self.rpm).map_err(|e| anyhow!("--rpm: {e}"))?;
         positive("--depth-mm", self.depth_mm, "mm")?;
         positive("--feed-per-tooth-mm", self.feed_per_tooth_mm, "mm")?;

@@ -572,16 +572,7 @@ impl LobesArgs {
     /// # Errors
     /// An unreadable or invalid tool file, an immersion outside (0, 1], malformed speeds.
     pub fn config(self) -> Result<commands::lobes::LobesConfig> {
-        let (tool, tool_source) = match &self.tool {
-            Some(path) => (
-                crate::milling::ToolDynamics::load(path)?,
-                path.display().to_string(),
-            ),
-            None => (
-                crate::milling::ToolDynamics::benchmark(),
-                crate::milling::DEFAULT_TOOL_PATH.to_string(),
-            ),
-        };
+        let (tool, tool_source) = crate::milling::ToolDynamics::from_option(self.tool.as_deref())?;
         crate::dynamics::params::validate_immersion(self.immersion)
             .map_err(|e| anyhow::anyhow!("--immersion: {e}"))?;
         let speeds_rpm =
