@@ -574,6 +574,8 @@ fn units(rng: &mut Rng, st: &mut State, out: &mut String) {
     // units across G20/G21, so that the next G43/G43.1/G49 shifts the position by a mix of
     // both (an inconsistency not reproduced here).
     let _ = writeln!(out, "G49");
+    let _ = writeln!(out, "G90 G0 Z{}", n(st.len(rng.range(0.0, 30.0))));
+    st.incremental = false;
     let inch = rng.chance(0.5);
     let _ = writeln!(out, "{}", if inch { "G20" } else { "G21" });
     st.unit_mm = if inch { 25.4 } else { 1.0 };
