@@ -184,8 +184,13 @@ fn generated_programs_move_as_rs274_does() {
     let dir = common::TempDir::new("fuzz");
     // `VMC_FUZZ_KEEP=<folder>`: the programs that fail are written there (`<i>.ngc`).
     let keep = std::env::var_os("VMC_FUZZ_KEEP").map(PathBuf::from);
+    // `VMC_FUZZ_FIRST=<i>`: start at program i (to rerun a failing one).
+    let first: u64 = std::env::var("VMC_FUZZ_FIRST")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
     let mut tally = Tally::default();
-    for i in 0..count {
+    for i in first..first + count {
         let reference = rs274_of(&bin, dir.path(), i);
         let outcome = judge(&generator::program(SEED, i), &reference);
         if let (

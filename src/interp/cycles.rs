@@ -35,6 +35,9 @@ use crate::gcode::{Block, GcodeError, Word};
 /// the program units (LinuxCNC's fixed value).
 pub const PECK_CLEARANCE_MM: f64 = 0.254;
 
+/// Two levels closer than this are the same level (1e-9 mm: float rounding only).
+const LEVEL_EPS_MM: f64 = 1e-9;
+
 /// Modal state of the canned cycles.
 #[derive(Debug, Clone, Default)]
 pub(super) struct CycleState {
@@ -321,14 +324,16 @@ pub(super) fn run(
                 hole[a] = w.value * k + input.offset_mm[a];
             }
         }
-        hole[ax] = if cx.pos[ax] <= r_mm {
+        // Levels within LEVEL_EPS_MM are one level: in G91 the R plane is a sum computed in mm
+        // here and in program units by LinuxCNC, whose roundings differ.
+        hole[ax] = if cx.pos[ax] <= r_mm + LEVEL_EPS_MM {
             clear_mm
         } else {
             cx.pos[ax]
         };
         cx.out.push(CanonKind::Traverse { end_mm: hole });
         *cx.pos = hole;
-        if hole[ax] != r_mm {
+        if (hole[ax] - r_mm).abs() > LEVEL_EPS_MM {
             cx.traverse(r_mm);
         }
         if let Some(ijk) = ijk {

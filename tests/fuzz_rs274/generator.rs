@@ -120,7 +120,7 @@ pub fn program(seed: u64, index: u64) -> String {
     // machine reports its real position).
     if rng.chance(0.5) {
         let _ = writeln!(out, "T1 M6");
-        let _ = writeln!(out, "G43 H1");
+        let _ = writeln!(out, "G0 G43 H1 Z{}", n(st.len(rng.range(0.0, 30.0))));
     }
     // Work offsets, some rotated.
     for p in 1..=rng.below(4) + 1 {
@@ -311,6 +311,12 @@ fn offsets(rng: &mut Rng, st: &mut State, out: &mut String) {
             }
         }
         let index = if p == 0 { st.coord } else { p as usize - 1 };
+        if index == st.coord && l == 2 {
+            // Turning the active system: the G92 offset is cleared first. LinuxCNC turns the
+            // current position without it (as if G92 were not rotated) while it places points
+            // with it rotated; the twin keeps one frame, `Rz(R)·(p + g92) + g5x`.
+            let _ = writeln!(out, "G92.1");
+        }
         // R with L20 is refused by LinuxCNC: now and then, to check that we refuse it too.
         if rng.chance(if l == 2 { 0.3 } else { 0.02 }) {
             let _ = write!(line, " R{}", n(rng.range(-180.0, 180.0)));
@@ -568,6 +574,8 @@ fn units(rng: &mut Rng, st: &mut State, out: &mut String) {
     // units across G20/G21, so that the next G43/G43.1/G49 shifts the position by a mix of
     // both (an inconsistency not reproduced here).
     let _ = writeln!(out, "G49");
+    let _ = writeln!(out, "G90 G0 Z{}", n(st.len(rng.range(0.0, 30.0))));
+    st.incremental = false;
     let inch = rng.chance(0.5);
     let _ = writeln!(out, "{}", if inch { "G20" } else { "G21" });
     st.unit_mm = if inch { 25.4 } else { 1.0 };
@@ -586,6 +594,13 @@ fn tool_length(rng: &mut Rng, st: &mut State, out: &mut String) {
         _ => "G49".to_string(),
     };
     let _ = writeln!(out, "{line}");
+    if !line.starts_with('T') {
+        // A Z move right after a tool length change: LinuxCNC keeps the tool tip's program Z
+        // (the spindle moves by the change at the next move, whatever its axes), the twin keeps
+        // the spindle until the next Z move; both agree from the next Z word on.
+        let _ = writeln!(out, "G90 G0 Z{}", n(st.len(rng.range(0.0, 30.0))));
+        st.incremental = false;
+    }
     st.known = None;
 }
 
