@@ -14,6 +14,11 @@ corpus=tests/data/linuxcnc
 src=$corpus/nc_files
 dst=$corpus/rs274-expected
 tools=$(realpath $corpus/tool.tbl)
+# rs274 keeps its tool table in $HOME/.tool.mmap: a private HOME keeps another rs274 running
+# at the same time from overwriting it.
+HOME=$(mktemp -d)
+export HOME
+trap 'rm -rf "$HOME"' EXIT
 rm -rf "$dst"
 mkdir -p "$dst"
 refused=$dst/REFUSED.txt

@@ -256,6 +256,11 @@ pub fn fixture_tool_table() -> PathBuf {
 
 /// What `rs274 -g -t TOOLS program` printed: `Ok(calls)` (one per line, without the line
 /// counter) if it accepted the program, `Err(message)` if it stopped with an error.
+///
+/// `rs274` keeps its tool table in a memory-mapped file `$HOME/.tool.mmap`: two runs at the
+/// same moment with the same `HOME` overwrite each other's tools (spurious refusals, wrong
+/// tool lengths and radii). It runs with `HOME` set to the program's folder, which the caller
+/// keeps to itself.
 pub fn run_rs274(bin: &Path, program: &Path) -> Result<String, String> {
     let out = Command::new(bin)
         .arg("-g")
@@ -263,6 +268,7 @@ pub fn run_rs274(bin: &Path, program: &Path) -> Result<String, String> {
         .arg(fixture_tool_table())
         .arg(program)
         .current_dir(program.parent().unwrap_or(Path::new(".")))
+        .env("HOME", program.parent().unwrap_or(Path::new(".")))
         .stdin(Stdio::null())
         .output()
         .map_err(|e| format!("cannot run rs274: {e}"))?;
