@@ -217,11 +217,9 @@ pub fn helical_cutting_matrix_mean(
     phi_a: f64,
     phi_b: f64,
 ) -> Matrix2<f64> {
-    let mut h = Matrix2::zeros();
-    for lag in disks.lags_rad() {
-        h += cutting_matrix_mean(tool, window, phi_a - lag, phi_b - lag);
-    }
-    h / disks.count() as f64
+    mean_over_disks(disks, |lag| {
+        cutting_matrix_mean(tool, window, phi_a - lag, phi_b - lag)
+    })
 }
 
 /// Mean over [φ_a, φ_b] of the helical process-damping shape (1/K)·Σ_k D(φ − k_β z_k).
@@ -232,11 +230,15 @@ pub fn helical_damping_matrix_mean(
     phi_a: f64,
     phi_b: f64,
 ) -> Matrix2<f64> {
-    let mut d = Matrix2::zeros();
-    for lag in disks.lags_rad() {
-        d += damping_matrix_mean(tool, window, phi_a - lag, phi_b - lag);
-    }
-    d / disks.count() as f64
+    mean_over_disks(disks, |lag| {
+        damping_matrix_mean(tool, window, phi_a - lag, phi_b - lag)
+    })
+}
+
+/// The mean over the disks of `of(lag)`, each disk's matrix at its lag angle.
+fn mean_over_disks(disks: &Disks, of: impl Fn(f64) -> Matrix2<f64>) -> Matrix2<f64> {
+    let sum: Matrix2<f64> = disks.lags_rad().iter().map(|&lag| of(lag)).sum();
+    sum / disks.count() as f64
 }
 
 /// Zero-order (time-averaged) directional matrix A₀ = (N/2π)∫_{φ_st}^{φ_ex} H dφ in N/m²
