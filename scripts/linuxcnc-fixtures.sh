@@ -3,6 +3,7 @@
 # example program in tests/data/linuxcnc/nc_files (recursively):
 #   tests/data/linuxcnc/rs274-expected/<relative path>.out   program accepted: rs274 -g output
 #   tests/data/linuxcnc/rs274-expected/REFUSED.txt           program refused: path and error line
+# and the output for the CAM-style example trajectories/cam_pocket_drill.ngc (tests/data/cam/).
 # The tool table tests/data/linuxcnc/tool.tbl is in inches, as rs274 reads it without an INI
 # file. In mm: T1 Ø12 × 150 long, T2 Ø6 × 100, T3 Ø3 × 80, T4 Ø20 × 120 (tests/linuxcnc_corpus.rs
 # gives our interpreter the same tools).
@@ -43,3 +44,9 @@ while IFS= read -r -d '' prog; do
   fi
 done < <(find "$src" -name '*.ngc' -print0 | sort -z)
 echo "rs274 accepted $accepted programs; refused $(wc -l <"$refused") (see $refused)"
+
+# The CAM-style example program (tests/cam_example.rs), with the same tool table.
+cam=trajectories/cam_pocket_drill.ngc
+(cd "$(dirname "$cam")" && "$RS274" -g -t "$tools" "$(basename "$cam")" </dev/null 2>/dev/null) |
+  sed -En 's/^ *[0-9]+ (N[^ ]* +[A-Z_0-9]+\()/\1/p' >tests/data/cam/cam_pocket_drill.out
+echo "rs274 output of $cam written to tests/data/cam/cam_pocket_drill.out"

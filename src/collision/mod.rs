@@ -39,15 +39,16 @@
 //!   unchanged, Z rising), which is the tool leaving its own cut — or on a feed move with the
 //!   spindle stopped. The tool in the stock at feed (G1/G2/G3) with the spindle running is
 //!   cutting, and is not reported.
-//! - Limitation: there is no material-removal model; the stock stays whole. A holder that
-//!   follows the tool into its own pocket is reported, and a rapid that moves sideways through
-//!   material already cut is reported as a rapid into the stock.
+//! - Material removal: a stock box is cut by the program's feed moves and the head's bodies are
+//!   checked against what is left ([`stock`]): a rapid back into a drilled hole or a cleared
+//!   pocket is not a crash. A cylindrical stock stays whole.
 //!
 //! One [`Problem`] is reported per segment and pair of bodies in contact (with the first contact
 //! and the deepest point), and one per segment and axis out of travel, move by move in plan
 //! order, through a [`CheckObserver`] (the shape a recorder needs to draw them).
 
 pub use crate::collision_spec as spec;
+mod stock;
 #[cfg(test)]
 mod tests;
 
@@ -58,6 +59,8 @@ use serde::Serialize;
 
 use crate::machine::MachineSpec;
 use crate::motion::{self, Geometry, MotionError, Plan, Segment, SegmentKind};
+use stock::CutStock;
+pub use stock::CUT_GRID_MM;
 pub use spec::{BodyRole, BodySpec, CollisionSpec, FixtureSpec, ShapeKind, SpindleCylinder};
 
 /// Largest path step between two samples of a segment, mm (0.2 mm: no contact deeper than
@@ -276,6 +279,8 @@ struct Static {
     pose: Pose,
     lo_mm: [f64; 3],
     hi_mm: [f64; 3],
+    /// A stock box whose material the tool removes (checked on its Z-map, see [`stock`]).
+    cut: bool,
 }
 
 /// The collision scene of a machine and an optional fixture.
@@ -298,6 +303,14 @@ pub enum CheckError {
         head: &'static str,
         /// Static body.
         body: String,
+    },
+    /// A stock box cannot be gridded for material removal.
+    #[error("stock {body}: {message}")]
+    StockGrid {
+        /// The stock body.
+        body: String,
+        /// Why.
+        message: String,
     },
 }
 
@@ -393,7 +406,13 @@ impl Scene {
             pose,
             lo_mm,
             hi_mm,
+            cut: b.role == BodyRole::Stock && b.shape == ShapeKind::Box,
         }
+    }
+
+    /// True when a stock box is checked with material removal ([`stock`]).
+    pub fn has_cut_stock(&self) -> bool {
+        self.statics.iter().any(|s| s.cut)
     }
 
     /// One line per body, for reports.
@@ -529,6 +548,67 @@ fn segment_bounds(seg: &Segment) -> ([f64; 3], [f64; 3]) {
     }
 }
 
+/// The contacts of one (head body, static body) pair along one segment.
+struct PairHits {
+    head: HeadBody,
+    static_index: usize,
+    reason: &'static str,
+    found: Option<Collision>,
+    /// Depth at the segment's start (0 when not in contact there).
+    start_depth_mm: f64,
+}
+
+impl PairHits {
+    fn new(head: HeadBody, static_index: usize, reason: &'static str) -> Self {
+        Self {
+            head,
+            static_index,
+            reason,
+            found: None,
+            start_depth_mm: 0.0,
+        }
+    }
+
+    /// A contact `depth_mm` deep at sample `k` (path length `s_mm`, tip `tip`).
+    #[allow(clippy::too_many_arguments)]
+    fn add(
+        &mut self,
+        seg: &Segment,
+        kind: MoveKind,
+        s: &Static,
+        k: usize,
+        s_mm: f64,
+        tip: [f64; 3],
+        depth_mm: f64,
+        point: [f64; 3],
+    ) {
+        if k == 0 {
+            self.start_depth_mm = depth_mm;
+        }
+        let time_s = seg.t_start_s + seg.profile.time_at_distance(s_mm);
+        let c = self.found.get_or_insert_with(|| Collision {
+            line: seg.line,
+            move_kind: kind,
+            head_body: self.head,
+            other_body: s.name.clone(),
+            other_role: s.role,
+            reason: self.reason,
+            first_contact_time_s: time_s,
+            first_contact_tip_mm: tip,
+            time_s,
+            tip_mm: tip,
+            contact_point_mm: point,
+            depth_mm: 0.0,
+        });
+        if depth_mm > c.depth_mm {
+            c.depth_mm = depth_mm;
+            c.time_s = time_s;
+            c.tip_mm = tip;
+            c.contact_point_mm = point;
+        }
+    }
+}
+
 /// Checks every segment of `plan` against the travel limits of `machine` and, with a `scene`,
 /// for collisions; reports each problem to `observer` move by move, in plan order.
 ///
@@ -545,6 +625,7 @@ pub fn check_plan(
     // a contact and gets no deeper is the same crash continuing (e.g. the retraction out of
     // it), and is not reported again.
     let mut reported_prev: Vec<(HeadBody, usize)> = Vec::new();
+    let mut cut_stock = scene.map(CutStock::new).transpose()?;
     for seg in plan.segments() {
         let Some(kind) = move_kind(seg.kind) else {
             continue;
@@ -576,20 +657,19 @@ pub fn check_plan(
         if length_mm <= 0.0 {
             continue;
         }
-        let mut reported_now = Vec::new();
+        let mut hits: Vec<PairHits> = Vec::new();
         let n = (length_mm / SAMPLE_SPACING_MM).ceil().max(1.0) as usize;
         let (lo, hi) = segment_bounds(seg);
         for m in &scene.moving {
             let (mlo, mhi) = Scene::moving_box(m, lo, hi);
             for (si, s) in scene.statics.iter().enumerate() {
-                if !overlap(mlo, mhi, s.lo_mm, s.hi_mm) {
+                if s.cut || !overlap(mlo, mhi, s.lo_mm, s.hi_mm) {
                     continue;
                 }
                 let Some(reason) = crash_reason(m.body, s.role, seg) else {
                     continue;
                 };
-                let mut found: Option<Collision> = None;
-                let mut start_depth_mm = 0.0;
+                let mut pair = PairHits::new(m.body, si, reason);
                 // On a line, only the samples whose bounding boxes can overlap (same results,
                 // cost ∝ the length near the body rather than the whole move).
                 let (k0, k1) = match line_window(seg, m, s) {
@@ -605,44 +685,26 @@ pub fn check_plan(
                     let s_mm = length_mm * k as f64 / n as f64;
                     let tip = seg.geometry.point_at(seg.start_mm, s_mm);
                     sum.samples += 1;
-                    let Some((depth_mm, point)) = scene.penetration(m, s, tip)? else {
-                        continue;
-                    };
-                    if k == 0 {
-                        start_depth_mm = depth_mm;
-                    }
-                    let time_s = seg.t_start_s + seg.profile.time_at_distance(s_mm);
-                    let c = found.get_or_insert_with(|| Collision {
-                        line: seg.line,
-                        move_kind: kind,
-                        head_body: m.body,
-                        other_body: s.name.clone(),
-                        other_role: s.role,
-                        reason,
-                        first_contact_time_s: time_s,
-                        first_contact_tip_mm: tip,
-                        time_s,
-                        tip_mm: tip,
-                        contact_point_mm: point,
-                        depth_mm: 0.0,
-                    });
-                    if depth_mm > c.depth_mm {
-                        c.depth_mm = depth_mm;
-                        c.time_s = time_s;
-                        c.tip_mm = tip;
-                        c.contact_point_mm = point;
+                    if let Some((depth_mm, point)) = scene.penetration(m, s, tip)? {
+                        pair.add(seg, kind, s, k, s_mm, tip, depth_mm, point);
                     }
                 }
-                if let Some(c) = found {
-                    let continuing = reported_prev.contains(&(m.body, si))
-                        && start_depth_mm > 0.0
-                        && c.depth_mm <= start_depth_mm + CONTACT_TOLERANCE_MM;
-                    reported_now.push((m.body, si));
-                    if !continuing {
-                        sum.collisions += 1;
-                        observer.on_problem(&Problem::Collision(c));
-                    }
-                }
+                hits.push(pair);
+            }
+        }
+        if let Some(stock) = cut_stock.as_mut() {
+            hits.extend(stock.check_and_cut(seg, kind, scene, n, &mut sum.samples));
+        }
+        let mut reported_now = Vec::new();
+        for pair in hits {
+            let Some(c) = pair.found else { continue };
+            let continuing = reported_prev.contains(&(pair.head, pair.static_index))
+                && pair.start_depth_mm > 0.0
+                && c.depth_mm <= pair.start_depth_mm + CONTACT_TOLERANCE_MM;
+            reported_now.push((pair.head, pair.static_index));
+            if !continuing {
+                sum.collisions += 1;
+                observer.on_problem(&Problem::Collision(c));
             }
         }
         reported_prev = reported_now;

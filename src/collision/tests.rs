@@ -106,6 +106,27 @@ fn a_pure_retraction_out_of_the_cut_is_not_a_crash_but_a_sideways_rapid_is() {
 }
 
 #[test]
+fn material_cut_by_the_program_is_gone_for_later_rapids_but_uncut_material_is_not() {
+    // A hole drilled at (150, 140) to Z −410, then a rapid back down into it (a peck
+    // cycle's re-entry), and a slot cut along X to (170, 140): a rapid along the slot is free.
+    let src = "S5000 M3\nG0 X150 Y140 Z-390\nG1 Z-410 F200\nG0 Z-395\nG0 Z-409\n\
+               G1 X170 F500\nG0 X150 Z-405\nG0 Z-300\nM30";
+    assert!(collisions(src, BLOCK).is_empty());
+    // Beside the hole, by half a tool diameter: uncut material, a crash 3 mm deep (the
+    // vertical overlap with the block's top at −400), reported on the rapid's line.
+    let src = "S5000 M3\nG0 X150 Y140 Z-390\nG1 Z-410 F200\nG0 Z-395\nG0 X156\nG0 Z-403\nM30";
+    let c = collisions(src, BLOCK);
+    assert_eq!(c.len(), 1, "{c:?}");
+    assert_eq!((c[0].line, c[0].reason), (6, "rapid into the stock"));
+    assert!((c[0].depth_mm - 3.0).abs() < 1e-9, "{}", c[0].depth_mm);
+    // Material removed with the spindle stopped does not count: the feed move is itself
+    // reported and the material stays for the next rapid.
+    let src = "G0 X150 Y140 Z-390\nG1 Z-410 F200\nG0 Z-395\nG0 Z-409\nM30";
+    let lines: Vec<usize> = collisions(src, BLOCK).iter().map(|c| c.line).collect();
+    assert_eq!(lines, [2, 4]);
+}
+
+#[test]
 fn the_holder_and_the_spindle_nose_in_the_stock_are_crashes_even_at_feed() {
     // Tool 105 mm exposed: the holder enters the block top (Z −400) when the tip is below −505,
     // which is out of travel; use a tall cylinder stock instead: top at −250, tip down to −370.

@@ -61,6 +61,13 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
                 collision::SAMPLE_SPACING_MM,
                 0.5 * collision::SAMPLE_SPACING_MM
             )?;
+            if sc.has_cut_stock() {
+                writeln!(
+                    out,
+                    "material removal: stock boxes on a Z-map of ≤ {} mm cells, cut by feed moves with the spindle running",
+                    collision::CUT_GRID_MM
+                )?;
+            }
         }
         None => writeln!(
             out,

@@ -112,28 +112,59 @@ impl ZMap {
     /// Removes the material above `z_mm` in every cell whose centre lies within `radius_mm` of
     /// (x, y): the footprint of a flat-end tool with its tip at that point.
     pub fn cut_disc(&mut self, centre_mm: [f64; 2], radius_mm: f64, z_mm: f64) {
-        let [gx, gy] = self.spacing_mm;
-        let [nx, ny] = self.cells;
-        // Rows whose centre y is within the disc: (j + 0.5)·gy in [cy − r, cy + r].
-        let j_lo = ((centre_mm[1] - radius_mm - self.min_mm[1]) / gy - 0.5).ceil();
-        let j_hi = ((centre_mm[1] + radius_mm - self.min_mm[1]) / gy - 0.5).floor();
-        if j_hi < 0.0 || j_lo >= ny as f64 {
-            return;
-        }
-        let (j_lo, j_hi) = (j_lo.max(0.0) as usize, (j_hi as usize).min(ny - 1));
-        for j in j_lo..=j_hi {
-            let dy = self.min_mm[1] + (j as f64 + 0.5) * gy - centre_mm[1];
-            let half = (radius_mm * radius_mm - dy * dy).max(0.0).sqrt();
-            let i_lo = ((centre_mm[0] - half - self.min_mm[0]) / gx - 0.5).ceil();
-            let i_hi = ((centre_mm[0] + half - self.min_mm[0]) / gx - 0.5).floor();
-            if i_hi < 0.0 || i_lo >= nx as f64 || i_lo > i_hi {
-                continue;
-            }
-            let (i_lo, i_hi) = (i_lo.max(0.0) as usize, (i_hi as usize).min(nx - 1));
+        let nx = self.cells[0];
+        for (j, i_lo, i_hi) in self.disc_spans(centre_mm, radius_mm) {
             for top in &mut self.top_mm[j * nx + i_lo..=j * nx + i_hi] {
                 *top = top.min(z_mm);
             }
         }
+    }
+
+    /// The highest material top (mm) among the non-empty cells whose centre lies within
+    /// `radius_mm` of (x, y), with that cell's centre; `None` when the disc holds no material.
+    #[must_use]
+    pub fn highest_in_disc(&self, centre_mm: [f64; 2], radius_mm: f64) -> Option<(f64, [f64; 2])> {
+        let nx = self.cells[0];
+        let mut best: Option<(f64, [f64; 2])> = None;
+        for (j, i_lo, i_hi) in self.disc_spans(centre_mm, radius_mm) {
+            for i in i_lo..=i_hi {
+                let top = self.top_mm[j * nx + i];
+                if top > self.bottom_mm && best.is_none_or(|(b, _)| top > b) {
+                    best = Some((top, self.cell_centre_mm(i, j)));
+                }
+            }
+        }
+        best
+    }
+
+    /// The cells whose centre lies within `radius_mm` of (x, y), row by row: (j, first i, last
+    /// i), rows without such a cell left out.
+    fn disc_spans(
+        &self,
+        centre_mm: [f64; 2],
+        radius_mm: f64,
+    ) -> impl Iterator<Item = (usize, usize, usize)> {
+        let [gx, gy] = self.spacing_mm;
+        let [nx, ny] = self.cells;
+        let min_mm = self.min_mm;
+        // Rows whose centre y is within the disc: (j + 0.5)·gy in [cy − r, cy + r].
+        let j_lo = ((centre_mm[1] - radius_mm - min_mm[1]) / gy - 0.5).ceil();
+        let j_hi = ((centre_mm[1] + radius_mm - min_mm[1]) / gy - 0.5).floor();
+        let rows = if j_hi < 0.0 || j_lo >= ny as f64 || j_lo > j_hi {
+            0..0
+        } else {
+            j_lo.max(0.0) as usize..(j_hi as usize).min(ny - 1) + 1
+        };
+        rows.filter_map(move |j| {
+            let dy = min_mm[1] + (j as f64 + 0.5) * gy - centre_mm[1];
+            let half = (radius_mm * radius_mm - dy * dy).max(0.0).sqrt();
+            let i_lo = ((centre_mm[0] - half - min_mm[0]) / gx - 0.5).ceil();
+            let i_hi = ((centre_mm[0] + half - min_mm[0]) / gx - 0.5).floor();
+            if i_hi < 0.0 || i_lo >= nx as f64 || i_lo > i_hi {
+                return None;
+            }
+            Some((j, i_lo.max(0.0) as usize, (i_hi as usize).min(nx - 1)))
+        })
     }
 
     /// Volume of material left (mm³).
@@ -189,6 +220,22 @@ mod tests {
         z.cut_disc([0.0, 0.0], 5.0, -20.0);
         assert_eq!(z.top_at(0.1, 0.1), None);
         z.cut_disc([100.0, -50.0], 5.0, -20.0);
+    }
+
+    #[test]
+    fn the_highest_material_under_a_disc_ignores_cut_and_outside_cells() {
+        let mut z = ZMap::new(&block(), 0.5).unwrap();
+        z.cut_disc([20.0, 10.0], 3.0, -4.0);
+        // The same disc sees the floor it cut; a wider one reaches the uncut top.
+        let (top, _) = z.highest_in_disc([20.0, 10.0], 3.0).unwrap();
+        assert_eq!(top, -4.0);
+        let (top, at) = z.highest_in_disc([20.0, 10.0], 3.6).unwrap();
+        assert_eq!(top, 0.0);
+        assert!((at[0] - 20.0).hypot(at[1] - 10.0) > 3.0);
+        // Empty cells and cells outside the stock hold nothing.
+        z.cut_disc([30.0, 10.0], 2.0, -10.0);
+        assert!(z.highest_in_disc([30.0, 10.0], 2.0).is_none());
+        assert!(z.highest_in_disc([100.0, 10.0], 5.0).is_none());
     }
 
     #[test]

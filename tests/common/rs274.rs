@@ -277,7 +277,8 @@ pub fn run_rs274(bin: &Path, program: &Path) -> Result<String, String> {
     let calls: Vec<&str> = stdout
         .lines()
         .filter_map(|l| l.trim_start().split_once(' ').map(|(_, rest)| rest))
-        .filter(|l| l.starts_with("N....."))
+        // The block's N number, or "N....." for a block without one.
+        .filter(|l| l.starts_with('N'))
         .collect();
     let message: Vec<&str> = stderr
         .lines()
