@@ -86,6 +86,9 @@ fn the_example_runs_every_cycle_and_passes_the_check() {
     let fixture = Path::new("tests/data/collision/vise.toml");
     let (ok, out, err) = vmc(&["check", PROGRAM, "--fixture", fixture.to_str().unwrap()]);
     assert!(ok, "{out}\n{err}");
-    assert!(out.contains("0 collision(s), 0 travel violation(s)"), "{out}");
+    assert!(
+        out.contains("0 collision(s), 0 travel violation(s)"),
+        "{out}"
+    );
     assert!(out.contains("material removal:"), "{out}");
 }

@@ -59,9 +59,9 @@ use serde::Serialize;
 
 use crate::machine::MachineSpec;
 use crate::motion::{self, Geometry, MotionError, Plan, Segment, SegmentKind};
+pub use spec::{BodyRole, BodySpec, CollisionSpec, FixtureSpec, ShapeKind, SpindleCylinder};
 use stock::CutStock;
 pub use stock::CUT_GRID_MM;
-pub use spec::{BodyRole, BodySpec, CollisionSpec, FixtureSpec, ShapeKind, SpindleCylinder};
 
 /// Largest path step between two samples of a segment, mm (0.2 mm: no contact deeper than
 /// 0.1 mm can be missed, see the module doc).

@@ -15,7 +15,7 @@
 //! bodies ([`super::SAMPLE_SPACING_MM`]). Cylindrical stocks keep the whole-body check.
 
 use super::{
-    crash_reason, overlap, BodyRole, CheckError, HeadBody, Moving, MoveKind, PairHits, Scene,
+    crash_reason, overlap, BodyRole, CheckError, HeadBody, MoveKind, Moving, PairHits, Scene,
     CONTACT_TOLERANCE_MM,
 };
 use crate::cutting::{StockBox, ZMap};

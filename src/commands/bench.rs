@@ -50,6 +50,27 @@ pub fn bench(cfg: &BenchConfig, out: &mut dyn Write) -> Result<()> {
             s * 1e9 / n.max(1) as f64
         )?;
     }
+    let g = benchmark::gcode_1mb(&spec, cfg.repeats.min(5))?;
+    writeln!(
+        out,
+        "G-code: a CAM-like finishing program of {:.2} MB ({} lines):",
+        g.bytes as f64 / 1e6,
+        g.lines
+    )?;
+    writeln!(out, "  {:<90} {:>12.3} s", "interpret", g.interpret_s)?;
+    writeln!(
+        out,
+        "  {:<90} {:>12.3} s",
+        "interpret + plan", g.interpret_and_plan_s
+    )?;
+    match g.rs274_s {
+        Some(s) => writeln!(
+            out,
+            "  {:<90} {:>12.3} s",
+            "LinuxCNC rs274 -g on the same file (process, output discarded)", s
+        )?,
+        None => writeln!(out, "  LinuxCNC rs274: not installed, not compared")?,
+    }
     if !cfg.quick {
         writeln!(
             out,
