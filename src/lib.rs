@@ -34,4 +34,5 @@ pub mod sensors;
 pub mod sim;
 pub mod study;
 pub mod thermal;
+pub mod tools;
 pub mod twin;

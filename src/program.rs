@@ -9,6 +9,7 @@ use thiserror::Error;
 use crate::interp::{self, InterpConfig};
 use crate::machine::MachineSpec;
 use crate::motion::{self, Plan};
+use crate::tools::ToolTable;
 
 /// A program that cannot be run.
 #[derive(Debug, Error)]
@@ -36,6 +37,16 @@ pub enum ProgramError {
         file: String,
         /// The planner's error.
         err: motion::MotionError,
+    },
+    /// `M6` loads a tool the tool table does not have.
+    #[error("{file}: line {line}: M6 loads tool {tool}, which is not in the tool table")]
+    UnknownTool {
+        /// The file.
+        file: String,
+        /// Line of the tool change.
+        line: usize,
+        /// The tool number.
+        tool: u32,
     },
 }
 
@@ -115,14 +126,25 @@ pub fn check_run_size(
     Ok(())
 }
 
-/// Reads, interprets, plans and travel-checks a program file, starting at `start_mm`.
+/// Reads, interprets, plans and travel-checks a program file with the machine's own tool for
+/// every tool number (see [`crate::tools`]).
 pub fn load_plan(
     path: &Path,
     machine: &MachineSpec,
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
+    load_plan_with_tools(path, machine, start_mm, &ToolTable::default())
+}
+
+/// [`load_plan`] with a tool table.
+pub fn load_plan_with_tools(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<Plan, ProgramError> {
     let (file, text) = read_program(path)?;
-    plan_source(&text, &file, machine, start_mm)
+    plan_source_with_tools(&text, &file, machine, start_mm, tools)
 }
 
 /// The program file's display name and text.
@@ -135,14 +157,15 @@ fn read_program(path: &Path) -> Result<(String, String), ProgramError> {
 }
 
 /// Reads, interprets and plans a program file without the travel check (for `check`, which
-/// reports every travel violation instead of stopping at the first).
+/// reports every travel violation instead of stopping at the first), with a tool table.
 pub fn load_plan_unchecked(
     path: &Path,
     machine: &MachineSpec,
     start_mm: [f64; 3],
+    tools: &ToolTable,
 ) -> Result<Plan, ProgramError> {
     let (file, text) = read_program(path)?;
-    plan_source_unchecked(&text, &file, machine, start_mm)
+    plan_source_unchecked_with_tools(&text, &file, machine, start_mm, tools)
 }
 
 /// Interprets and plans program text, without the travel check; `file` names it in errors.
@@ -152,19 +175,47 @@ pub fn plan_source_unchecked(
     machine: &MachineSpec,
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
+    plan_source_unchecked_with_tools(text, file, machine, start_mm, &ToolTable::default())
+}
+
+/// [`plan_source_unchecked`] with a tool table (lengths relative to the machine's own tool,
+/// see [`crate::tools`]).
+pub fn plan_source_unchecked_with_tools(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<Plan, ProgramError> {
+    let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
     let cfg = InterpConfig {
         start_mm,
         work_offsets_mm: machine.axes.work_offsets_mm,
+        tool_lengths_mm,
+        tool_diameters_mm,
         ..InterpConfig::default()
     };
     let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
         file: file.to_string(),
         err,
     })?;
-    motion::plan(&moves, start_mm, &machine.motion).map_err(|err| ProgramError::Motion {
-        file: file.to_string(),
-        err,
-    })
+    let plan =
+        motion::plan(&moves, start_mm, &machine.motion).map_err(|err| ProgramError::Motion {
+            file: file.to_string(),
+            err,
+        })?;
+    for seg in plan.segments() {
+        if let motion::SegmentKind::ToolChange { tool } = seg.kind {
+            if tools.loaded(tool, machine).is_none() {
+                return Err(ProgramError::UnknownTool {
+                    file: file.to_string(),
+                    line: seg.line,
+                    tool,
+                });
+            }
+        }
+    }
+    Ok(plan)
 }
 
 /// Interprets, plans and travel-checks program text; `file` names it in errors.
@@ -174,7 +225,18 @@ pub fn plan_source(
     machine: &MachineSpec,
     start_mm: [f64; 3],
 ) -> Result<Plan, ProgramError> {
-    let plan = plan_source_unchecked(text, file, machine, start_mm)?;
+    plan_source_with_tools(text, file, machine, start_mm, &ToolTable::default())
+}
+
+/// [`plan_source`] with a tool table.
+pub fn plan_source_with_tools(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<Plan, ProgramError> {
+    let plan = plan_source_unchecked_with_tools(text, file, machine, start_mm, tools)?;
     let motion_err = |err| ProgramError::Motion {
         file: file.to_string(),
         err,

@@ -309,6 +309,14 @@ pub enum SimError {
         /// Distance of the axis command from it, mm (NaN if not a number).
         correction_mm: f64,
     },
+    /// The controller cannot compensate with the tool the program loads.
+    #[error("line {line}: tool change: {message}")]
+    ToolChange {
+        /// Program line of the `M6`.
+        line: usize,
+        /// The controller's reason.
+        message: String,
+    },
 }
 
 /// Largest distance between the compensated axis command and the programmed point, mm. Geometric
@@ -383,6 +391,16 @@ pub fn execute(
                         cfg.report_thermal_part,
                     )?;
                     index += 1;
+                }
+            }
+            (SegmentKind::ToolChange { tool }, _) => {
+                let offset_mm = twin.change_tool(tool)?;
+                if let Some(c) = compensator.as_mut() {
+                    c.on_tool_change(offset_mm)
+                        .map_err(|message| SimError::ToolChange {
+                            line: seg.line,
+                            message,
+                        })?;
                 }
             }
             _ => {}

@@ -20,6 +20,7 @@ use crate::machine::MachineSpec;
 use crate::predict::synthesis::{ElementaryErrors, MachineGeometry};
 use crate::sensors::{SensorBank, SensorReadings};
 use crate::thermal::{Activity, AmbientProfile, ThermalError, ThermalNetwork};
+use crate::tools::ToolTable;
 
 /// Why a twin could not be built or advanced.
 #[derive(Debug, Error)]
@@ -33,6 +34,9 @@ pub enum TwinError {
     /// Sensor set problem.
     #[error("sensors: {0}")]
     Sensors(String),
+    /// `M6` loads a tool the tool table does not have.
+    #[error("tool {0} is not in the tool table")]
+    UnknownTool(u32),
 }
 
 /// Derives independent sub-seeds from one user seed (SplitMix64 finaliser).
@@ -51,6 +55,8 @@ pub struct Twin {
     approach: ApproachErrors,
     thermal: ThermalNetwork,
     sensors: SensorBank,
+    /// The tools `M6` may load (empty: the machine file's own tool for every number).
+    tools: ToolTable,
 }
 
 impl Twin {
@@ -86,6 +92,7 @@ impl Twin {
             thermal,
             sensors,
             spec: spec.clone(),
+            tools: ToolTable::default(),
         };
         twin.sensors
             .update(0.0, twin.thermal.temps_degc(), twin.thermal.ambient_degc())
@@ -101,6 +108,31 @@ impl Twin {
     /// Nominal geometry (public knowledge).
     pub fn geometry(&self) -> &MachineGeometry {
         &self.geometry
+    }
+
+    /// The tools `M6` loads from now on (the tool in the spindle stays until the next change).
+    pub fn set_tool_table(&mut self, tools: ToolTable) {
+        self.tools = tools;
+    }
+
+    /// `M6`: loads tool `number` from the tool table (the machine file's own tool when there is
+    /// no table); from now on the tool tip is that tool's. Returns its tip relative to the
+    /// spindle gauge point, mm (what the controller's tool table says too).
+    ///
+    /// # Errors
+    /// [`TwinError::UnknownTool`] for a number the table does not have.
+    pub fn change_tool(&mut self, number: u32) -> Result<[f64; 3], TwinError> {
+        let offset_mm = if self.tools.is_empty() {
+            self.spec.tool.offset_mm
+        } else {
+            let tool = self
+                .tools
+                .loaded(number, &self.spec)
+                .ok_or(TwinError::UnknownTool(number))?;
+            [0.0, 0.0, -tool.length_mm]
+        };
+        self.geometry.tool_offset_mm = offset_mm;
+        Ok(offset_mm)
     }
 
     /// Simulated time since the twin was built, s.
@@ -341,6 +373,32 @@ mod tests {
             assert!(cold_gap < 1e-5, "seed {seed} cold: {cold_gap} mm");
             assert!(warm_gap < 1e-5, "seed {seed} warm: {warm_gap} mm");
         }
+    }
+
+    #[test]
+    fn after_a_tool_change_the_tip_error_is_that_of_the_loaded_tool() {
+        // The reference twin with a 250 mm tool 2 in its table gives, after M6 T2, the error
+        // of the same machine whose file holds a 250 mm tool; M6 T1 (150 mm) gives it back.
+        let spec = MachineSpec::reference();
+        let mut long_spec = spec.clone();
+        long_spec.tool.offset_mm = [0.0, 0.0, -250.0];
+        let table = "[[tool]]\nnumber = 1\nlength_mm = 150.0\ndiameter_mm = 12.0\n\
+                     [[tool]]\nnumber = 2\nlength_mm = 250.0\ndiameter_mm = 10.0\n";
+        let mut twin = Twin::new(&spec, 3).unwrap();
+        twin.set_tool_table(ToolTable::from_toml_str(table, "t.toml").unwrap());
+        let long = Twin::new(&long_spec, 3).unwrap();
+        let p = [400.0, 300.0, -350.0];
+        let before = twin.tool_error_mm(p, p, [0.0; 3]);
+        assert_eq!(twin.change_tool(2).unwrap(), [0.0, 0.0, -250.0]);
+        let after = twin.tool_error_mm(p, p, [0.0; 3]);
+        assert_eq!(after, long.tool_error_mm(p, p, [0.0; 3]));
+        assert!((after - before).norm() > 1e-5, "{after} vs {before}");
+        twin.change_tool(1).unwrap();
+        assert_eq!(twin.tool_error_mm(p, p, [0.0; 3]), before);
+        assert!(matches!(
+            twin.change_tool(9),
+            Err(TwinError::UnknownTool(9))
+        ));
     }
 
     #[test]

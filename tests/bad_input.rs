@@ -482,6 +482,63 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         .and_then(|v| v.trim_end_matches(" %").parse().ok())
         .unwrap_or_else(|| panic!("no reduction line in\n{out}"));
     assert!(reduction >= 80.0, "{reduction} %\n{out}");
+    // The same change by the program itself: M6 loads the 250 mm tool 2 of a tool table on the
+    // reference machine. The hybrid follows it in the loop; the baseline stops at the M6.
+    std::fs::write(
+        t.0.join("tools.toml"),
+        "[[tool]]\nnumber = 1\nlength_mm = 150.0\ndiameter_mm = 12.0\n\
+         [[tool]]\nnumber = 2\nlength_mm = 250.0\ndiameter_mm = 12.0\n",
+    )
+    .unwrap();
+    let diag = std::fs::read_to_string(repo("trajectories/diag_xy.ngc")).unwrap();
+    // After the program's opening `%`.
+    let body = diag.trim_start().trim_start_matches('%');
+    std::fs::write(t.0.join("t2.ngc"), format!("%\nT2 M6\nG43 H2{body}")).unwrap();
+    let run = |model: &str| {
+        vec![
+            "run",
+            "t2.ngc",
+            "--tools",
+            "tools.toml",
+            "--model",
+            model,
+            "--compensate",
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>()
+    };
+    let err = one_line_error(
+        &t.0,
+        &run("lin.json")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert!(
+        err.starts_with("t2.ngc: line 2: tool change: geometry mismatch"),
+        "{err}"
+    );
+    let out = succeed(
+        &t.0,
+        &run("hyb.json")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    let reduction: f64 = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("reduction of RMS |E|: "))
+        .and_then(|v| v.trim_end_matches(" %").parse().ok())
+        .unwrap_or_else(|| panic!("no reduction line in\n{out}"));
+    assert!(reduction >= 80.0, "{reduction} %\n{out}");
+    // A tool the table does not have is refused before the run, at its line.
+    std::fs::write(t.0.join("t5.ngc"), format!("%\nT5 M6{body}")).unwrap();
+    let err = one_line_error(&t.0, &["run", "t5.ngc", "--tools", "tools.toml"]);
+    assert_eq!(
+        err,
+        "t5.ngc: line 2: M6 loads tool 5, which is not in the tool table"
+    );
 }
 
 #[test]

@@ -92,3 +92,41 @@ fn the_example_runs_every_cycle_and_passes_the_check() {
     );
     assert!(out.contains("material removal:"), "{out}");
 }
+
+#[test]
+fn with_its_tool_table_the_tools_follow_the_program() {
+    // The drill (T2, 100 mm, Ø6) is 50 mm shorter than the machine's own tool: with `G43 H2`
+    // the program drills where it says, and the check passes.
+    let tools = "trajectories/cam_tools.toml";
+    let fixture = "tests/data/collision/vise.toml";
+    let (ok, out, err) = vmc(&["check", PROGRAM, "--fixture", fixture, "--tools", tools]);
+    assert!(ok, "{out}\n{err}");
+    let (ok, _, err) = vmc(&["run", PROGRAM, "--tools", tools, "--every-cycle"]);
+    assert!(ok, "{err}");
+    // A 200 mm drill without its length offset reaches 50 mm lower than the program says: its
+    // rapid to the R plane goes into the stock.
+    let text = std::fs::read_to_string(repo().join(PROGRAM)).unwrap();
+    let dir = std::env::temp_dir().join(format!("vmc-cam-tools-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let long = dir.join("long_tools.toml");
+    let table = std::fs::read_to_string(repo().join(tools)).unwrap();
+    std::fs::write(
+        &long,
+        table.replace("length_mm = 100.0", "length_mm = 200.0"),
+    )
+    .unwrap();
+    let no_offset = dir.join("no_offset.ngc");
+    assert!(text.contains("G43 Z50. H2"));
+    std::fs::write(&no_offset, text.replace("G43 Z50. H2", "Z50.")).unwrap();
+    let (ok, out, _) = vmc(&[
+        "check",
+        no_offset.to_str().unwrap(),
+        "--fixture",
+        fixture,
+        "--tools",
+        long.to_str().unwrap(),
+    ]);
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(!ok, "{out}");
+    assert!(out.contains("G0 rapid: tool hits stock"), "{out}");
+}

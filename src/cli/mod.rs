@@ -188,6 +188,10 @@ pub struct RunArgs {
     /// Thermal loading program(s) to run first (repeatable, run in order).
     #[arg(long)]
     pub warmup: Vec<PathBuf>,
+    /// Tool table (TOML, `[[tool]]` with `number`, `length_mm`, `diameter_mm`): `M6` loads
+    /// the twin's tool from it; default: the machine's own tool for every number.
+    #[arg(long)]
+    pub tools: Option<PathBuf>,
     /// Folder for samples.csv and summary.json (created if missing).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -260,8 +264,17 @@ impl RunArgs {
             rrd,
             strict: self.strict,
             allow_other_machine: self.allow_other_machine,
+            tools: load_tool_table(self.tools.as_deref())?,
         })
     }
+}
+
+/// The tool table of `--tools`, or none (the machine's own tool for every number).
+fn load_tool_table(path: Option<&Path>) -> Result<crate::tools::ToolTable> {
+    path.map_or_else(
+        || Ok(crate::tools::ToolTable::default()),
+        crate::tools::ToolTable::load,
+    )
 }
 
 /// Arguments of `calibrate`.
@@ -488,6 +501,10 @@ pub struct CheckArgs {
     /// Fixture file (TOML): vise, clamps and stock on the table.
     #[arg(long)]
     pub fixture: Option<PathBuf>,
+    /// Tool table (TOML, `[[tool]]` with `number`, `length_mm`, `diameter_mm`): the tool body
+    /// follows `M6`; default: the machine's own tool for every number.
+    #[arg(long)]
+    pub tools: Option<PathBuf>,
     /// Also write a Rerun recording: the program's motion with every problem drawn at its time
     /// and place (magenta points on `paths/events`, entries in the `events` log).
     #[arg(long, value_name = "FILE.rrd")]
@@ -513,6 +530,7 @@ impl CheckArgs {
             fixture: self.fixture,
             rrd: self.rrd,
             force: self.force,
+            tools: load_tool_table(self.tools.as_deref())?,
         })
     }
 }

@@ -59,6 +59,7 @@ use serde::Serialize;
 
 use crate::machine::MachineSpec;
 use crate::motion::{self, Geometry, MotionError, Plan, Segment, SegmentKind};
+use crate::tools::ToolTable;
 pub use spec::{BodyRole, BodySpec, CollisionSpec, FixtureSpec, ShapeKind, SpindleCylinder};
 use stock::CutStock;
 pub use stock::CUT_GRID_MM;
@@ -287,6 +288,12 @@ struct Static {
 pub struct Scene {
     moving: Vec<Moving>,
     statics: Vec<Static>,
+    /// The tools `M6` loads (empty: the machine file's own tool for every number).
+    tools: ToolTable,
+    /// The machine file's own tool length, mm: the commanded position is that tool's tip.
+    master_length_mm: f64,
+    /// The holder's length below the gauge point, mm.
+    holder_length_mm: f64,
 }
 
 /// A check that could not be completed.
@@ -322,6 +329,18 @@ pub enum SceneError {
     NoGeometry(String),
 }
 
+/// A head body: a vertical cylinder of `diameter_mm` from `bottom_mm` above the commanded tip,
+/// `length_mm` long.
+fn cyl(body: HeadBody, diameter_mm: f64, bottom_mm: f64, length_mm: f64) -> Moving {
+    Moving {
+        body,
+        shape: Cylinder::new(0.5 * length_mm, 0.5 * diameter_mm),
+        center_above_tip_mm: bottom_mm + 0.5 * length_mm,
+        radius_mm: 0.5 * diameter_mm,
+        half_height_mm: 0.5 * length_mm,
+    }
+}
+
 /// Parry cylinders are Y-aligned: this pose puts one on the Z axis at `center`.
 fn vertical_pose(center: [f64; 3]) -> Pose {
     Pose::new(
@@ -338,15 +357,8 @@ impl Scene {
             .collision
             .as_ref()
             .ok_or_else(|| SceneError::NoGeometry(machine.machine.name.clone()))?;
-        let tool_len_mm = -machine.tool.offset_mm[2];
+        let tool_len_mm = crate::tools::master_length_mm(machine);
         let exposed_mm = tool_len_mm - c.holder.length_mm;
-        let cyl = |body, diameter_mm: f64, bottom_mm: f64, length_mm: f64| Moving {
-            body,
-            shape: Cylinder::new(0.5 * length_mm, 0.5 * diameter_mm),
-            center_above_tip_mm: bottom_mm + 0.5 * length_mm,
-            radius_mm: 0.5 * diameter_mm,
-            half_height_mm: 0.5 * length_mm,
-        };
         let moving = vec![
             cyl(HeadBody::Tool, machine.tool.diameter_mm, 0.0, exposed_mm),
             cyl(
@@ -368,7 +380,36 @@ impl Scene {
             .chain(fixture.iter().flat_map(|f| f.bodies.iter()))
             .map(Self::static_body)
             .collect();
-        Ok(Scene { moving, statics })
+        Ok(Scene {
+            moving,
+            statics,
+            tools: ToolTable::default(),
+            master_length_mm: tool_len_mm,
+            holder_length_mm: c.holder.length_mm,
+        })
+    }
+
+    /// The same scene where `M6` loads the tools of `tools` (the tool body follows the loaded
+    /// tool: its diameter, and its tip `length − master length` below the commanded position,
+    /// see [`crate::tools`]).
+    #[must_use]
+    pub fn with_tools(mut self, tools: ToolTable) -> Self {
+        self.tools = tools;
+        self
+    }
+
+    /// The tool body after `M6` with tool `number` (the current body when the table lacks it;
+    /// the interpreter refuses such a program first).
+    fn loaded_tool_body(&self, number: u32, machine: &MachineSpec, current: &Moving) -> Moving {
+        match self.tools.loaded(number, machine) {
+            Some(t) => cyl(
+                HeadBody::Tool,
+                t.diameter_mm,
+                self.master_length_mm - t.length_mm,
+                t.length_mm - self.holder_length_mm,
+            ),
+            None => current.clone(),
+        }
     }
 
     fn static_body(b: &BodySpec) -> Static {
@@ -626,7 +667,14 @@ pub fn check_plan(
     // it), and is not reported again.
     let mut reported_prev: Vec<(HeadBody, usize)> = Vec::new();
     let mut cut_stock = scene.map(CutStock::new).transpose()?;
+    // The head's bodies; the tool's follows the tool changes.
+    let mut heads: Vec<Moving> = scene.map(|s| s.moving.clone()).unwrap_or_default();
     for seg in plan.segments() {
+        if let (SegmentKind::ToolChange { tool }, Some(sc)) = (seg.kind, scene) {
+            if let Some(h) = heads.iter_mut().find(|h| h.body == HeadBody::Tool) {
+                *h = sc.loaded_tool_body(tool, machine, h);
+            }
+        }
         let Some(kind) = move_kind(seg.kind) else {
             continue;
         };
@@ -660,7 +708,7 @@ pub fn check_plan(
         let mut hits: Vec<PairHits> = Vec::new();
         let n = (length_mm / SAMPLE_SPACING_MM).ceil().max(1.0) as usize;
         let (lo, hi) = segment_bounds(seg);
-        for m in &scene.moving {
+        for m in &heads {
             let (mlo, mhi) = Scene::moving_box(m, lo, hi);
             for (si, s) in scene.statics.iter().enumerate() {
                 if s.cut || !overlap(mlo, mhi, s.lo_mm, s.hi_mm) {
@@ -693,7 +741,7 @@ pub fn check_plan(
             }
         }
         if let Some(stock) = cut_stock.as_mut() {
-            hits.extend(stock.check_and_cut(seg, kind, scene, n, &mut sum.samples));
+            hits.extend(stock.check_and_cut(seg, kind, scene, &heads, n, &mut sum.samples));
         }
         let mut reported_now = Vec::new();
         for pair in hits {

@@ -52,18 +52,19 @@ impl CutStock {
         Ok(Self { maps })
     }
 
-    /// Checks the head's bodies against the stocks along `seg` (sampled at `n + 1` points), then
-    /// removes what the tool cuts at each sample. Returns the contacts per (body, stock) pair.
+    /// Checks the head's bodies `heads` against the stocks along `seg` (sampled at `n + 1`
+    /// points), then removes what the tool cuts at each sample. Returns the contacts per (body, stock) pair.
     pub(super) fn check_and_cut(
         &mut self,
         seg: &Segment,
         kind: MoveKind,
         scene: &Scene,
+        heads: &[Moving],
         n: usize,
         samples: &mut usize,
     ) -> Vec<PairHits> {
         let mut pairs: Vec<(usize, usize, PairHits)> = Vec::new();
-        for (mi, m) in scene.moving.iter().enumerate() {
+        for (mi, m) in heads.iter().enumerate() {
             for (ci, (si, _)) in self.maps.iter().enumerate() {
                 if let Some(reason) = crash_reason(m.body, BodyRole::Stock, seg) {
                     pairs.push((mi, ci, PairHits::new(m.body, *si, reason)));
@@ -72,7 +73,7 @@ impl CutStock {
         }
         let cutting =
             matches!(seg.kind, SegmentKind::Feed | SegmentKind::Arc) && seg.spindle_rpm > 0.0;
-        let tool = scene.moving.iter().find(|m| m.body == HeadBody::Tool);
+        let tool = heads.iter().find(|m| m.body == HeadBody::Tool);
         if pairs.is_empty() && !cutting {
             return Vec::new();
         }
@@ -81,7 +82,7 @@ impl CutStock {
             let s_mm = length_mm * k as f64 / n as f64;
             let tip = seg.geometry.point_at(seg.start_mm, s_mm);
             for (mi, ci, pair) in &mut pairs {
-                let (m, (si, map)) = (&scene.moving[*mi], &self.maps[*ci]);
+                let (m, (si, map)) = (&heads[*mi], &self.maps[*ci]);
                 let st = &scene.statics[*si];
                 let (lo, hi) = Scene::moving_box(m, tip, tip);
                 if !overlap(lo, hi, st.lo_mm, st.hi_mm) {
@@ -97,7 +98,8 @@ impl CutStock {
                 for (si, map) in &mut self.maps {
                     let st = &scene.statics[*si];
                     if overlap(lo, hi, st.lo_mm, st.hi_mm) {
-                        map.cut_disc([tip[0], tip[1]], t.radius_mm, tip[2]);
+                        let tool_tip_mm = tip[2] + t.center_above_tip_mm - t.half_height_mm;
+                        map.cut_disc([tip[0], tip[1]], t.radius_mm, tool_tip_mm);
                     }
                 }
             }

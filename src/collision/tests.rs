@@ -127,6 +127,44 @@ fn material_cut_by_the_program_is_gone_for_later_rapids_but_uncut_material_is_no
 }
 
 #[test]
+fn the_tool_body_follows_the_tool_table() {
+    // Positions are those of the machine's 150 mm tool tip. A 200 mm tool loaded without G43
+    // reaches 50 mm lower: its rapid to 10 mm above the block is 40 mm into it. With G43 H2
+    // it stops where the program says. A Ø40 tool clips the block on a rapid beside it.
+    let table = "[[tool]]\nnumber = 2\nlength_mm = 200.0\ndiameter_mm = 10.0\n\
+                 [[tool]]\nnumber = 3\nlength_mm = 150.0\ndiameter_mm = 40.0\n";
+    let m = machine();
+    let f = FixtureSpec::from_toml_str(BLOCK, "f.toml").unwrap();
+    let tools = crate::tools::ToolTable::from_toml_str(table, "t.toml").unwrap();
+    let s = Scene::new(&m, Some(&f)).unwrap().with_tools(tools.clone());
+    let run = |src: &str| {
+        let plan =
+            program::plan_source_unchecked_with_tools(src, "p.ngc", &m, m.axes.home_mm, &tools)
+                .expect("plan");
+        let mut out = Vec::new();
+        check_plan(&plan, &m, Some(&s), &mut out).expect("check");
+        out.into_iter()
+            .filter_map(|p| match p {
+                Problem::Collision(c) => Some(c),
+                Problem::Travel(_) => None,
+            })
+            .collect::<Vec<_>>()
+    };
+    let c = run("T2 M6\nG0 X150 Y140 Z-390\nM30");
+    assert_eq!(c.len(), 1, "{c:?}");
+    assert_eq!((c[0].line, c[0].head_body), (2, HeadBody::Tool));
+    assert!((c[0].depth_mm - 40.0).abs() < 1e-6, "{}", c[0].depth_mm);
+    assert!(run("T2 M6\nG43 H2\nG0 X150 Y140 Z-390\nM30").is_empty());
+    // 6 mm from the block's edge at X 100: the Ø12 tool clears it; the Ø40 tool overlaps it by
+    // 14 mm sideways and, going down to 20 mm below its top, meets it (the stock's depth is the
+    // vertical overlap, 20 mm).
+    assert!(run("G0 X94 Y140 Z-380\nG0 Z-420\nM30").is_empty());
+    let c = run("T3 M6\nG0 X94 Y140 Z-380\nG0 Z-420\nM30");
+    assert_eq!(c.len(), 1, "{c:?}");
+    assert!((c[0].depth_mm - 20.0).abs() < 1e-6, "{}", c[0].depth_mm);
+}
+
+#[test]
 fn the_holder_and_the_spindle_nose_in_the_stock_are_crashes_even_at_feed() {
     // Tool 105 mm exposed: the holder enters the block top (Z −400) when the tip is below −505,
     // which is out of travel; use a tall cylinder stock instead: top at −250, tip down to −370.

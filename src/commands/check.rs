@@ -24,6 +24,8 @@ pub struct CheckConfig {
     pub rrd: Option<PathBuf>,
     /// Overwrite an existing recording.
     pub force: bool,
+    /// The tools `M6` loads (empty: the machine's own tool for every number).
+    pub tools: crate::tools::ToolTable,
 }
 
 /// Checks every move, prints each problem and a summary.
@@ -35,9 +37,10 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
     let fixture = cfg.fixture.as_deref().map(FixtureSpec::load).transpose()?;
     let scene = match (&machine.collision, &fixture) {
         (None, None) => None,
-        _ => Some(Scene::new(machine, fixture.as_ref())?),
+        _ => Some(Scene::new(machine, fixture.as_ref())?.with_tools(cfg.tools.clone())),
     };
-    let plan = program::load_plan_unchecked(&cfg.program, machine, machine.axes.home_mm)?;
+    let plan =
+        program::load_plan_unchecked(&cfg.program, machine, machine.axes.home_mm, &cfg.tools)?;
     let file = cfg.program.display().to_string();
     let fixture_name = cfg
         .fixture

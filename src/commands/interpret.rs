@@ -25,57 +25,16 @@ pub struct InterpretConfig {
     pub interp: InterpConfig,
 }
 
-/// One tool of a tool table file.
-#[derive(Debug, Clone, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ToolEntry {
-    number: u32,
-    length_mm: f64,
-    diameter_mm: f64,
-}
-
-/// The tool table file: `[[tool]]` entries with `number`, `length_mm`, `diameter_mm`.
-#[derive(Debug, Clone, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ToolTable {
-    tool: Vec<ToolEntry>,
-}
-
 /// Tool lengths and diameters, mm, by tool number.
-pub type ToolData = (Vec<(u32, f64)>, Vec<(u32, f64)>);
+pub use crate::tools::ToolData;
 
 /// Reads a tool table (TOML, see `docs/usage.md`) as (tool number, length in mm) and
-/// (tool number, diameter in mm) pairs.
+/// (tool number, diameter in mm) pairs, lengths as written (as `rs274` reads its table).
 ///
 /// # Errors
-/// An unreadable file, bad TOML, a tool given twice, a length or diameter that is not finite
-/// (or a negative diameter).
+/// As [`crate::tools::ToolTable::load`].
 pub fn load_tools(path: &std::path::Path) -> Result<ToolData> {
-    let file = path.display().to_string();
-    let text = crate::files::read_text(path).with_context(|| file.clone())?;
-    let table: ToolTable = toml::from_str(&text).with_context(|| file.clone())?;
-    let mut out: Vec<(u32, f64)> = Vec::new();
-    let mut diameters = Vec::new();
-    for t in &table.tool {
-        if out.iter().any(|o| o.0 == t.number) {
-            anyhow::bail!("{file}: tool {} appears twice", t.number);
-        }
-        if !t.length_mm.is_finite() || t.length_mm.abs() > 1e4 {
-            anyhow::bail!(
-                "{file}: tool {}: length_mm must be finite within ±10000 mm",
-                t.number
-            );
-        }
-        if !(t.diameter_mm.is_finite() && t.diameter_mm >= 0.0) {
-            anyhow::bail!(
-                "{file}: tool {}: diameter_mm must be a finite number >= 0",
-                t.number
-            );
-        }
-        out.push((t.number, t.length_mm));
-        diameters.push((t.number, t.diameter_mm));
-    }
-    Ok((out, diameters))
+    Ok(crate::tools::ToolTable::load(path)?.absolute_data())
 }
 
 /// Interprets the program and prints its canonical calls.

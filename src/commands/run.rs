@@ -47,6 +47,8 @@ pub struct RunConfig {
     pub strict: bool,
     /// Accept a model calibrated on another machine or realisation (with a note).
     pub allow_other_machine: bool,
+    /// The tools `M6` loads (empty: the machine's own tool for every number).
+    pub tools: crate::tools::ToolTable,
 }
 
 /// The compensating controller of a run: the model, its inputs checked against its trained
@@ -133,11 +135,11 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
     let mut start = cfg.machine.axes.home_mm;
     let mut warmups = Vec::new();
     for w in &cfg.warmups {
-        let plan = program::load_plan(w, &cfg.machine, start)?;
+        let plan = program::load_plan_with_tools(w, &cfg.machine, start, &cfg.tools)?;
         start = plan.end_mm();
         warmups.push(plan);
     }
-    let plan = program::load_plan(&cfg.program, &cfg.machine, start)?;
+    let plan = program::load_plan_with_tools(&cfg.program, &cfg.machine, start, &cfg.tools)?;
     let total_s = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
     program::check_run_size(
         &cfg.program.display().to_string(),
@@ -230,6 +232,7 @@ fn simulate(
 ) -> Result<(RunLog, Option<(record::Recorder, record::RrdFile)>)> {
     let machine = &cfg.machine;
     let mut twin = Twin::new(machine, cfg.seed)?;
+    twin.set_tool_table(cfg.tools.clone());
     let sim_cfg = cfg
         .sim
         .sampling(if cfg.every_cycle {

@@ -82,6 +82,16 @@ pub trait Controller {
     /// backlash compensation). Default: ignored.
     fn on_commanded_motion(&mut self, _start_mm: [f64; 3], _end_mm: [f64; 3]) {}
 
+    /// The controller loaded a tool (M6) whose tip sits at `tool_offset_mm` (mm) from the
+    /// spindle gauge point, from its own tool table. Default: nothing to do.
+    ///
+    /// # Errors
+    /// A message when the controller cannot compensate with that tool (e.g. a model fitted on
+    /// another tool's tip error).
+    fn on_tool_change(&mut self, _tool_offset_mm: [f64; 3]) -> Result<(), String> {
+        Ok(())
+    }
+
     /// Axis command `q` (mm) for the commanded tool position `p_mm` (mm, workpiece
     /// coordinates), under the readings last given to [`Self::on_readings`].
     fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3];
@@ -232,6 +242,12 @@ impl<P: ErrorPredictor> Controller for Compensator<P> {
 
     fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
         self.note_motion_segment_mm(start_mm, end_mm);
+    }
+
+    fn on_tool_change(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), String> {
+        self.predictor
+            .change_tool(tool_offset_mm)
+            .map_err(|e| e.to_string())
     }
 
     /// Axis command `q` (mm) that should put the tool at `p_mm` under the readings last

@@ -89,6 +89,10 @@ impl<C: Controller> Controller for Guarded<C> {
         self.inner.on_commanded_motion(start_mm, end_mm);
     }
 
+    fn on_tool_change(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), String> {
+        self.inner.on_tool_change(tool_offset_mm)
+    }
+
     #[inline]
     fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
         self.inner.axis_command_mm(p_mm)

@@ -470,6 +470,14 @@ impl ErrorPredictor for AnyPredictor {
             p.observe_axis_feeds(time_s, feeds_mm_per_min);
         }
     }
+
+    fn change_tool(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), PredictError> {
+        match self {
+            AnyPredictor::Hybrid(p) => p.change_tool(tool_offset_mm),
+            AnyPredictor::Volumetric(p) => p.change_tool(tool_offset_mm),
+            AnyPredictor::Linear(p) => p.change_tool(tool_offset_mm),
+        }
+    }
 }
 
 #[cfg(test)]

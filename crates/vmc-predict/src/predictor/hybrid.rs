@@ -381,6 +381,18 @@ impl ErrorPredictor for HybridPredictor {
             self.rt.stale = true;
         }
     }
+
+    /// Follows any tool: only the synthesis's tool arm changes (the reversal shift does not
+    /// depend on it); the filtered history is kept.
+    fn change_tool(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), PredictError> {
+        if let Some(v) = tool_offset_mm.iter().find(|v| !v.is_finite()) {
+            return Err(PredictError::Inconsistent {
+                reason: format!("tool offset holds a non-finite value ({v})"),
+            });
+        }
+        self.geometry.tool_offset_mm = tool_offset_mm;
+        Ok(())
+    }
 }
 
 /// Trains the hybrid predictor on the `laser_x/y/z`, `spindle` and `squareness` records.

@@ -160,6 +160,10 @@ impl ErrorPredictor for LinearPredictor {
         assert_temps_len(temps_degc, self.sensors.len());
         self.readings.copy_from_slice(temps_degc);
     }
+
+    fn change_tool(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), PredictError> {
+        super::same_tool_only(&self.geometry, tool_offset_mm)
+    }
 }
 
 /// Trains the linear-regression baseline on the `volumetric` records.

@@ -112,6 +112,23 @@ pub trait ErrorPredictor {
     /// since the previous call, up to `time_s`. A model with axis-feed features
     /// ([`Settings::axis_feed_taus_s`]) filters them; the default ignores them.
     fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
+
+    /// The spindle now holds a tool whose tip sits at `tool_offset_mm` (mm) from the gauge
+    /// point: the controller commanded the change (M6) and knows its tool table. A model that
+    /// synthesises the tool-tip error from elementary errors follows it, keeping its state (the
+    /// filtered history of its inputs); one fitted on the tool-tip error of its calibration
+    /// tool accepts only that tool. The default refuses any change.
+    ///
+    /// # Errors
+    /// [`PredictError::GeometryMismatch`] (or [`PredictError::Inconsistent`] for a non-finite
+    /// offset) when the model cannot predict for that tool.
+    fn change_tool(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), PredictError> {
+        Err(PredictError::Inconsistent {
+            reason: format!(
+                "this model cannot follow a tool change (to tool offset {tool_offset_mm:?} mm)"
+            ),
+        })
+    }
 }
 
 /// A mutable borrow predicts like the predictor itself (e.g. `Compensator::new(&mut model)`).
@@ -139,6 +156,10 @@ impl<P: ErrorPredictor + ?Sized> ErrorPredictor for &mut P {
 
     fn observe_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
         (**self).observe_axis_feeds(time_s, feeds_mm_per_min);
+    }
+
+    fn change_tool(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), PredictError> {
+        (**self).change_tool(tool_offset_mm)
     }
 }
 
@@ -516,6 +537,33 @@ pub struct TrainSummary {
 /// Checks that a model's sensor list equals the machine's, names and order.
 ///
 /// # Errors
+
+/// A tool change for a model fitted on one tool's tip error: accepted only when the new tool is
+/// that tool (offset within 1 nm).
+///
+/// # Errors
+/// [`PredictError::GeometryMismatch`] naming both tools.
+pub(crate) fn same_tool_only(
+    model: &crate::synthesis::MachineGeometry,
+    tool_offset_mm: [f64; 3],
+) -> Result<(), PredictError> {
+    let same = model
+        .tool_offset_mm
+        .iter()
+        .zip(&tool_offset_mm)
+        .all(|(a, b)| (a - b).abs() <= 1e-6);
+    if same {
+        Ok(())
+    } else {
+        Err(PredictError::GeometryMismatch {
+            model_chain: model.chain.to_string(),
+            model_tool_mm: model.tool_offset_mm,
+            machine_chain: model.chain.to_string(),
+            machine_tool_mm: tool_offset_mm,
+        })
+    }
+}
+
 /// [`PredictError::SensorMismatch`] listing both lists.
 pub fn check_sensor_names(model: &[String], machine: &[String]) -> Result<(), PredictError> {
     if model == machine {

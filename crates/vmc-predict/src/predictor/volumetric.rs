@@ -96,6 +96,10 @@ impl ErrorPredictor for VolumetricPredictor {
         self.readings.copy_from_slice(temps_degc);
         self.stale = true;
     }
+
+    fn change_tool(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), PredictError> {
+        super::same_tool_only(&self.geometry, tool_offset_mm)
+    }
 }
 
 /// Trains the volumetric MLP baseline on the `volumetric` records.

@@ -92,6 +92,13 @@ fn another_tool_gives_the_model_calibrated_with_that_tool() {
         );
     }
     assert!(p150.with_tool_offset_mm([0.0, f64::NAN, -250.0]).is_err());
+    // A tool change in the loop (M6) keeps what the model has observed: no new readings
+    // needed before it predicts for the new tool.
+    let mut changed = p150.clone();
+    changed.change_tool([0.0, 0.0, -250.0]).unwrap();
+    let q = [250.0, 120.0, -200.0];
+    assert_eq!(changed.predict_error_mm(q), p250.predict_error_mm(q));
+    assert!(changed.change_tool([f64::NAN, 0.0, -250.0]).is_err());
 }
 
 #[test]
