@@ -82,7 +82,9 @@ fn front_end(text: &str) -> Result<(), TestCaseError> {
             let msg = e.to_string();
             prop_assert!(!msg.contains('\n'), "one line: {}", msg);
             match &e {
-                ProgramError::Gcode { .. } | ProgramError::Motion { .. } => {
+                ProgramError::Gcode { .. }
+                | ProgramError::Motion { .. }
+                | ProgramError::UnknownTool { .. } => {
                     prop_assert!(has_line_location(&msg, file), "no location: {}", msg)
                 }
                 ProgramError::Io { .. } => prop_assert!(false, "no I/O here: {}", msg),

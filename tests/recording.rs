@@ -477,3 +477,43 @@ fn a_cut_recording_holds_vibration_forces_and_spectra() {
         "cut recording",
     );
 }
+
+#[test]
+fn a_chatter_recording_draws_the_program_cuts_on_the_lobes_of_their_engagements() {
+    let dir = TempDir::new("chatter");
+    let d = dir.path();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let program = repo.join("trajectories/pocket_chatter.ngc");
+    let stock = repo.join("trajectories/pocket_chatter.stock.toml");
+    let o = vmc(
+        d,
+        &[
+            "chatter",
+            program.to_str().unwrap(),
+            "--stock",
+            stock.to_str().unwrap(),
+            "--rrd",
+            "chatter.rrd",
+        ],
+    );
+    // The example has unstable cuts: the command fails after writing its recording.
+    let (out, err) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}\n{err}");
+    assert!(out.contains("wrote chatter.rrd"), "{out}");
+    let file = d.join("chatter.rrd");
+    assert_verified(&file);
+    // Three engagements (the slot, the 2 mm passes, the sideways entries) and both verdicts.
+    assert_has(
+        &printed(&file, "-vv"),
+        &[
+            "chatter/depth_mm/lobes/a_e_D_1_000_slot",
+            "chatter/depth_mm/lobes/a_e_D_0_200_down",
+            "chatter/depth_mm/lobes/a_e_D_0_400_entry",
+            "chatter/depth_mm/cuts/stable",
+            "chatter/depth_mm/cuts/unstable",
+            "report",
+        ],
+        &["spindle_rpm"],
+        "chatter recording",
+    );
+}

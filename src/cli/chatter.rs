@@ -33,6 +33,10 @@ pub struct ChatterArgs {
     /// Write one row per cutting move as CSV.
     #[arg(long, value_name = "FILE.csv")]
     pub out: Option<PathBuf>,
+    /// Write a Rerun recording: the stability lobes of the program's engagements with its cuts
+    /// as points on them.
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rrd: Option<PathBuf>,
     #[command(flatten)]
     pub force: ForceArg,
 }
@@ -72,6 +76,7 @@ impl ChatterArgs {
             options,
             out: self.out,
             force: self.force.force,
+            rrd: self.rrd,
         })
     }
 }

@@ -14,6 +14,7 @@ use crate::files;
 use crate::interp::{self, InterpConfig};
 use crate::milling::ToolDynamics;
 use crate::program::ProgramError;
+use crate::tools::TOOL_NUMBERS;
 
 /// What to check, validated.
 pub struct ChatterConfig {
@@ -33,10 +34,9 @@ pub struct ChatterConfig {
     pub out: Option<PathBuf>,
     /// Overwrite an existing output file.
     pub force: bool,
+    /// A Rerun recording to write: the lobes of the program's engagements with its cuts.
+    pub rrd: Option<PathBuf>,
 }
-
-/// Tool numbers given the tool file's diameter for cutter compensation (G41/G42 D).
-const TOOL_NUMBERS: u32 = 1000;
 
 /// Interprets the program (coordinates as programmed: no machine work offsets; subroutine
 /// files next to it; every tool number 0…999 is the cutter of `diameter_mm`, so that G41/G42
@@ -73,30 +73,34 @@ pub fn chatter(cfg: &ChatterConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(path) = &cfg.out {
         files::check_writable(path, cfg.force)?;
     }
+    if let Some(path) = &cfg.rrd {
+        crate::record::check_rrd_path(path, cfg.force)?;
+    }
     let file = cfg.program.display().to_string();
     let moves = load_moves(&cfg.program, cfg.tool.tool.diameter_mm)?;
     let report = chatter::check(&moves, &cfg.stock.stock, &cfg.tool, &cfg.options)
         .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
-    write_header(cfg, &report, out)?;
-    for c in &report.cuts {
-        writeln!(out, "{file}: {}", cut_line(c))?;
-    }
-    writeln!(
-        out,
-        "checked {} feed moves ({} in material, {} samples): {} stable, {} marginal, {} unstable, {} plunge(s); {} stability keys, {} SDM evaluations",
-        report.feed_moves,
-        report.cuts.len(),
-        report.samples,
-        report.count(Verdict::Stable),
-        report.count(Verdict::Marginal),
-        report.count(Verdict::Unstable),
-        report.count(Verdict::Plunge),
-        report.stability_keys,
-        report.stability_evaluations
-    )?;
+    // The report is printed and, with --rrd, also stored in the recording.
+    let mut text = Vec::new();
+    write_report(cfg, &report, &file, &mut text)?;
+    out.write_all(&text)?;
     if let Some(path) = &cfg.out {
         files::write_atomic(path, chatter::report_csv(&report).as_bytes(), cfg.force)?;
         writeln!(out, "wrote {}", path.display())?;
+    }
+    if let Some(path) = &cfg.rrd {
+        let (curves, cuts) = diagram(cfg, &report)?;
+        let md = format!(
+            "# vmc-twin chatter\n\nStability lobes (SDM, feed along X) of each engagement the \
+             program has, with its cutting moves at (spindle speed, axial depth): green stable, \
+             yellow marginal, red unstable. A cut above the curve of its engagement \
+             chatters.\n\n```text\n{}```\n",
+            String::from_utf8_lossy(&text)
+        );
+        let title = format!("vmc-twin chatter {file}");
+        let bytes =
+            crate::record::chatter::record_chatter(path, cfg.force, &title, &curves, &cuts, &md)?;
+        super::wrote_recording(out, path, bytes, "")?;
     }
     let unstable: Vec<String> = report
         .cuts
@@ -120,6 +124,116 @@ pub fn chatter(cfg: &ChatterConfig, out: &mut dyn Write) -> Result<()> {
         report.cuts.len(),
         unstable[..unstable.len().min(SHOWN)].join(", ")
     )
+}
+
+/// Speeds of the diagram's lobes, spread over half the program's lowest to 1.5 × its highest.
+const DIAGRAM_SPEEDS: usize = 121;
+
+/// The lobe curve of every engagement the program's cuts have (a_e/D at the top of its bin, as
+/// the check judges it; up, down, or the lower of both for an entry) over a band of speeds around
+/// the program's, and the cuts as points.
+///
+/// # Errors
+/// Values the dynamics refuses.
+fn diagram(
+    cfg: &ChatterConfig,
+    report: &ChatterReport,
+) -> Result<(
+    Vec<crate::record::chatter::LobeCurve>,
+    Vec<crate::record::chatter::CutPoint>,
+)> {
+    use crate::chatter::Engagement;
+    use crate::dynamics::{lobes, LobePoint, Method, Milling};
+    use crate::record::chatter::{CutPoint, LobeCurve};
+    let judged: Vec<&Cut> = report
+        .cuts
+        .iter()
+        .filter(|c| c.engagement != Engagement::Plunge)
+        .collect();
+    let cuts = judged
+        .iter()
+        .map(|c| CutPoint {
+            spindle_rpm: c.spindle_rpm,
+            axial_depth_mm: c.axial_depth_mm,
+            class: match c.verdict {
+                Verdict::Stable => 0,
+                Verdict::Marginal => 1,
+                _ => 2,
+            },
+        })
+        .collect();
+    let (lo, hi) = judged.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), c| {
+        (lo.min(c.spindle_rpm), hi.max(c.spindle_rpm))
+    });
+    if judged.is_empty() {
+        return Ok((Vec::new(), cuts));
+    }
+    let speeds: Vec<f64> = (0..DIAGRAM_SPEEDS)
+        .map(|k| 0.5 * lo + (1.5 * hi - 0.5 * lo) * k as f64 / (DIAGRAM_SPEEDS - 1) as f64)
+        .collect();
+    let bin = cfg.options.immersion_bin;
+    let mut groups: Vec<(u32, Engagement)> = judged
+        .iter()
+        .map(|c| {
+            let b = ((c.immersion / bin - 1e-9).ceil().max(1.0)) as u32;
+            (b, c.engagement)
+        })
+        .collect();
+    groups.sort_by_key(|&(b, e)| (b, e.name()));
+    groups.dedup();
+    let t = &cfg.tool;
+    let mut curves = Vec::new();
+    for (b, engagement) in groups {
+        let immersion = (f64::from(b) * bin).min(1.0);
+        let millings: &[Milling] = match engagement {
+            Engagement::Up => &[Milling::Up],
+            Engagement::Entry => &[Milling::Up, Milling::Down],
+            _ => &[Milling::Down],
+        };
+        let mut points: Vec<LobePoint> = Vec::new();
+        for &m in millings {
+            for p in lobes(Method::Sdm, &t.tool, &t.modes, immersion, m, &speeds)? {
+                match points.iter_mut().find(|q| q.spindle_rpm == p.spindle_rpm) {
+                    Some(q) if p.critical_depth_mm < q.critical_depth_mm => *q = p,
+                    Some(_) => {}
+                    None => points.push(p),
+                }
+            }
+        }
+        points.sort_by(|a, b| a.spindle_rpm.total_cmp(&b.spindle_rpm));
+        curves.push(LobeCurve {
+            name: format!("a_e/D {immersion:.3} {}", engagement.name()),
+            points,
+        });
+    }
+    Ok((curves, cuts))
+}
+
+/// The header, one line per cut and the totals.
+fn write_report(
+    cfg: &ChatterConfig,
+    report: &ChatterReport,
+    file: &str,
+    out: &mut dyn Write,
+) -> Result<()> {
+    write_header(cfg, report, out)?;
+    for c in &report.cuts {
+        writeln!(out, "{file}: {}", cut_line(c))?;
+    }
+    writeln!(
+        out,
+        "checked {} feed moves ({} in material, {} samples): {} stable, {} marginal, {} unstable, {} plunge(s); {} stability keys, {} SDM evaluations",
+        report.feed_moves,
+        report.cuts.len(),
+        report.samples,
+        report.count(Verdict::Stable),
+        report.count(Verdict::Marginal),
+        report.count(Verdict::Unstable),
+        report.count(Verdict::Plunge),
+        report.stability_keys,
+        report.stability_evaluations
+    )?;
+    Ok(())
 }
 
 fn write_header(cfg: &ChatterConfig, r: &ChatterReport, out: &mut dyn Write) -> Result<()> {

@@ -38,6 +38,7 @@
 //! before any simulation starts.
 
 pub mod campaign;
+pub mod chatter;
 pub mod check;
 pub mod dynamics;
 pub mod layout;
