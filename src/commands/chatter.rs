@@ -150,6 +150,23 @@ fn diagram(
         .iter()
         .filter(|c| c.engagement != Engagement::Plunge)
         .collect();
+    let (lo, hi) = judged.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), c| {
+        (lo.min(c.spindle_rpm), hi.max(c.spindle_rpm))
+    });
+    if judged.is_empty() {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let speeds: Vec<f64> = (0..DIAGRAM_SPEEDS)
+        .map(|k| 0.5 * lo + (1.5 * hi - 0.5 * lo) * k as f64 / (DIAGRAM_SPEEDS - 1) as f64)
+        .collect();
+    let bin = cfg.options.immersion_bin;
+    let group_of = |c: &Cut| {
+        let b = ((c.immersion / bin - 1e-9).ceil().max(1.0)) as u32;
+        (b, c.engagement)
+    };
+    let mut groups: Vec<(u32, Engagement)> = judged.iter().map(|c| group_of(c)).collect();
+    groups.sort_by_key(|&(b, e)| (b, e.name()));
+    groups.dedup();
     let cuts = judged
         .iter()
         .map(|c| CutPoint {
@@ -160,27 +177,9 @@ fn diagram(
                 Verdict::Marginal => 1,
                 _ => 2,
             },
+            curve: groups.iter().position(|g| *g == group_of(c)).unwrap_or(0),
         })
         .collect();
-    let (lo, hi) = judged.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), c| {
-        (lo.min(c.spindle_rpm), hi.max(c.spindle_rpm))
-    });
-    if judged.is_empty() {
-        return Ok((Vec::new(), cuts));
-    }
-    let speeds: Vec<f64> = (0..DIAGRAM_SPEEDS)
-        .map(|k| 0.5 * lo + (1.5 * hi - 0.5 * lo) * k as f64 / (DIAGRAM_SPEEDS - 1) as f64)
-        .collect();
-    let bin = cfg.options.immersion_bin;
-    let mut groups: Vec<(u32, Engagement)> = judged
-        .iter()
-        .map(|c| {
-            let b = ((c.immersion / bin - 1e-9).ceil().max(1.0)) as u32;
-            (b, c.engagement)
-        })
-        .collect();
-    groups.sort_by_key(|&(b, e)| (b, e.name()));
-    groups.dedup();
     let t = &cfg.tool;
     let mut curves = Vec::new();
     for (b, engagement) in groups {

@@ -24,13 +24,19 @@ use rerun::blueprint::{
 /// Room for the views (blueprint and selection panels collapsed), the time cursor at the end of
 /// `timeline` (every path fully drawn).
 pub(crate) fn framed(root: Horizontal, timeline: &str) -> Blueprint {
+    framed_with(root, timeline, PlayState::Following)
+}
+
+/// [`framed`] with the time cursor paused: for diagrams drawn on a timeline that is not time
+/// (e.g. spindle speed), whose plots then show the whole range.
+pub(crate) fn framed_with(root: Horizontal, timeline: &str, play: PlayState) -> Blueprint {
     Blueprint::new(root)
         .with_blueprint_panel(BlueprintPanel::from_state(PanelState::Collapsed))
         .with_selection_panel(SelectionPanel::from_state(PanelState::Collapsed))
         .with_time_panel(
             TimePanel::new()
                 .with_timeline(timeline)
-                .with_play_state(PlayState::Following),
+                .with_play_state(play),
         )
 }
 
