@@ -65,6 +65,7 @@ fn bench(c: &mut Criterion) {
                 .map(|(rot, pts)| {
                     let fit = fit_centre(pts, 14.5).unwrap();
                     Observation {
+                        target_w_mm: [0.0; 3],
                         rotary_deg: *rot,
                         nominal_mm: nominal_linear_axes(&g, *rot, Vector3::zeros()),
                         measured_mm: fit.centre_mm.into(),

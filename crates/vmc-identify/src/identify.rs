@@ -2,7 +2,8 @@
 //! on the exact model.
 //!
 //! # Method
-//! Each observation (one configuration) is the fitted sphere centre in linear-axis coordinates
+//! Each observation (one configuration) is the fitted centre of a sphere (the datum sphere, or
+//! another sphere of a calibrated artefact at a known offset from it) in linear-axis coordinates
 //! `q_meas` with its covariance `Σ`; the nominal reading `q_nom` follows from the nominal
 //! geometry. To first order `q_meas − q_nom = S·E + noise` ([`crate::sensitivity`]). Rows are
 //! whitened by the Cholesky factor of `Σ` (`A = L⁻¹S`, `b = L⁻¹(q_meas − q_nom)`), columns
@@ -39,6 +40,9 @@ use crate::sensitivity::probe_sensitivity;
 pub struct Observation {
     /// Rotary angles, degrees ([`Geometry::rotary`] order).
     pub rotary_deg: [f64; 2],
+    /// Nominal centre of the probed sphere in the workpiece frame, mm (zero for the datum
+    /// sphere; another sphere of a calibrated artefact sits at its known offset).
+    pub target_w_mm: [f64; 3],
     /// Nominal linear axes at the sphere centre, mm.
     pub nominal_mm: [f64; 3],
     /// Measured (fitted) sphere centre in linear-axis coordinates, mm.
@@ -421,9 +425,12 @@ pub fn identify(
     let exact_readings = |values: &[f64]| -> Result<Vec<[f64; 3]>, HtmError> {
         obs.iter()
             .map(|o| {
-                linear_axes_for(geom, o.rotary_deg, Vector3::zeros(), &|pose: &Pose| {
-                    set.state_at(values, pose)
-                })
+                linear_axes_for(
+                    geom,
+                    o.rotary_deg,
+                    Vector3::from(o.target_w_mm),
+                    &|pose: &Pose| set.state_at(values, pose),
+                )
             })
             .collect()
     };

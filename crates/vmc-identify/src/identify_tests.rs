@@ -75,6 +75,7 @@ fn observe(
             .unwrap();
             let noise = l * Vector3::new(rng.normal(), rng.normal(), rng.normal());
             Observation {
+                target_w_mm: [0.0; 3],
                 rotary_deg: rot,
                 nominal_mm: nominal_linear_axes(&g, rot, Vector3::zeros()),
                 measured_mm: (Vector3::from(q) + noise).into(),
