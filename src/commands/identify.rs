@@ -48,6 +48,7 @@ struct ParameterOut {
     unit: &'static str,
     value: f64,
     std_uncertainty: f64,
+    std_uncertainty_scaled: f64,
     status: Status,
 }
 
@@ -152,6 +153,7 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
                     unit,
                     value: e.value * k,
                     std_uncertainty: e.std_uncertainty * k,
+                    std_uncertainty_scaled: e.std_uncertainty_scaled * k,
                     status: e.status,
                 }
             })
@@ -214,7 +216,7 @@ fn print_report(
     }
     writeln!(
         out,
-        "parameters (standard uncertainty from the probe noise):"
+        "parameters (standard uncertainty from the probe noise; in brackets scaled by √(χ²/dof)):"
     )?;
     for e in &id.estimates {
         let (unit, k) = if e.is_angle {
@@ -230,10 +232,11 @@ fn print_report(
         };
         writeln!(
             out,
-            "  {:<14} {:>10.3} ± {:<7.3} {unit:<5} {status}",
+            "  {:<14} {:>10.3} ± {:<6.3} [{:<6.3}] {unit:<5} {status}",
             e.name,
             e.value * k,
-            e.std_uncertainty * k
+            e.std_uncertainty * k,
+            e.std_uncertainty_scaled * k
         )?;
     }
     writeln!(

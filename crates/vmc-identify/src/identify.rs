@@ -20,7 +20,9 @@
 //!
 //! **Uncertainty.** `cov = (AᵀA)⁻¹` over the kept parameters; the standard uncertainty is the
 //! root of its diagonal. `χ² = |A·x − b|²` with `3n − p` degrees of freedom says whether the
-//! residual is noise (≈ 1 per degree of freedom) or unmodelled error.
+//! residual is noise (≈ 1 per degree of freedom) or unmodelled error; in the latter case the
+//! uncertainty scaled by `√(χ²/dof)` is the honest one (it treats the misfit as extra noise of
+//! the same structure).
 //!
 //! **Refinement.** The first-order solution is refined by Gauss–Newton on the exact model
 //! (readings recomputed by [`crate::htm::linear_axes_for`], the first-order operator as the
@@ -95,6 +97,9 @@ pub struct Estimate {
     pub value: f64,
     /// Standard uncertainty from the measurement noise (0 when fixed).
     pub std_uncertainty: f64,
+    /// The same scaled by `√(χ²/dof)` when the residual exceeds the noise (unmodelled errors
+    /// then dominate; the Birge ratio), else equal to it.
+    pub std_uncertainty_scaled: f64,
     /// What became of it.
     pub status: Status,
 }
@@ -487,12 +492,15 @@ pub fn identify(
         ustd_full[j] = u_std[c];
     }
     let names = set.names();
+    let dof = 3 * n - k;
+    let birge = (chi2 / dof.max(1) as f64).sqrt().max(1.0);
     let estimates = (0..p)
         .map(|j| Estimate {
             name: names[j].clone(),
             is_angle: set.params[j].component.is_angle(),
             value: x[j],
             std_uncertainty: ustd_full[j],
+            std_uncertainty_scaled: ustd_full[j] * birge,
             status: sel.status[j],
         })
         .collect();
@@ -509,7 +517,7 @@ pub fn identify(
         estimates,
         relations: sel.relations,
         chi2,
-        dof: 3 * n - k,
+        dof,
         linearisation_error_mm: lin_err,
         refinement_change_sigmas: change,
         rms_residual_mm: rms,
