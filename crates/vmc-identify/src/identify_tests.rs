@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::errors::tests_support::trunnion;
+use crate::errors::ErrorState;
 use crate::htm::nominal_linear_axes;
 
 /// A small deterministic generator for the tests (SplitMix64 + Box–Muller); the crate itself
@@ -287,4 +288,49 @@ fn a_d_optimal_half_is_nearly_as_good_as_all_candidates() {
         worst_u(&chosen),
         worst_u(&spread25)
     );
+}
+
+#[test]
+fn a_second_sphere_separates_the_zero_offset_of_c_from_the_datum_offset() {
+    let g = trunnion();
+    let set = ParameterSet::location_and_assembly(&g);
+    let mut rng = Rng(17);
+    let zeros = vec![0.0; set.len()];
+    let configs = spread(50, None);
+    let one = observe(&set, &zeros, &configs, 1.25e-4, &mut rng);
+    let id1 = identify(&g, &set, &one, &IdentifyOptions::default()).unwrap();
+    assert!(
+        id1.relations
+            .iter()
+            .any(|r| r.fixed == "E_YW" && r.message.contains("E_C0C")),
+        "{:#?}",
+        id1.relations
+    );
+    // Every other configuration on a second sphere 250 mm away, 50 mm lower.
+    let target = [-250.0, 80.0, -50.0];
+    let two: Vec<Observation> = one
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            if i % 2 == 0 {
+                return *o;
+            }
+            let q = linear_axes_for(&g, o.rotary_deg, Vector3::from(target), &|_: &Pose| {
+                ErrorState::default()
+            })
+            .unwrap();
+            Observation {
+                target_w_mm: target,
+                nominal_mm: q,
+                measured_mm: q,
+                ..*o
+            }
+        })
+        .collect();
+    let id2 = identify(&g, &set, &two, &IdentifyOptions::default()).unwrap();
+    assert_eq!(id2.rank, id1.rank + 1);
+    for name in ["E_C0C", "E_YW"] {
+        let e = id2.estimates.iter().find(|e| e.name == name).unwrap();
+        assert_eq!(e.status, Status::Identified, "{name}");
+    }
 }
