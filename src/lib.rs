@@ -6,6 +6,7 @@
 //! planner, the [`sim`] loop, [`report`]s, Rerun [`record`]ings and [`progress`] bars. Knowledge side: the `vmc-predict` crate, re-exported
 //! as [`predict`]; it does not depend on this crate (the information boundary, docs/architecture.md).
 pub use vmc_dynamics as dynamics;
+pub use vmc_identify as identify;
 pub use vmc_predict as predict;
 
 pub mod benchmark;
@@ -18,6 +19,7 @@ pub mod commands;
 pub mod cutting;
 pub mod errors;
 pub mod files;
+pub mod fiveaxis;
 pub mod gcode;
 pub mod instruments;
 pub mod interp;

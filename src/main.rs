@@ -43,6 +43,10 @@ fn run(command: Command) -> Result<()> {
         Command::Cut(args) => commands::cut::cut(&args.config()?, out),
         Command::Chatter(args) => commands::chatter::chatter(&args.config()?, out),
         Command::Interpret(args) => commands::interpret::interpret(&args.config()?, out),
+        Command::ProbeCampaign(args) => {
+            commands::probe_campaign::probe_campaign(&args.config()?, out)
+        }
+        Command::Identify(args) => commands::identify::identify(&args.config()?, out),
         Command::Bench(args) => commands::bench::bench(&args.config()?, out),
     }
 }

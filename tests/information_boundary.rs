@@ -1,9 +1,22 @@
 //! The information boundary (docs/architecture.md), checked: the knowledge side (`vmc-predict`: predictors,
-//! controller, synthesis, datasets) cannot reach the twin's internals because it does not depend
+//! controller, synthesis, datasets; `vmc-identify`: five-axis identification) cannot reach the twin's internals because it does not depend
 //! on the twin crate — and cannot, since the twin crate depends on it (Cargo forbids cycles).
 //! This test fails if someone adds such a dependency or names the twin in its sources.
 
 use std::path::Path;
+
+/// The crates of the knowledge side.
+const KNOWLEDGE_CRATES: [&str; 2] = ["vmc-predict", "vmc-identify"];
+
+#[test]
+fn the_identification_crate_depends_only_on_numerics() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let m = manifest(&root.join("crates/vmc-identify/Cargo.toml"));
+    let deps = m["dependencies"].as_table().unwrap();
+    let mut names: Vec<&String> = deps.keys().collect();
+    names.sort();
+    assert_eq!(names, ["nalgebra", "serde", "thiserror"]);
+}
 
 fn manifest(path: &Path) -> toml::Table {
     let text = std::fs::read_to_string(path).unwrap();
@@ -23,18 +36,20 @@ fn dependency_names(t: &toml::Table) -> Vec<String> {
 #[test]
 fn the_knowledge_crate_does_not_depend_on_the_twin() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let predict = manifest(&root.join("crates/vmc-predict/Cargo.toml"));
-    let deps = dependency_names(&predict);
-    assert!(!deps.is_empty());
-    for d in &deps {
-        assert!(
-            !d.contains("vmc-twin") && !d.contains("vmc_twin"),
-            "vmc-predict depends on {d}"
-        );
+    for krate in KNOWLEDGE_CRATES {
+        let m = manifest(&root.join(format!("crates/{krate}/Cargo.toml")));
+        let deps = dependency_names(&m);
+        assert!(!deps.is_empty());
+        for d in &deps {
+            assert!(
+                !d.contains("vmc-twin") && !d.contains("vmc_twin"),
+                "{krate} depends on {d}"
+            );
+        }
+        // And the twin depends on the knowledge crate (the only allowed direction).
+        let twin = manifest(&root.join("Cargo.toml"));
+        assert!(dependency_names(&twin).iter().any(|d| d == krate));
     }
-    // And the twin depends on the knowledge crate (the only allowed direction).
-    let twin = manifest(&root.join("Cargo.toml"));
-    assert!(dependency_names(&twin).iter().any(|d| d == "vmc-predict"));
 }
 
 #[test]
@@ -50,11 +65,14 @@ fn no_knowledge_side_source_names_the_twin() {
         }
     }
     let mut files = Vec::new();
-    walk(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/vmc-predict/src"),
-        &mut files,
-    );
-    assert!(files.len() > 5);
+    for krate in KNOWLEDGE_CRATES {
+        let before = files.len();
+        walk(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("crates/{krate}/src")),
+            &mut files,
+        );
+        assert!(files.len() - before > 5, "{krate}");
+    }
     for f in files {
         let text = std::fs::read_to_string(&f).unwrap();
         // Code lines only: documentation may mention the twin to explain the boundary.

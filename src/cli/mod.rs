@@ -6,6 +6,7 @@
 
 mod chatter;
 mod cut;
+mod fiveaxis;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -20,6 +21,7 @@ use crate::sim::{SimConfig, SimConfigError};
 
 pub use chatter::ChatterArgs;
 pub use cut::CutArgs;
+pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
 /// `vmc-twin`: the whole command line.
@@ -76,6 +78,12 @@ pub enum Command {
     /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
     /// `rs274`, to compare with a controller.
     Interpret(InterpretArgs),
+    /// Probe the reference sphere of a five-axis machine in N configurations with the virtual
+    /// touch probe and write the probing file (CSV).
+    ProbeCampaign(ProbeCampaignArgs),
+    /// Identify the geometric errors of a five-axis machine from a probing file: the
+    /// identifiability report, the parameters with their uncertainty, and the held-out judge.
+    Identify(IdentifyArgs),
     /// Measure the speed figures (compensation query, 8 h of machine time, campaign) and how
     /// they scale with the interpolation cycle and the number of calibration cycles.
     Bench(BenchArgs),
