@@ -424,6 +424,16 @@ fn a_model_of_another_kinematics_is_refused_before_the_run() {
     );
 }
 
+/// The run's "reduction of RMS |E|" is at least `min_percent`.
+fn assert_reduction_at_least(out: &str, min_percent: f64) {
+    let reduction: f64 = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("reduction of RMS |E|: "))
+        .and_then(|v| v.trim_end_matches(" %").parse().ok())
+        .unwrap_or_else(|| panic!("no reduction line in\n{out}"));
+    assert!(reduction >= min_percent, "{reduction} %\n{out}");
+}
+
 #[test]
 fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
     let t = Tmp::new("tool");
@@ -476,12 +486,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         ),
         "{out}"
     );
-    let reduction: f64 = out
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("reduction of RMS |E|: "))
-        .and_then(|v| v.trim_end_matches(" %").parse().ok())
-        .unwrap_or_else(|| panic!("no reduction line in\n{out}"));
-    assert!(reduction >= 80.0, "{reduction} %\n{out}");
+    assert_reduction_at_least(&out, 80.0);
     // The same change by the program itself: M6 loads the 250 mm tool 2 of a tool table on the
     // reference machine. The hybrid follows it in the loop; the baseline stops at the M6.
     std::fs::write(
@@ -526,12 +531,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
             .map(String::as_str)
             .collect::<Vec<_>>(),
     );
-    let reduction: f64 = out
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("reduction of RMS |E|: "))
-        .and_then(|v| v.trim_end_matches(" %").parse().ok())
-        .unwrap_or_else(|| panic!("no reduction line in\n{out}"));
-    assert!(reduction >= 80.0, "{reduction} %\n{out}");
+    assert_reduction_at_least(&out, 80.0);
     // A tool the table does not have is refused before the run, at its line.
     std::fs::write(t.0.join("t5.ngc"), format!("%\nT5 M6{body}")).unwrap();
     let err = one_line_error(&t.0, &["run", "t5.ngc", "--tools", "tools.toml"]);
