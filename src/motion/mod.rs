@@ -393,7 +393,7 @@ impl PlanBuilder<'_> {
     fn apply(&mut self, mv: &CanonMove) -> Result<bool, MotionError> {
         let line = mv.line;
         match mv.kind {
-            CanonKind::Traverse { end_mm } => {
+            CanonKind::Traverse { end_mm, .. } => {
                 check_finite(line, "end point", end_mm)?;
                 let geometry = Geometry::line(self.pos_mm, end_mm);
                 let (speed, accel) = self.line_caps(&geometry, f64::INFINITY);
@@ -402,6 +402,7 @@ impl PlanBuilder<'_> {
             CanonKind::Feed {
                 end_mm,
                 feed_mm_per_min,
+                ..
             } => {
                 check_finite(line, "end point", end_mm)?;
                 let feed_mm_per_s = self.feed_mm_per_s(line, feed_mm_per_min)?;
@@ -416,6 +417,7 @@ impl PlanBuilder<'_> {
                 clockwise,
                 extra_turns,
                 feed_mm_per_min,
+                ..
             } => {
                 check_finite(line, "end point", end_mm)?;
                 check_finite(line, "arc centre", center_mm)?;

@@ -160,7 +160,7 @@ pub fn ours(moves: &[CanonMove]) -> Vec<RefMove> {
     moves
         .iter()
         .filter_map(|m| match m.kind {
-            CanonKind::Traverse { end_mm } => Some(RefMove::Traverse(end_mm)),
+            CanonKind::Traverse { end_mm, .. } => Some(RefMove::Traverse(end_mm)),
             CanonKind::Feed { end_mm, .. } => Some(RefMove::Feed(end_mm)),
             CanonKind::Arc {
                 end_mm,
