@@ -95,6 +95,8 @@ mod feed;
 mod flow;
 #[cfg(test)]
 mod flow_tests;
+#[cfg(test)]
+mod rotary_tests;
 mod sub_files;
 #[cfg(test)]
 mod tests;
