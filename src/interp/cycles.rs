@@ -289,7 +289,11 @@ pub(super) fn run(
     let pecks_mm = if matches!(cycle, Cycle::G73 | Cycle::G83) {
         let off = input.offset_mm[ax];
         let (r_u, bottom_u) = if input.incremental {
-            let r_u = (initial - off) / k + r_word;
+            // LinuxCNC holds the position in program units, as written (`Z0.047`); ours comes
+            // back from mm with a rounding error of ~1e-15: snapped to 1e-10 of a unit, far
+            // below any written digit, so that the peck sums round as LinuxCNC's do.
+            let initial_u = ((initial - off) / k * 1e10).round() / 1e10;
+            let r_u = initial_u + r_word;
             (r_u, r_u + bottom_word)
         } else {
             (r_word, bottom_word)
