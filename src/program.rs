@@ -30,6 +30,18 @@ pub enum ProgramError {
         /// The interpreter's error.
         err: interp::GcodeError,
     },
+    /// The program turns a rotary axis (A, B, C) of a machine that has none.
+    #[error("{file}: line {line}: the program moves the {axis} axis; machine {machine} has no rotary axes")]
+    NoRotaryAxes {
+        /// The file.
+        file: String,
+        /// 1-based line of the first move that turns the axis.
+        line: usize,
+        /// `'A'`, `'B'` or `'C'`.
+        axis: char,
+        /// The machine's name.
+        machine: String,
+    },
     /// Planning or travel problem (line in the message).
     #[error("{file}: {err}")]
     Motion {
@@ -126,6 +138,40 @@ pub fn check_run_size(
     Ok(())
 }
 
+/// Largest angle, degrees, at which a rotary axis of a machine without rotary axes counts as
+/// not moved (1e-9°: float rounding of offsets that cancel, e.g. `G92 A5` then `G0 A5`).
+pub const ROTARY_STILL_DEG: f64 = 1e-9;
+
+/// Refuses a program that turns a rotary axis on a machine without rotary axes (every
+/// machine description today: X, Y, Z only). The axes start at 0°; words that leave them there
+/// (`A0`, or angles cancelled by offsets) are accepted, as they move nothing.
+///
+/// # Errors
+/// [`ProgramError::NoRotaryAxes`] naming the first move (line) and axis that turn.
+pub fn refuse_rotary(
+    moves: &[interp::CanonMove],
+    file: &str,
+    machine: &str,
+) -> Result<(), ProgramError> {
+    for m in moves {
+        let (interp::CanonKind::Traverse { end_abc_deg, .. }
+        | interp::CanonKind::Feed { end_abc_deg, .. }
+        | interp::CanonKind::Arc { end_abc_deg, .. }) = &m.kind
+        else {
+            continue;
+        };
+        if let Some(i) = (0..3).find(|&i| end_abc_deg[i].abs() > ROTARY_STILL_DEG) {
+            return Err(ProgramError::NoRotaryAxes {
+                file: file.to_string(),
+                line: m.line,
+                axis: ['A', 'B', 'C'][i],
+                machine: machine.to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Reads, interprets, plans and travel-checks a program file with the machine's own tool for
 /// every tool number (see [`crate::tools`]).
 pub fn load_plan(
@@ -199,6 +245,7 @@ pub fn plan_source_unchecked_with_tools(
         file: file.to_string(),
         err,
     })?;
+    refuse_rotary(&moves, file, &machine.machine.name)?;
     let plan =
         motion::plan(&moves, start_mm, &machine.motion).map_err(|err| ProgramError::Motion {
             file: file.to_string(),

@@ -84,7 +84,8 @@ fn front_end(text: &str) -> Result<(), TestCaseError> {
             match &e {
                 ProgramError::Gcode { .. }
                 | ProgramError::Motion { .. }
-                | ProgramError::UnknownTool { .. } => {
+                | ProgramError::UnknownTool { .. }
+                | ProgramError::NoRotaryAxes { .. } => {
                     prop_assert!(has_line_location(&msg, file), "no location: {}", msg)
                 }
                 ProgramError::Io { .. } => prop_assert!(false, "no I/O here: {}", msg),
@@ -112,7 +113,8 @@ fn gcode_text() -> impl Strategy<Value = String> {
         (0u32..100).prop_map(|v| v.to_string()),
     ];
     let letter = prop::sample::select(vec![
-        'G', 'G', 'G', 'X', 'Y', 'Z', 'I', 'J', 'K', 'R', 'F', 'S', 'P', 'M', 'T', 'N', 'Q',
+        'G', 'G', 'G', 'X', 'Y', 'Z', 'A', 'C', 'I', 'J', 'K', 'R', 'F', 'S', 'P', 'M', 'T', 'N',
+        'Q',
     ]);
     let code = prop::sample::select(vec![
         "0", "1", "2", "3", "4", "17", "18", "19", "20", "21", "53", "54", "59", "90", "91",

@@ -223,7 +223,8 @@ fn regenerate_stored_rs274_outputs() {
             Ok(calls) => {
                 let _ = writeln!(out, "=== {i} accepted");
                 for call in calls.lines().filter(|c| kept(c)) {
-                    // Without the sequence-number column and the A, B, C coordinates (0 here).
+                    // Without the sequence-number column, and without the A, B, C coordinates
+                    // where all three are 0.
                     let call = call.trim_start_matches("N..... ");
                     let call = call
                         .strip_suffix(", 0.0000, 0.0000, 0.0000)")

@@ -37,6 +37,7 @@ fn sampling_a_one_hour_program_at_1_ms_does_not_allocate_per_sample() {
             kind: CanonKind::Feed {
                 end_mm: [100.0, 50.0, 0.0],
                 feed_mm_per_min: 3000.0,
+                end_abc_deg: [0.0; 3],
             },
         },
         CanonMove {
@@ -45,7 +46,10 @@ fn sampling_a_one_hour_program_at_1_ms_does_not_allocate_per_sample() {
         },
         CanonMove {
             line: 3,
-            kind: CanonKind::Traverse { end_mm: [0.0; 3] },
+            kind: CanonKind::Traverse {
+                end_mm: [0.0; 3],
+                end_abc_deg: [0.0; 3],
+            },
         },
     ];
     let p = plan(&moves, [0.0; 3], &MotionLimits::default()).expect("valid program");

@@ -366,7 +366,7 @@ fn engage(
     let (mut out, mut feed_moves, mut samples) = (Vec::new(), 0, 0);
     for m in moves {
         let (end_mm, geometry, motion, feed) = match &m.kind {
-            CanonKind::Traverse { end_mm } => {
+            CanonKind::Traverse { end_mm, .. } => {
                 at = *end_mm;
                 continue;
             }
@@ -377,6 +377,7 @@ fn engage(
             CanonKind::Feed {
                 end_mm,
                 feed_mm_per_min,
+                ..
             } => (*end_mm, Geometry::line(at, *end_mm), "G1", *feed_mm_per_min),
             CanonKind::Arc {
                 end_mm,
@@ -385,6 +386,7 @@ fn engage(
                 clockwise,
                 extra_turns,
                 feed_mm_per_min,
+                ..
             } => {
                 let motion = if *clockwise { "G2" } else { "G3" };
                 let arc =

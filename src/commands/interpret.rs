@@ -7,6 +7,9 @@
 //! `rs274`'s when no work offset or G92 offset is active. Only the motion, spindle, tool,
 //! coolant, pause, message and end calls are printed (no state-setting calls such as
 //! `SET_G5X_OFFSET`).
+//!
+//! Every move prints the rotary axes A, B, C too (degrees, machine coordinates), as `rs274`
+//! does: `STRAIGHT_FEED(x, y, z, a, b, c)`; they are 0 in a program without rotary words.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -63,23 +66,36 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
     call(out, "USE_LENGTH_UNITS(CANON_UNITS_MM)".to_string())?;
     let (mut feed, mut plane, mut speed) = (None, Plane::Xy, None);
     let mut coolant = (false, false);
+    let point = |p: &[f64; 3], a: &[f64; 3]| {
+        format!(
+            "{:.4}, {:.4}, {:.4}, {:.4}, {:.4}, {:.4}",
+            p[0], p[1], p[2], a[0], a[1], a[2]
+        )
+    };
     for m in moves {
         match &m.kind {
-            CanonKind::Traverse { end_mm } => {
-                call(out, format!("STRAIGHT_TRAVERSE({})", xyz(end_mm)))?;
+            CanonKind::Traverse {
+                end_mm,
+                end_abc_deg,
+            } => {
+                let p = point(end_mm, end_abc_deg);
+                call(out, format!("STRAIGHT_TRAVERSE({p})"))?;
             }
             CanonKind::Feed {
                 end_mm,
+                end_abc_deg,
                 feed_mm_per_min,
             } => {
                 if feed != Some(*feed_mm_per_min) {
                     feed = Some(*feed_mm_per_min);
                     call(out, format!("SET_FEED_RATE({feed_mm_per_min:.4})"))?;
                 }
-                call(out, format!("STRAIGHT_FEED({})", xyz(end_mm)))?;
+                let p = point(end_mm, end_abc_deg);
+                call(out, format!("STRAIGHT_FEED({p})"))?;
             }
             CanonKind::Arc {
                 end_mm,
+                end_abc_deg,
                 center_mm,
                 plane: p,
                 clockwise,
@@ -109,8 +125,15 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                 call(
                     out,
                     format!(
-                        "ARC_FEED({:.4}, {:.4}, {:.4}, {:.4}, {rotation}, {:.4}, 0.0000, 0.0000, 0.0000)",
-                        end_mm[a1], end_mm[a2], center_mm[a1], center_mm[a2], end_mm[ax]
+                        "ARC_FEED({:.4}, {:.4}, {:.4}, {:.4}, {rotation}, {:.4}, {:.4}, {:.4}, {:.4})",
+                        end_mm[a1],
+                        end_mm[a2],
+                        center_mm[a1],
+                        center_mm[a2],
+                        end_mm[ax],
+                        end_abc_deg[0],
+                        end_abc_deg[1],
+                        end_abc_deg[2],
                     ),
                 )?;
             }
@@ -189,13 +212,6 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
         }
     }
     Ok(())
-}
-
-fn xyz(p: &[f64; 3]) -> String {
-    format!(
-        "{:.4}, {:.4}, {:.4}, 0.0000, 0.0000, 0.0000",
-        p[0], p[1], p[2]
-    )
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use super::expr::{Assign, ExprWord, Line, OKind, OName, OWord};
 use super::GcodeError;
 
 /// Letters whose words the interpreter understands.
-const SUPPORTED_LETTERS: &str = "DEFGHIJKLMNPQRSTXYZ";
+const SUPPORTED_LETTERS: &str = "ABCDEFGHIJKLMNPQRSTXYZ";
 
 /// Parses one line (1-based `line`). `Ok(None)` for a line that does nothing (blank, plain
 /// comments only, or a lone N word).
@@ -318,8 +318,8 @@ impl Lexer<'_> {
 
 fn unsupported_letter_msg(letter: char) -> String {
     match letter {
-        'A' | 'B' | 'C' | 'U' | 'V' | 'W' => {
-            format!("{letter} axis word is not supported (3-axis XYZ machine)")
+        'U' | 'V' | 'W' => {
+            format!("{letter} axis word is not supported (axes X, Y, Z, A, B, C only)")
         }
         _ => format!("unknown word letter '{letter}'"),
     }
@@ -469,7 +469,7 @@ mod tests {
 
     #[test]
     fn outside_the_subset_is_unsupported() {
-        for (text, col) in [("G0 A1", 4), ("G1 @1 ^90", 4), ("(abort, stop)", 1)] {
+        for (text, col) in [("G0 U1", 4), ("G1 @1 ^90", 4), ("(abort, stop)", 1)] {
             let e = err(text);
             assert_eq!(
                 (e.col, e.kind),

@@ -2,7 +2,8 @@
 //! words mean, and the values of parameters and expressions, are the business of the
 //! interpreter (`interp`), which builds on this module.
 //!
-//! Dialect: the RS274/NGC of LinuxCNC that a 3-axis mill post-processor emits.
+//! Dialect: the RS274/NGC of LinuxCNC that a mill post-processor emits (axes X Y Z and the
+//! rotary A B C).
 //! - One block per line. Letters are case-insensitive; spaces and tabs may appear anywhere
 //!   outside comments, even inside numbers (`X 1 2 . 5` is `X12.5`), as LinuxCNC allows.
 //! - Comments: `( … )` (not nested) and `;` to the end of the line; `(MSG, text)` is kept as a
@@ -22,7 +23,7 @@
 //! - Columns are 1-based character (not byte) positions in the line.
 //!
 //! Rejected with [`GcodeErrorKind::Unsupported`] (valid LinuxCNC we do not implement):
-//! polar words `@ ^`, axis words `A B C U V W`, the `D` word, O-words with a computed
+//! polar words `@ ^`, axis words `U V W`, the `D` word, O-words with a computed
 //! number, and the `(abort, …)` comment. `O100` alone starts a Fanuc-style subroutine. Everything else that
 //! cannot be read is [`GcodeErrorKind::Invalid`].
 //!

@@ -96,9 +96,13 @@ fn check_g10_tool(line: usize, col: usize, d: &Decoded) -> Result<(), GcodeError
         let msg = format!("G10 L{l} P{}: P must be a tool number >= 1", p.value);
         return Err(GcodeError::invalid(line, p.col, msg));
     }
-    if let Some(w) = [d.axes[0], d.axes[1]].into_iter().flatten().next() {
+    if let Some(w) = [d.axes[0], d.axes[1], d.abc[0], d.abc[1], d.abc[2]]
+        .into_iter()
+        .flatten()
+        .next()
+    {
         let msg = format!(
-            "G10 L{l} {} (a tool offset across the spindle) is not supported",
+            "G10 L{l} {} (a tool offset other than along Z) is not supported",
             w.letter
         );
         return Err(GcodeError::unsupported(line, w.col, msg));

@@ -135,6 +135,9 @@ pub(super) struct CutterComp {
     tail: Vec<usize>,
     /// The same for the current block's output (indices into it).
     block_tail: Vec<usize>,
+    /// A, B, C of the moves compensation adds, degrees (the rotary axes do not move while
+    /// compensation is on: the interpreter refuses such moves).
+    abc_deg: [f64; 3],
 }
 
 impl CutterComp {
@@ -200,6 +203,12 @@ impl CutterComp {
             out.push(kind.clone());
             return Ok(());
         };
+        if let CanonKind::Traverse { end_abc_deg, .. }
+        | CanonKind::Feed { end_abc_deg, .. }
+        | CanonKind::Arc { end_abc_deg, .. } = kind
+        {
+            self.abc_deg = *end_abc_deg;
+        }
         let r = self.compensate(&mut a, start_mm, kind, out);
         self.active = Some(a);
         r
@@ -225,7 +234,7 @@ impl CutterComp {
         let (s, r) = (a.side, a.radius_mm);
         let (p0, cur) = (plane(start_mm), plane(tool));
         match *kind {
-            CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } => {
+            CanonKind::Traverse { end_mm, .. } | CanonKind::Feed { end_mm, .. } => {
                 let rapid = matches!(kind, CanonKind::Traverse { .. });
                 let p1 = plane(end_mm);
                 if p1 == p0 && !a.first_move {
@@ -276,6 +285,7 @@ impl CutterComp {
                 clockwise,
                 extra_turns,
                 feed_mm_per_min,
+                end_abc_deg,
             } => {
                 let (p1, c) = (plane(end_mm), plane(center_mm));
                 let ccw = !clockwise;
@@ -322,6 +332,7 @@ impl CutterComp {
                 self.block_tail.push(out.len());
                 out.push(CanonKind::Arc {
                     end_mm: end,
+                    end_abc_deg,
                     center_mm: put(center, tool[ax]),
                     plane: arc_plane,
                     clockwise,
@@ -395,9 +406,13 @@ impl CutterComp {
             (end_mm[a1], end_mm[a2], end_mm[ax]) = (s0[0], s0[1], axis_mm);
             (center_mm[a1], center_mm[a2], center_mm[ax]) = (p0[0], p0[1], axis_mm);
             out.push(match feed_mm_per_min {
-                None => CanonKind::Traverse { end_mm },
+                None => CanonKind::Traverse {
+                    end_mm,
+                    end_abc_deg: self.abc_deg,
+                },
                 Some(feed_mm_per_min) => CanonKind::Arc {
                     end_mm,
+                    end_abc_deg: self.abc_deg,
                     center_mm,
                     plane: plane_of(a.axes),
                     clockwise: a.side > 0.0,
@@ -512,14 +527,14 @@ fn feed_of(kind: &CanonKind) -> Option<f64> {
 
 fn with_end(kind: &CanonKind, end: [f64; 3]) -> CanonKind {
     let mut k = kind.clone();
-    if let CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } = &mut k {
+    if let CanonKind::Traverse { end_mm, .. } | CanonKind::Feed { end_mm, .. } = &mut k {
         *end_mm = end;
     }
     k
 }
 
 fn set_plane_end(kind: &mut CanonKind, a1: usize, a2: usize, p: P2) {
-    if let CanonKind::Traverse { end_mm }
+    if let CanonKind::Traverse { end_mm, .. }
     | CanonKind::Feed { end_mm, .. }
     | CanonKind::Arc { end_mm, .. } = kind
     {

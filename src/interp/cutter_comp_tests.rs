@@ -42,7 +42,7 @@ fn as_ref_calls(moves: &[CanonMove]) -> Vec<(String, Vec<f64>)> {
     moves
         .iter()
         .filter_map(|m| match &m.kind {
-            CanonKind::Traverse { end_mm } => {
+            CanonKind::Traverse { end_mm, .. } => {
                 Some(("STRAIGHT_TRAVERSE".to_string(), end_mm.to_vec()))
             }
             CanonKind::Feed { end_mm, .. } => Some(("STRAIGHT_FEED".to_string(), end_mm.to_vec())),

@@ -79,6 +79,8 @@ pub(super) struct CycleInput<'a> {
     pub scale: f64,
     /// Program-to-machine offset of each axis, mm.
     pub offset_mm: [f64; 3],
+    /// A, B, C during the cycle (a cycle block carries no rotary word), degrees.
+    pub abc_deg: [f64; 3],
     pub feed_mm_per_min: f64,
     pub spindle: (SpindleDir, f64),
 }
@@ -287,7 +289,11 @@ pub(super) fn run(
     let pecks_mm = if matches!(cycle, Cycle::G73 | Cycle::G83) {
         let off = input.offset_mm[ax];
         let (r_u, bottom_u) = if input.incremental {
-            let r_u = (initial - off) / k + r_word;
+            // LinuxCNC holds the position in program units, as written (`Z0.047`); ours comes
+            // back from mm with a rounding error of ~1e-15: snapped to 1e-10 of a unit, far
+            // below any written digit, so that the peck sums round as LinuxCNC's do.
+            let initial_u = ((initial - off) / k * 1e10).round() / 1e10;
+            let r_u = initial_u + r_word;
             (r_u, r_u + bottom_word)
         } else {
             (r_word, bottom_word)
@@ -308,6 +314,7 @@ pub(super) fn run(
         out,
         pos: &mut pos,
         ax,
+        abc_deg: input.abc_deg,
         feed: input.feed_mm_per_min,
         pecks_mm,
     };
@@ -331,7 +338,10 @@ pub(super) fn run(
         } else {
             cx.pos[ax]
         };
-        cx.out.push(CanonKind::Traverse { end_mm: hole });
+        cx.out.push(CanonKind::Traverse {
+            end_mm: hole,
+            end_abc_deg: input.abc_deg,
+        });
         *cx.pos = hole;
         if (hole[ax] - r_mm).abs() > LEVEL_EPS_MM {
             cx.traverse(r_mm);
@@ -366,6 +376,8 @@ struct Expander<'a> {
     out: &'a mut Vec<CanonKind>,
     pos: &'a mut [f64; 3],
     ax: usize,
+    /// A, B, C, unchanged by the cycle, degrees.
+    abc_deg: [f64; 3],
     feed: f64,
     /// G73/G83: the levels the pecks feed to (above the bottom), mm.
     pecks_mm: Vec<f64>,
@@ -379,13 +391,17 @@ impl Expander<'_> {
 
     fn traverse(&mut self, level: f64) {
         let end_mm = self.to(level);
-        self.out.push(CanonKind::Traverse { end_mm });
+        self.out.push(CanonKind::Traverse {
+            end_mm,
+            end_abc_deg: self.abc_deg,
+        });
     }
 
     fn feed(&mut self, level: f64) {
         let end_mm = self.to(level);
         self.out.push(CanonKind::Feed {
             end_mm,
+            end_abc_deg: self.abc_deg,
             feed_mm_per_min: self.feed,
         });
     }
@@ -403,6 +419,7 @@ impl Expander<'_> {
         let end_mm = [0, 1, 2].map(|i| p[(i + shift) % 3]);
         self.out.push(CanonKind::Feed {
             end_mm,
+            end_abc_deg: self.abc_deg,
             feed_mm_per_min: self.feed,
         });
     }

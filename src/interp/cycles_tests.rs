@@ -14,7 +14,9 @@ fn listing(lines: &str) -> Vec<String> {
         .iter()
         .filter(|m| m.line > 2)
         .filter_map(|m| match &m.kind {
-            CanonKind::Traverse { end_mm } => Some(format!("STRAIGHT_TRAVERSE({})", p(*end_mm))),
+            CanonKind::Traverse { end_mm, .. } => {
+                Some(format!("STRAIGHT_TRAVERSE({})", p(*end_mm)))
+            }
             CanonKind::Feed { end_mm, .. } => Some(format!("STRAIGHT_FEED({})", p(*end_mm))),
             CanonKind::Dwell { duration_s } => Some(format!("DWELL({duration_s:.4})")),
             CanonKind::Pause(PauseKind::Program) => Some("PROGRAM_STOP()".to_string()),
@@ -347,6 +349,7 @@ fn m70_m72_and_m73_restore_the_modal_state_as_rs274_does() {
             CanonKind::Feed {
                 end_mm,
                 feed_mm_per_min,
+                ..
             } => Some((end_mm, feed_mm_per_min)),
             _ => None,
         })

@@ -193,6 +193,8 @@ pub(super) struct Decoded {
     pub spindle: Option<(SpindleDir, usize)>,
     /// X, Y, Z.
     pub axes: [Option<Word>; 3],
+    /// A, B, C (rotary axes, degrees).
+    pub abc: [Option<Word>; 3],
     /// I, J, K.
     pub ijk: [Option<Word>; 3],
     pub r: Option<Word>,
@@ -214,9 +216,19 @@ pub(super) struct Decoded {
 }
 
 impl Decoded {
-    /// True if any of X, Y, Z is present.
+    /// True if any of X, Y, Z, A, B, C is present.
     pub fn has_axis_words(&self) -> bool {
+        self.has_xyz_words() || self.abc.iter().any(Option::is_some)
+    }
+
+    /// True if any of X, Y, Z is present.
+    pub fn has_xyz_words(&self) -> bool {
         self.axes.iter().any(Option::is_some)
+    }
+
+    /// The first axis word of the block (X, Y, Z, then A, B, C), for messages.
+    pub fn first_axis_word(&self) -> Option<Word> {
+        self.axes.iter().chain(&self.abc).flatten().copied().next()
     }
 
     /// The first of I, J, K, R present (for messages).
@@ -324,6 +336,9 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'X' => d.axes[0] = Some(*w),
             'Y' => d.axes[1] = Some(*w),
             'Z' => d.axes[2] = Some(*w),
+            'A' => d.abc[0] = Some(*w),
+            'B' => d.abc[1] = Some(*w),
+            'C' => d.abc[2] = Some(*w),
             'I' => d.ijk[0] = Some(*w),
             'J' => d.ijk[1] = Some(*w),
             'K' => d.ijk[2] = Some(*w),

@@ -18,6 +18,7 @@ use block_checks::motion_col;
 mod frame;
 pub(super) use frame::COORD_SYSTEMS;
 mod modal_state;
+mod rotary;
 mod tool_table;
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
@@ -65,6 +66,8 @@ pub struct Interpreter {
     tools: tool_table::ToolTable,
     /// Cutter radius compensation; `pos_mm` stays the programmed (uncompensated) position.
     comp: CutterComp,
+    /// A, B, C: position, offsets and stored positions, degrees.
+    rotary: rotary::RotaryState,
 }
 
 /// What the motion step of a block will do.
@@ -105,12 +108,18 @@ impl Interpreter {
             feed_mode: FeedMode::PerMinute,
             contexts: modal_state::Contexts::default(),
             comp: CutterComp::default(),
+            rotary: rotary::RotaryState::new(cfg.start_abc_deg),
         }
     }
 
     /// Current tool position in machine coordinates, mm.
     pub fn position_mm(&self) -> [f64; 3] {
         self.pos_mm
+    }
+
+    /// Current angles of the rotary axes A, B, C in machine coordinates, degrees.
+    pub fn position_abc_deg(&self) -> [f64; 3] {
+        self.rotary.pos_deg
     }
 
     /// Reads the parameters that mirror the modal state (LinuxCNC's numbers, in mm): G28
@@ -128,6 +137,7 @@ impl Interpreter {
         for (i, r) in self.rotations_deg.iter_mut().enumerate() {
             *r = params.get(5230 + 20 * i);
         }
+        self.sync_rotary_params_in(params);
     }
 
     /// Writes the parameters that mirror the modal state (see [`Self::sync_params_in`]).
@@ -144,6 +154,7 @@ impl Interpreter {
             params.set(5230 + 20 * i, *r);
         }
         params.set(5220, (self.coord_index + 1) as f64);
+        self.sync_rotary_params_out(params);
     }
 
     /// True once M2/M30 has run; later blocks are ignored.
@@ -167,9 +178,10 @@ impl Interpreter {
         feed::apply(
             next.feed_mode,
             &mut kinds,
-            self.pos_mm,
+            (self.pos_mm, self.rotary.pos_deg),
             next.feed_mm_per_min,
             next.spindle.1,
+            next.scale(),
         );
         next.comp.finish_block(block.line, kinds, next.ended, out);
         *self = next;
@@ -294,6 +306,8 @@ impl Interpreter {
             Some((NonModal::SetAxisOffsets, _)) => {
                 self.set_axis_offsets(&d);
                 self.axis_offset_saved_mm = self.axis_offset_mm;
+                self.set_rotary_axis_offsets(&d);
+                self.rotary.g92_saved_deg = self.rotary.g92_deg;
             }
             Some((NonModal::LocalOffsets, _)) => {
                 // Absolute values whatever the distance mode; they become the stored G92
@@ -304,16 +318,27 @@ impl Interpreter {
                     }
                 }
                 self.axis_offset_saved_mm = self.axis_offset_mm;
+                self.set_rotary_local_offsets(&d);
+                self.rotary.g92_saved_deg = self.rotary.g92_deg;
             }
             Some((NonModal::ResetAxisOffsets, _)) => {
                 self.axis_offset_mm = [0.0; 3];
                 self.axis_offset_saved_mm = [0.0; 3];
+                self.rotary.g92_deg = [0.0; 3];
+                self.rotary.g92_saved_deg = [0.0; 3];
             }
-            Some((NonModal::SuspendAxisOffsets, _)) => self.axis_offset_mm = [0.0; 3],
+            Some((NonModal::SuspendAxisOffsets, _)) => {
+                self.axis_offset_mm = [0.0; 3];
+                self.rotary.g92_deg = [0.0; 3];
+            }
             Some((NonModal::RestoreAxisOffsets, _)) => {
                 self.axis_offset_mm = self.axis_offset_saved_mm;
+                self.rotary.g92_deg = self.rotary.g92_saved_deg;
             }
-            Some((NonModal::SetHome(i), _)) => self.homes_mm[i] = self.pos_mm,
+            Some((NonModal::SetHome(i), _)) => {
+                self.homes_mm[i] = self.pos_mm;
+                self.rotary.homes_deg[i] = self.rotary.pos_deg;
+            }
             Some((NonModal::SetCoordData, col)) => {
                 if d.l.is_some_and(|l| [1.0, 10.0, 11.0].contains(&l.value)) {
                     self.set_tool_data(&d, block.line, col)?;
@@ -325,16 +350,28 @@ impl Interpreter {
                 // Through the intermediate point (current position where no axis is given),
                 // then to the stored position along the given axes (all if none is given).
                 let via = self.target_mm(&d, false);
-                emit(CanonKind::Traverse { end_mm: via });
-                let mut end_mm = via;
+                let via_abc = self.target_abc_deg(&d, false);
+                emit(CanonKind::Traverse {
+                    end_mm: via,
+                    end_abc_deg: via_abc,
+                });
                 let all = !d.has_axis_words();
-                for ((end, home), word) in end_mm.iter_mut().zip(self.homes_mm[i]).zip(&d.axes) {
-                    if all || word.is_some() {
-                        *end = home;
+                let homed = |mut end: [f64; 3], home: [f64; 3], words: &[Option<_>; 3]| {
+                    for a in 0..3 {
+                        if all || words[a].is_some() {
+                            end[a] = home[a];
+                        }
                     }
-                }
-                emit(CanonKind::Traverse { end_mm });
+                    end
+                };
+                let end_mm = homed(via, self.homes_mm[i], &d.axes);
+                let end_abc_deg = homed(via_abc, self.rotary.homes_deg[i], &d.abc);
+                emit(CanonKind::Traverse {
+                    end_mm,
+                    end_abc_deg,
+                });
                 self.pos_mm = end_mm;
+                self.rotary.pos_deg = end_abc_deg;
             }
             _ => {}
         }
@@ -349,13 +386,20 @@ impl Interpreter {
         if let MotionStep::Move(m) = step {
             let machine = matches!(d.non_modal, Some((NonModal::MachineCoords, _)));
             let end_mm = self.target_mm(&d, machine);
+            let end_abc_deg = self.target_abc_deg(&d, machine);
             let kind = match m {
-                Motion::Rapid => Some(CanonKind::Traverse { end_mm }),
+                Motion::Rapid => Some(CanonKind::Traverse {
+                    end_mm,
+                    end_abc_deg,
+                }),
                 Motion::Linear => Some(CanonKind::Feed {
                     end_mm,
+                    end_abc_deg,
                     feed_mm_per_min: self.feed_mm_per_min,
                 }),
-                Motion::Arc { clockwise } => Some(self.arc(block, &d, end_mm, clockwise)?),
+                Motion::Arc { clockwise } => {
+                    Some(self.arc(block, &d, (end_mm, end_abc_deg), clockwise)?)
+                }
                 Motion::Cycle(cycle) => {
                     let first = previous_motion != Some(m);
                     for kind in self.canned_cycle(block, &d, cycle, first)? {
@@ -369,7 +413,15 @@ impl Interpreter {
             if let Some(kind) = kind {
                 let start_mm = self.pos_mm;
                 self.pos_mm = end_mm;
+                let turns_rotary = end_abc_deg != self.rotary.pos_deg;
+                self.rotary.pos_deg = end_abc_deg;
                 if self.comp.takes_motion() {
+                    if turns_rotary {
+                        let col = d.first_axis_word().map_or(block.first_col, |w| w.col);
+                        let msg = "rotary axis motion (A, B, C) with cutter radius \
+                                   compensation on is not supported";
+                        return Err(GcodeError::unsupported(block.line, col, msg));
+                    }
                     let col = motion_col(block, &d);
                     self.comp.motion(start_mm, &kind, out).map_err(|e| {
                         if e.unsupported {
@@ -412,7 +464,7 @@ impl Interpreter {
             col: d
                 .motion
                 .map(|m| m.1)
-                .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+                .or_else(|| d.first_axis_word().map(|w| w.col))
                 .unwrap_or(block.first_col),
             first,
             pos_mm: self.pos_mm,
@@ -420,6 +472,7 @@ impl Interpreter {
             incremental: self.distance == Distance::Incremental,
             scale: self.scale(),
             offset_mm: [0, 1, 2].map(|a| self.offset_mm(a)),
+            abc_deg: self.rotary.pos_deg,
             feed_mm_per_min: self.feed_mm_per_min,
             spindle: self.spindle,
         };
@@ -437,7 +490,7 @@ impl Interpreter {
         let end_mm = cycles::run(&input, &mut self.cycle, &mut out)?;
         self.pos_mm = self.machine_from_unrotated(end_mm);
         for kind in &mut out {
-            if let CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } = kind {
+            if let CanonKind::Traverse { end_mm, .. } | CanonKind::Feed { end_mm, .. } = kind {
                 *end_mm = self.machine_from_unrotated(*end_mm);
             }
         }
@@ -509,7 +562,7 @@ impl Interpreter {
         &self,
         block: &Block,
         d: &Decoded,
-        end_mm: [f64; 3],
+        (end_mm, end_abc_deg): ([f64; 3], [f64; 3]),
         clockwise: bool,
     ) -> Result<CanonKind, GcodeError> {
         let (a1, a2, _) = plane_axes(self.plane);
@@ -538,6 +591,7 @@ impl Interpreter {
         let turns = d.p.map_or(1, |p| p.value.round() as u32);
         Ok(CanonKind::Arc {
             end_mm,
+            end_abc_deg,
             center_mm,
             plane: self.plane,
             clockwise,

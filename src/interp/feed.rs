@@ -6,6 +6,11 @@
 //! - G93: the move takes 1/F minutes: feed = path length × F. The path length of an arc is
 //!   that of its helix: √((radius · swept angle)² + (axis travel)²).
 //!
+//! Rotary axes (LinuxCNC's rule): the feed applies to the XYZ path whenever X, Y or Z moves,
+//! the rotary axes following in step; a straight move of A, B, C alone
+//! ([`super::rotary_only`]) has its feed along the angle √(ΔA² + ΔB² + ΔC²), in deg/min
+//! (G94: F; G95: F × S; G93: angle × F). Angles are never scaled by G20.
+//!
 //! Selecting any of G93, G94, G95 sets the feed rate to 0 (LinuxCNC does), so a feed move must
 //! then get a new F; under G93 every G1/G2/G3 block needs its own F.
 
@@ -43,23 +48,41 @@ pub(super) fn check_move(
 }
 
 /// Rewrites the feed of every Feed/Arc action of one block from the modal F value.
-/// `start_mm`: the tool position before the block; `f`: the F value (G94/G95: mm per minute
-/// or per revolution; G93: 1/minutes); `rpm`: programmed spindle speed.
-pub(super) fn apply(mode: FeedMode, kinds: &mut [CanonKind], start_mm: [f64; 3], f: f64, rpm: f64) {
-    if mode == FeedMode::PerMinute {
-        return;
-    }
-    let mut pos = start_mm;
+/// `start`: the tool position (mm) and rotary angles (degrees) before the block; `f`: the F
+/// value (G94/G95: mm or degrees per minute or per revolution; G93: 1/minutes); `rpm`:
+/// programmed spindle speed; `mm_per_unit`: 25.4 under G20, 1 under G21 (the F value of
+/// G94/G95 is stored in mm; a move of the rotary axes alone reads it unscaled, in degrees,
+/// as LinuxCNC's angular feed does).
+pub(super) fn apply(
+    mode: FeedMode,
+    kinds: &mut [CanonKind],
+    start: ([f64; 3], [f64; 3]),
+    f: f64,
+    rpm: f64,
+    mm_per_unit: f64,
+) {
+    let (mut pos, mut abc) = start;
     for kind in kinds.iter_mut() {
         match kind {
-            CanonKind::Traverse { end_mm } => pos = *end_mm,
+            CanonKind::Traverse {
+                end_mm,
+                end_abc_deg,
+            } => (pos, abc) = (*end_mm, *end_abc_deg),
             CanonKind::Feed {
                 end_mm,
+                end_abc_deg,
                 feed_mm_per_min,
             } => {
-                let length = dist(pos, *end_mm);
-                *feed_mm_per_min = rate(mode, f, rpm, length);
-                pos = *end_mm;
+                if super::rotary_only(pos, *end_mm, abc, *end_abc_deg) {
+                    let unscale = match mode {
+                        FeedMode::InverseTime => 1.0,
+                        _ => mm_per_unit,
+                    };
+                    *feed_mm_per_min = rate(mode, f, rpm, dist(abc, *end_abc_deg)) / unscale;
+                } else if mode != FeedMode::PerMinute {
+                    *feed_mm_per_min = rate(mode, f, rpm, dist(pos, *end_mm));
+                }
+                (pos, abc) = (*end_mm, *end_abc_deg);
             }
             CanonKind::Arc {
                 end_mm,
@@ -68,7 +91,12 @@ pub(super) fn apply(mode: FeedMode, kinds: &mut [CanonKind], start_mm: [f64; 3],
                 clockwise,
                 extra_turns,
                 feed_mm_per_min,
+                end_abc_deg,
             } => {
+                if mode == FeedMode::PerMinute {
+                    (pos, abc) = (*end_mm, *end_abc_deg);
+                    continue;
+                }
                 let (a1, a2, ax) = plane_axes(*plane);
                 let v0 = [pos[a1] - center_mm[a1], pos[a2] - center_mm[a2]];
                 let v1 = [end_mm[a1] - center_mm[a1], end_mm[a2] - center_mm[a2]];
@@ -85,7 +113,7 @@ pub(super) fn apply(mode: FeedMode, kinds: &mut [CanonKind], start_mm: [f64; 3],
                 sweep += TAU * f64::from(*extra_turns);
                 let length = (radius * sweep).hypot(end_mm[ax] - pos[ax]);
                 *feed_mm_per_min = rate(mode, f, rpm, length);
-                pos = *end_mm;
+                (pos, abc) = (*end_mm, *end_abc_deg);
             }
             _ => {}
         }
@@ -116,6 +144,7 @@ mod tests {
         // rs274: `G93 G2 X10 Y10 Z0 I5 J5 F3` from (0, 0, 10) → SET_FEED_RATE(73.0843).
         let mut kinds = [CanonKind::Arc {
             end_mm: [10.0, 10.0, 0.0],
+            end_abc_deg: [0.0; 3],
             center_mm: [5.0, 5.0, 10.0],
             plane: Plane::Xy,
             clockwise: true,
@@ -125,9 +154,10 @@ mod tests {
         apply(
             FeedMode::InverseTime,
             &mut kinds,
-            [0.0, 0.0, 10.0],
+            ([0.0, 0.0, 10.0], [0.0; 3]),
             3.0,
             0.0,
+            1.0,
         );
         let CanonKind::Arc {
             feed_mm_per_min, ..

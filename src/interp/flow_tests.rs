@@ -8,7 +8,7 @@ fn xs(src: &str) -> Vec<f64> {
         .unwrap_or_else(|e| panic!("program rejected: {e}"))
         .into_iter()
         .filter_map(|m| match m.kind {
-            CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } => Some(end_mm[0]),
+            CanonKind::Traverse { end_mm, .. } | CanonKind::Feed { end_mm, .. } => Some(end_mm[0]),
             _ => None,
         })
         .collect()
@@ -34,7 +34,8 @@ fn named_parameters_are_local_to_a_call_and_globals_are_shared() {
     assert_eq!(
         moves[0].kind,
         CanonKind::Traverse {
-            end_mm: [1.0, 7.0, 0.0]
+            end_mm: [1.0, 7.0, 0.0],
+            end_abc_deg: [0.0; 3]
         }
     );
 }
@@ -47,7 +48,8 @@ fn call_arguments_are_restored_and_return_sets_value() {
     assert_eq!(
         moves[0].kind,
         CanonKind::Traverse {
-            end_mm: [2.0, 1.0, 110.0]
+            end_mm: [2.0, 1.0, 110.0],
+            end_abc_deg: [0.0; 3]
         }
     );
 }
@@ -126,7 +128,10 @@ fn kinds(src: &str) -> Vec<CanonKind> {
 #[test]
 fn g28_goes_through_the_intermediate_point_to_the_stored_position() {
     let k = kinds("G0 X5 Y5 Z5\n#5161=1 #5162=2 #5163=3\nG28 Z7\nG28\nG0 X4\nG30.1\nG0 X9\nG30");
-    let t = |x, y, z| CanonKind::Traverse { end_mm: [x, y, z] };
+    let t = |x, y, z| CanonKind::Traverse {
+        end_mm: [x, y, z],
+        end_abc_deg: [0.0; 3],
+    };
     assert_eq!(
         k,
         vec![
@@ -181,7 +186,7 @@ fn ends(src: &str) -> Vec<[f64; 3]> {
         .unwrap_or_else(|e| panic!("program rejected: {e}"))
         .into_iter()
         .filter_map(|m| match m.kind {
-            CanonKind::Traverse { end_mm } | CanonKind::Feed { end_mm, .. } => Some(end_mm),
+            CanonKind::Traverse { end_mm, .. } | CanonKind::Feed { end_mm, .. } => Some(end_mm),
             _ => None,
         })
         .collect()
@@ -262,7 +267,7 @@ fn g43_shifts_absolute_z_by_the_tool_length_until_g49() {
             .unwrap()
             .into_iter()
             .filter_map(|m| match m.kind {
-                CanonKind::Traverse { end_mm } => Some(end_mm[2]),
+                CanonKind::Traverse { end_mm, .. } => Some(end_mm[2]),
                 _ => None,
             })
             .collect()
@@ -335,7 +340,7 @@ fn a_call_runs_the_subroutine_file_of_that_name_from_the_subroutine_folders() {
     let ends: Vec<[f64; 3]> = moves
         .iter()
         .filter_map(|m| match m.kind {
-            CanonKind::Feed { end_mm, .. } | CanonKind::Traverse { end_mm } => Some(end_mm),
+            CanonKind::Feed { end_mm, .. } | CanonKind::Traverse { end_mm, .. } => Some(end_mm),
             _ => None,
         })
         .collect();
@@ -394,7 +399,7 @@ fn g10_l1_l10_l11_write_tool_lengths_that_g43_then_uses() {
             .unwrap_or_else(|e| panic!("{src}: {e}"))
             .into_iter()
             .filter_map(|m| match m.kind {
-                CanonKind::Traverse { end_mm } => Some(end_mm[2]),
+                CanonKind::Traverse { end_mm, .. } => Some(end_mm[2]),
                 _ => None,
             })
             .collect()

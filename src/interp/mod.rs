@@ -95,6 +95,8 @@ mod feed;
 mod flow;
 #[cfg(test)]
 mod flow_tests;
+#[cfg(test)]
+mod rotary_tests;
 mod sub_files;
 #[cfg(test)]
 mod tests;
@@ -115,6 +117,8 @@ pub struct InterpConfig {
     /// Machine position of the tool when the program starts, mm (default: origin, as LinuxCNC's
     /// reference runs assume).
     pub start_mm: [f64; 3],
+    /// Angles of the rotary axes A, B, C when the program starts, degrees (default: 0).
+    pub start_abc_deg: [f64; 3],
     /// Work offsets G54…G59 (index 0…5) in machine coordinates, mm (default: all zero).
     pub work_offsets_mm: [[f64; 3]; 6],
     /// Tool lengths (tool number, length in mm) for G43 H. Empty (the default): every tool has
@@ -136,6 +140,7 @@ impl Default for InterpConfig {
     fn default() -> Self {
         Self {
             start_mm: [0.0; 3],
+            start_abc_deg: [0.0; 3],
             work_offsets_mm: [[0.0; 3]; 6],
             tool_lengths_mm: Vec::new(),
             tool_diameters_mm: Vec::new(),
@@ -152,7 +157,10 @@ impl Default for InterpConfig {
 /// use vmc_twin::interp::{run_program, CanonKind, InterpConfig};
 /// let moves = run_program("G21 G90\nG1 X10 F600\nM2", &InterpConfig::default())?;
 /// assert_eq!(moves[0].line, 2);
-/// assert_eq!(moves[0].kind, CanonKind::Feed { end_mm: [10.0, 0.0, 0.0], feed_mm_per_min: 600.0 });
+/// assert_eq!(
+///     moves[0].kind,
+///     CanonKind::Feed { end_mm: [10.0, 0.0, 0.0], end_abc_deg: [0.0; 3], feed_mm_per_min: 600.0 }
+/// );
 /// assert_eq!(moves[1].kind, CanonKind::ProgramEnd);
 /// let err = run_program("G1 X1 F100\nG33 X5", &InterpConfig::default()).unwrap_err();
 /// assert!(err.is_unsupported());
@@ -188,16 +196,28 @@ pub enum SpindleDir {
 /// One canonical action, in machine coordinates (mm, after unit conversion, G5x and G92 offsets).
 #[derive(Debug, Clone, PartialEq)]
 pub enum CanonKind {
-    /// G0 rapid move to `end_mm` at the machine's rapid rate.
-    Traverse { end_mm: [f64; 3] },
-    /// G1 straight feed move to `end_mm`.
+    /// G0 rapid move to `end_mm` (and the rotary axes to `end_abc_deg`) at the machine's
+    /// rapid rate.
+    Traverse {
+        end_mm: [f64; 3],
+        /// A, B, C at the end, machine coordinates, degrees (0 on a program without them).
+        end_abc_deg: [f64; 3],
+    },
+    /// G1 straight feed move to `end_mm`, the rotary axes moving in step to `end_abc_deg`.
     Feed {
         end_mm: [f64; 3],
+        /// A, B, C at the end, machine coordinates, degrees.
+        end_abc_deg: [f64; 3],
+        /// The feed of the move (see [`rotary_only`]): along the XYZ path in mm/min; for a
+        /// move of the rotary axes alone, along the A, B, C angle in deg/min.
         feed_mm_per_min: f64,
     },
-    /// G2/G3 arc (helix if the axis coordinate changes) from the current point to `end_mm`.
+    /// G2/G3 arc (helix if the axis coordinate changes) from the current point to `end_mm`;
+    /// the rotary axes move in step to `end_abc_deg` (LinuxCNC's extra axes of an arc).
     Arc {
         end_mm: [f64; 3],
+        /// A, B, C at the end, machine coordinates, degrees.
+        end_abc_deg: [f64; 3],
         /// Centre in machine coordinates; its coordinate along the plane's axis is the start's.
         center_mm: [f64; 3],
         plane: Plane,
@@ -266,6 +286,25 @@ pub enum PauseKind {
     Optional,
     /// M60: pallet shuttle, then pause.
     PalletShuttle,
+}
+
+/// Largest XYZ travel, mm, of a move that counts as a move of the rotary axes alone (1e-7 mm
+/// = 0.1 nm: rounding of offsets, not motion; LinuxCNC's canonical layer uses the same
+/// threshold).
+pub const XYZ_STILL_MM: f64 = 1e-7;
+
+/// True if a straight move from (`start_mm`, `start_abc_deg`) to (`end_mm`, `end_abc_deg`)
+/// turns a rotary axis and leaves X, Y, Z where they are (within [`XYZ_STILL_MM`]): LinuxCNC's
+/// rule then applies the feed to the rotary angle `√(ΔA² + ΔB² + ΔC²)` in deg/min instead of
+/// to the XYZ path in mm/min.
+pub fn rotary_only(
+    start_mm: [f64; 3],
+    end_mm: [f64; 3],
+    start_abc_deg: [f64; 3],
+    end_abc_deg: [f64; 3],
+) -> bool {
+    let d = |a: [f64; 3], b: [f64; 3]| (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
+    d(start_mm, end_mm) <= XYZ_STILL_MM && d(start_abc_deg, end_abc_deg) > 0.0
 }
 
 /// A canonical action with the source line (1-based) it came from.

@@ -26,7 +26,7 @@ fn ends(kinds: &[CanonKind]) -> Vec<[f64; 3]> {
     kinds
         .iter()
         .filter_map(|k| match k {
-            CanonKind::Traverse { end_mm }
+            CanonKind::Traverse { end_mm, .. }
             | CanonKind::Feed { end_mm, .. }
             | CanonKind::Arc { end_mm, .. } => Some(*end_mm),
             _ => None,
@@ -69,7 +69,8 @@ fn rapid_and_feed_moves_land_where_programmed_with_their_line_numbers() {
         CanonMove {
             line: 1,
             kind: CanonKind::Traverse {
-                end_mm: [10.0, 20.0, 0.0]
+                end_mm: [10.0, 20.0, 0.0],
+                end_abc_deg: [0.0; 3]
             }
         }
     );
@@ -79,7 +80,8 @@ fn rapid_and_feed_moves_land_where_programmed_with_their_line_numbers() {
             line: 3,
             kind: CanonKind::Feed {
                 end_mm: [10.0, 20.0, -5.0],
-                feed_mm_per_min: 300.0
+                feed_mm_per_min: 300.0,
+                end_abc_deg: [0.0; 3]
             }
         }
     );
@@ -89,12 +91,13 @@ fn rapid_and_feed_moves_land_where_programmed_with_their_line_numbers() {
 fn motion_mode_and_feed_are_modal() {
     let k = run("G1 X1 F100\nY2\nG0 Z3\nX4");
     assert!(
-        matches!(k[1], CanonKind::Feed { end_mm: [1.0, 2.0, 0.0], feed_mm_per_min: f } if f == 100.0)
+        matches!(k[1], CanonKind::Feed { end_mm: [1.0, 2.0, 0.0], feed_mm_per_min: f, .. } if f == 100.0)
     );
     assert!(matches!(
         k[3],
         CanonKind::Traverse {
-            end_mm: [4.0, 2.0, 3.0]
+            end_mm: [4.0, 2.0, 3.0],
+            ..
         }
     ));
 }
@@ -117,7 +120,7 @@ fn g91_moves_are_relative_to_the_current_point() {
 fn g20_coordinates_and_feeds_are_converted_to_mm() {
     let k = run("G20\nG1 X1 Y-0.5 F10\nG21 X1");
     assert!(
-        matches!(k[0], CanonKind::Feed { end_mm: [25.4, -12.7, 0.0], feed_mm_per_min: f } if (f - 254.0).abs() < TOL_MM)
+        matches!(k[0], CanonKind::Feed { end_mm: [25.4, -12.7, 0.0], feed_mm_per_min: f, .. } if (f - 254.0).abs() < TOL_MM)
     );
     assert!(matches!(
         k[1],
@@ -133,7 +136,7 @@ fn f_word_is_read_in_the_units_active_before_the_blocks_g20() {
     // RS274/NGC order: feed (step 3) before units (step 12).
     let k = run("G20 G1 X1 F10");
     assert!(
-        matches!(k[0], CanonKind::Feed { end_mm: [25.4, 0.0, 0.0], feed_mm_per_min: f } if f == 10.0)
+        matches!(k[0], CanonKind::Feed { end_mm: [25.4, 0.0, 0.0], feed_mm_per_min: f, .. } if f == 10.0)
     );
 }
 
@@ -302,7 +305,8 @@ fn a_block_executes_in_rs274_order_and_m2_ends_the_program() {
             CanonKind::Dwell { duration_s: 2.0 },
             CanonKind::Feed {
                 end_mm: [1.0, 0.0, 0.0],
-                feed_mm_per_min: 100.0
+                feed_mm_per_min: 100.0,
+                end_abc_deg: [0.0; 3]
             },
             CanonKind::ProgramEnd,
         ]
@@ -333,7 +337,8 @@ fn a_failed_block_leaves_the_interpreter_unchanged() {
         out[1].kind,
         CanonKind::Feed {
             end_mm: [2.0, 0.0, 0.0],
-            feed_mm_per_min: 1.0
+            feed_mm_per_min: 1.0,
+            end_abc_deg: [0.0; 3]
         }
     );
     assert_eq!(it.position_mm(), [2.0, 0.0, 0.0]);

@@ -28,23 +28,35 @@
 //! after it are ignored. A zero-length move is kept (its line stays in the plan) as a
 //! zero-duration segment.
 //!
+//! Rotary axes A, B, C (see `rotary`): [`plan_with_rotary`] takes their limits; their angles
+//! move in step with the XYZ path, or alone along the angle. [`plan`] is the 3-axis machine:
+//! a move that turns a rotary axis is an error.
+//!
 //! Units: positions mm (machine coordinates), times s, speeds mm/s inside segments (limits and
-//! activity reports use mm/min as G-code does), accelerations mm/s², angles rad.
+//! activity reports use mm/min as G-code does), accelerations mm/s², angles rad; rotary axis
+//! angles in degrees.
 
 mod geometry;
+mod limits;
 mod profile;
+mod rotary;
+#[cfg(test)]
+mod rotary_tests;
 mod sampling;
 mod travel;
 
 #[cfg(test)]
+mod limit_tests;
+#[cfg(test)]
 mod tests;
 
 pub use geometry::{plane_axes, ArcGeometry, Geometry, MIN_ARC_RADIUS_MM};
+pub use limits::MotionLimits;
 pub use profile::SpeedProfile;
+pub use rotary::{RotaryAxisLimits, RotaryLimits, ROTARY_AXES};
 pub use sampling::{AxisActivity, DwellPoint, Sample, Samples, DEFAULT_INTERPOLATION_CYCLE_S};
 pub use travel::{check_travel, segment_travel_violations};
 
-use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::interp::{CanonKind, CanonMove, SpindleDir};
@@ -104,6 +116,14 @@ pub enum MotionError {
         /// Smallest radius accepted (mm).
         min_radius_mm: f64,
     },
+    /// A move turns a rotary axis the machine does not have.
+    #[error("line {line}: the move turns the {axis} axis, which the machine does not have")]
+    NoRotaryAxis {
+        /// Source line.
+        line: usize,
+        /// `'A'`, `'B'` or `'C'`.
+        axis: char,
+    },
     /// An interpolation cycle that is not positive and finite.
     #[error("sampling period {dt_s} s must be positive and finite")]
     InvalidSamplePeriod {
@@ -159,96 +179,10 @@ pub enum MotionError {
     },
 }
 
-/// Kinematic limits of the machine's axes, as given in the machine description.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MotionLimits {
-    /// Rapid (G0) rate per axis X, Y, Z (mm/min); typical `[30000.0; 3]`.
-    pub rapid_mm_per_min: [f64; 3],
-    /// Largest programmable path feed (mm/min); typical `10000.0`. Higher F words are capped.
-    pub max_feed_mm_per_min: f64,
-    /// Maximum acceleration per axis X, Y, Z (mm/s²); typical `[2000.0; 3]`.
-    pub max_accel_mm_per_s2: [f64; 3],
-    /// Duration of an M6 tool change (s); optional, default `5.0` (a typical VMC carousel).
-    #[serde(default = "default_tool_change_s")]
-    pub tool_change_s: f64,
-    /// Highest spindle speed (rpm); an S word above it is an error. Optional, default
-    /// `12000.0` (a typical BT40 VMC spindle).
-    #[serde(default = "default_max_spindle_rpm")]
-    pub max_spindle_rpm: f64,
-}
-
-fn default_tool_change_s() -> f64 {
-    5.0
-}
-
-fn default_max_spindle_rpm() -> f64 {
-    12_000.0
-}
-
 /// Longest machine time a program may take (s): 7 days. Longer plans (a G4 of 10⁸ s, a feed
 /// of 10⁻⁶ mm/min, 1000 turns of a slow helix) are refused with the line that crosses it, so
 /// that no simulation of them can run for hours.
 pub const MAX_PLAN_DURATION_S: f64 = 7.0 * 86_400.0;
-
-impl Default for MotionLimits {
-    /// A mid-size VMC: 30 m/min rapids, 10 m/min max feed, 2 m/s² on every axis, 5 s tool change.
-    fn default() -> Self {
-        Self {
-            rapid_mm_per_min: [30_000.0; 3],
-            max_feed_mm_per_min: 10_000.0,
-            max_accel_mm_per_s2: [2_000.0; 3],
-            tool_change_s: default_tool_change_s(),
-            max_spindle_rpm: default_max_spindle_rpm(),
-        }
-    }
-}
-
-impl MotionLimits {
-    /// Checks every field is finite and positive (`tool_change_s` may be 0), naming the bad one.
-    pub fn validate(&self) -> Result<(), MotionError> {
-        fn positive(field: String, value: f64) -> Result<(), MotionError> {
-            if value.is_finite() && value > 0.0 {
-                Ok(())
-            } else {
-                Err(MotionError::InvalidLimit {
-                    field,
-                    value,
-                    reason: "must be positive and finite",
-                })
-            }
-        }
-        for (i, &v) in self.rapid_mm_per_min.iter().enumerate() {
-            positive(format!("rapid_mm_per_min[{i}]"), v)?;
-        }
-        positive("max_feed_mm_per_min".into(), self.max_feed_mm_per_min)?;
-        positive("max_spindle_rpm".into(), self.max_spindle_rpm)?;
-        for (i, &v) in self.max_accel_mm_per_s2.iter().enumerate() {
-            positive(format!("max_accel_mm_per_s2[{i}]"), v)?;
-        }
-        if !(self.tool_change_s.is_finite() && self.tool_change_s >= 0.0) {
-            return Err(MotionError::InvalidLimit {
-                field: "tool_change_s".into(),
-                value: self.tool_change_s,
-                reason: "must be non-negative and finite",
-            });
-        }
-        Ok(())
-    }
-
-    /// Rapid rates per axis in mm/s.
-    fn rapid_mm_per_s(&self) -> [f64; 3] {
-        self.rapid_mm_per_min.map(|v| v / 60.0)
-    }
-
-    /// Smallest axis acceleration (mm/s²).
-    fn min_accel_mm_per_s2(&self) -> f64 {
-        self.max_accel_mm_per_s2
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min)
-    }
-}
 
 /// What a segment does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -279,13 +213,18 @@ pub struct Segment {
     pub start_mm: [f64; 3],
     /// Position at the segment's end (mm).
     pub end_mm: [f64; 3],
+    /// Rotary axes A, B, C at the segment's start (degrees; 0 on a 3-axis machine).
+    pub start_abc_deg: [f64; 3],
+    /// Rotary axes A, B, C at the segment's end (degrees).
+    pub end_abc_deg: [f64; 3],
     /// Time at which the segment starts, from the start of the plan (s).
     pub t_start_s: f64,
     /// Duration (s); 0 for a zero-length move.
     pub duration_s: f64,
     /// Path shape.
     pub geometry: Geometry,
-    /// Speed along the path over time.
+    /// Speed along the path over time: along the XYZ path (mm), or along the rotary angle
+    /// (degrees) for a move of the rotary axes alone.
     pub profile: SpeedProfile,
     /// Spindle direction in effect during the segment.
     pub spindle_dir: SpindleDir,
@@ -311,6 +250,19 @@ impl Segment {
             .point_at(self.start_mm, self.profile.distance_at(t_local_s))
     }
 
+    /// Rotary angles A, B, C at local time `t_local_s` (degrees): they move in step with the
+    /// profile's distance (clamped to the segment).
+    pub fn abc_at_local(&self, t_local_s: f64) -> [f64; 3] {
+        if self.start_abc_deg == self.end_abc_deg || t_local_s >= self.duration_s {
+            return self.end_abc_deg;
+        }
+        if t_local_s <= 0.0 || self.profile.length_mm <= 0.0 {
+            return self.start_abc_deg;
+        }
+        let f = self.profile.distance_at(t_local_s) / self.profile.length_mm;
+        [0, 1, 2].map(|i| self.start_abc_deg[i] + f * (self.end_abc_deg[i] - self.start_abc_deg[i]))
+    }
+
     /// Velocity at local time `t_local_s` (mm/s); zero outside the segment and at its ends.
     pub fn velocity_at_local(&self, t_local_s: f64) -> [f64; 3] {
         let speed = self.profile.speed_at(t_local_s);
@@ -332,16 +284,33 @@ pub struct Plan {
     program_end_line: Option<usize>,
 }
 
-/// Builds the timed plan of `moves`, starting at rest at `start_mm` (machine coordinates, mm).
+/// Builds the timed plan of `moves`, starting at rest at `start_mm` (machine coordinates, mm),
+/// on a machine without rotary axes (a move that turns A, B or C is an error).
 pub fn plan(
     moves: &[CanonMove],
     start_mm: [f64; 3],
     limits: &MotionLimits,
 ) -> Result<Plan, MotionError> {
+    plan_with_rotary(moves, start_mm, [0.0; 3], limits, &RotaryLimits::default())
+}
+
+/// Builds the timed plan of `moves` on a machine with the rotary axes of `rotary`, starting at
+/// rest at `start_mm` (mm) with the rotary axes at `start_abc_deg` (degrees).
+pub fn plan_with_rotary(
+    moves: &[CanonMove],
+    start_mm: [f64; 3],
+    start_abc_deg: [f64; 3],
+    limits: &MotionLimits,
+    rotary: &RotaryLimits,
+) -> Result<Plan, MotionError> {
     limits.validate()?;
+    rotary.validate()?;
     check_finite(0, "start position", start_mm)?;
+    check_finite(0, "start rotary angles", start_abc_deg)?;
     let mut builder = PlanBuilder {
         limits,
+        rotary,
+        abc_deg: start_abc_deg,
         pos_mm: start_mm,
         t_s: 0.0,
         spindle_dir: SpindleDir::Off,
@@ -381,6 +350,9 @@ fn check_finite(line: usize, what: &'static str, pos_mm: [f64; 3]) -> Result<(),
 /// Running state while the plan is built.
 struct PlanBuilder<'a> {
     limits: &'a MotionLimits,
+    rotary: &'a RotaryLimits,
+    /// Current A, B, C (degrees).
+    abc_deg: [f64; 3],
     pos_mm: [f64; 3],
     t_s: f64,
     spindle_dir: SpindleDir,
@@ -393,24 +365,49 @@ impl PlanBuilder<'_> {
     fn apply(&mut self, mv: &CanonMove) -> Result<bool, MotionError> {
         let line = mv.line;
         match mv.kind {
-            CanonKind::Traverse { end_mm } => {
+            CanonKind::Traverse {
+                end_mm,
+                end_abc_deg,
+            } => {
                 check_finite(line, "end point", end_mm)?;
+                self.rotary.check_move(line, self.abc_deg, end_abc_deg)?;
+                if self.turns_rotary_only(end_mm, end_abc_deg) {
+                    self.push_rotary(line, SegmentKind::Rapid, end_mm, end_abc_deg, f64::INFINITY);
+                    return Ok(false);
+                }
                 let geometry = Geometry::line(self.pos_mm, end_mm);
                 let (speed, accel) = self.line_caps(&geometry, f64::INFINITY);
-                self.push(line, SegmentKind::Rapid, end_mm, geometry, speed, accel);
+                let end = (end_mm, end_abc_deg);
+                self.push(line, SegmentKind::Rapid, end, geometry, speed, accel);
             }
             CanonKind::Feed {
                 end_mm,
+                end_abc_deg,
                 feed_mm_per_min,
             } => {
                 check_finite(line, "end point", end_mm)?;
+                self.rotary.check_move(line, self.abc_deg, end_abc_deg)?;
+                if self.turns_rotary_only(end_mm, end_abc_deg) {
+                    if !(feed_mm_per_min.is_finite() && feed_mm_per_min > 0.0) {
+                        return Err(MotionError::NonPositiveFeed {
+                            line,
+                            feed_mm_per_min,
+                        });
+                    }
+                    // The feed is in deg/min here (see `rotary`).
+                    let feed_deg_per_s = feed_mm_per_min / 60.0;
+                    self.push_rotary(line, SegmentKind::Feed, end_mm, end_abc_deg, feed_deg_per_s);
+                    return Ok(false);
+                }
                 let feed_mm_per_s = self.feed_mm_per_s(line, feed_mm_per_min)?;
                 let geometry = Geometry::line(self.pos_mm, end_mm);
                 let (speed, accel) = self.line_caps(&geometry, feed_mm_per_s);
-                self.push(line, SegmentKind::Feed, end_mm, geometry, speed, accel);
+                let end = (end_mm, end_abc_deg);
+                self.push(line, SegmentKind::Feed, end, geometry, speed, accel);
             }
             CanonKind::Arc {
                 end_mm,
+                end_abc_deg,
                 center_mm,
                 plane,
                 clockwise,
@@ -419,6 +416,7 @@ impl PlanBuilder<'_> {
             } => {
                 check_finite(line, "end point", end_mm)?;
                 check_finite(line, "arc centre", center_mm)?;
+                self.rotary.check_move(line, self.abc_deg, end_abc_deg)?;
                 let feed_mm_per_s = self.feed_mm_per_s(line, feed_mm_per_min)?;
                 let arc = ArcGeometry::new(
                     self.pos_mm,
@@ -436,7 +434,7 @@ impl PlanBuilder<'_> {
                 self.push(
                     line,
                     SegmentKind::Arc,
-                    end_mm,
+                    (end_mm, end_abc_deg),
                     Geometry::Arc(arc),
                     speed,
                     accel,
@@ -545,22 +543,70 @@ impl PlanBuilder<'_> {
         (speed, a_budget)
     }
 
-    fn push(
+    /// True if the move to (`end_mm`, `end_abc_deg`) turns rotary axes and leaves X, Y, Z
+    /// (the interpreter's rule for its feed).
+    fn turns_rotary_only(&self, end_mm: [f64; 3], end_abc_deg: [f64; 3]) -> bool {
+        crate::interp::rotary_only(self.pos_mm, end_mm, self.abc_deg, end_abc_deg)
+    }
+
+    /// A move of the rotary axes alone: its profile runs along the angle (degrees) at
+    /// `requested_deg_per_s` (`∞`: a rapid), within every turning axis's limits.
+    fn push_rotary(
         &mut self,
         line: usize,
         kind: SegmentKind,
         end_mm: [f64; 3],
+        end_abc_deg: [f64; 3],
+        requested_deg_per_s: f64,
+    ) {
+        let angle_deg = rotary::angle_deg(self.abc_deg, end_abc_deg);
+        let delta = rotary::delta_deg(self.abc_deg, end_abc_deg);
+        let (speed, accel) =
+            self.rotary
+                .cap(angle_deg, delta, (requested_deg_per_s, f64::INFINITY));
+        let profile = SpeedProfile::new(angle_deg, speed, accel);
+        let end = (end_mm, end_abc_deg);
+        self.push_profile(line, kind, end, Geometry::Point, profile);
+    }
+
+    fn push(
+        &mut self,
+        line: usize,
+        kind: SegmentKind,
+        end: ([f64; 3], [f64; 3]),
         geometry: Geometry,
         speed_mm_per_s: f64,
         accel_mm_per_s2: f64,
     ) {
-        let profile = SpeedProfile::new(geometry.length_mm(), speed_mm_per_s, accel_mm_per_s2);
+        let length_mm = geometry.length_mm();
+        let (speed_mm_per_s, accel_mm_per_s2) = if end.1 == self.abc_deg {
+            (speed_mm_per_s, accel_mm_per_s2)
+        } else {
+            let delta = rotary::delta_deg(self.abc_deg, end.1);
+            self.rotary
+                .cap(length_mm, delta, (speed_mm_per_s, accel_mm_per_s2))
+        };
+        let profile = SpeedProfile::new(length_mm, speed_mm_per_s, accel_mm_per_s2);
+        self.push_profile(line, kind, end, geometry, profile);
+    }
+
+    /// Appends a segment to `(end_mm, end_abc_deg)` with its profile.
+    fn push_profile(
+        &mut self,
+        line: usize,
+        kind: SegmentKind,
+        (end_mm, end_abc_deg): ([f64; 3], [f64; 3]),
+        geometry: Geometry,
+        profile: SpeedProfile,
+    ) {
         let duration_s = profile.duration_s();
         self.segments.push(Segment {
             line,
             kind,
             start_mm: self.pos_mm,
             end_mm,
+            start_abc_deg: self.abc_deg,
+            end_abc_deg,
             t_start_s: self.t_s,
             duration_s,
             geometry,
@@ -569,6 +615,7 @@ impl PlanBuilder<'_> {
             spindle_rpm: self.spindle_rpm,
         });
         self.pos_mm = end_mm;
+        self.abc_deg = end_abc_deg;
         self.t_s += duration_s;
     }
 
@@ -578,6 +625,8 @@ impl PlanBuilder<'_> {
             kind,
             start_mm: self.pos_mm,
             end_mm: self.pos_mm,
+            start_abc_deg: self.abc_deg,
+            end_abc_deg: self.abc_deg,
             t_start_s: self.t_s,
             duration_s,
             geometry: Geometry::Point,
@@ -633,6 +682,18 @@ impl Plan {
         }
     }
 
+    /// Commanded rotary angles A, B, C at time `t_s` (degrees); those of the first segment's
+    /// start before 0 (0 for an empty plan), the end after the plan.
+    pub fn abc_at(&self, t_s: f64) -> [f64; 3] {
+        match self.segment_index_at(t_s) {
+            Some(i) => {
+                let seg = &self.segments[i];
+                seg.abc_at_local(t_s - seg.t_start_s)
+            }
+            None => self.segments.first().map_or([0.0; 3], |s| s.start_abc_deg),
+        }
+    }
+
     /// Commanded velocity at time `t_s` (mm/s); zero outside the plan.
     pub fn velocity_at(&self, t_s: f64) -> [f64; 3] {
         match self.segment_index_at(t_s) {
@@ -651,53 +712,5 @@ impl Plan {
         }
         self.segment_index_at(t_s)
             .map_or(0.0, |i| self.segments[i].spindle_rpm)
-    }
-}
-
-#[cfg(test)]
-mod limit_tests {
-    use super::*;
-
-    #[test]
-    fn limits_parse_from_toml_with_their_defaults_and_round_trip() {
-        let text = "rapid_mm_per_min = [30000.0, 30000.0, 24000.0]\n\
-                    max_feed_mm_per_min = 10000.0\n\
-                    max_accel_mm_per_s2 = [2000.0, 2000.0, 1500.0]\n";
-        let limits: MotionLimits = toml::from_str(text).expect("valid limits");
-        // The optional fields left out take the built-in defaults.
-        let built_in = MotionLimits::default();
-        assert_eq!(limits.tool_change_s, built_in.tool_change_s);
-        assert_eq!(limits.max_spindle_rpm, built_in.max_spindle_rpm);
-        assert!(limits.validate().is_ok());
-        // What is written reads back as the same limits.
-        let text = toml::to_string(&limits).unwrap();
-        assert_eq!(toml::from_str::<MotionLimits>(&text).unwrap(), limits);
-    }
-
-    #[test]
-    fn unknown_limit_field_is_rejected() {
-        let text = "rapid_mm_per_min = [1.0, 1.0, 1.0]\nmax_feed_mm_per_min = 1.0\n\
-                    max_accel_mm_per_s2 = [1.0, 1.0, 1.0]\njerk = 3.0\n";
-        assert!(toml::from_str::<MotionLimits>(text).is_err());
-    }
-
-    #[test]
-    fn validate_names_the_bad_axis_field() {
-        let mut limits = MotionLimits::default();
-        limits.max_accel_mm_per_s2[1] = 0.0;
-        match limits.validate() {
-            Err(MotionError::InvalidLimit { field, .. }) => {
-                assert_eq!(field, "max_accel_mm_per_s2[1]")
-            }
-            other => panic!("expected InvalidLimit, got {other:?}"),
-        }
-        let limits = MotionLimits {
-            tool_change_s: f64::NAN,
-            ..MotionLimits::default()
-        };
-        assert!(matches!(
-            limits.validate(),
-            Err(MotionError::InvalidLimit { field, .. }) if field == "tool_change_s"
-        ));
     }
 }

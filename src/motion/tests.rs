@@ -17,12 +17,19 @@ fn feed(line: usize, end_mm: [f64; 3], feed_mm_per_min: f64) -> CanonMove {
         CanonKind::Feed {
             end_mm,
             feed_mm_per_min,
+            end_abc_deg: [0.0; 3],
         },
     )
 }
 
 fn rapid(line: usize, end_mm: [f64; 3]) -> CanonMove {
-    mv(line, CanonKind::Traverse { end_mm })
+    mv(
+        line,
+        CanonKind::Traverse {
+            end_mm,
+            end_abc_deg: [0.0; 3],
+        },
+    )
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -44,6 +51,7 @@ fn arc(
             clockwise,
             extra_turns,
             feed_mm_per_min,
+            end_abc_deg: [0.0; 3],
         },
     )
 }

@@ -2,20 +2,24 @@
 //! `rs274 -g` (the corpus fixtures and the differential fuzzing test): its calls are parsed,
 //! turned from its program coordinates into machine coordinates (work offset, G92, XY
 //! rotation, tool length), and compared move for move within 1e-4 of the program's unit (it
-//! prints 4 decimals).
+//! prints 4 decimals). The rotary axes A, B, C (degrees, program coordinates plus the A, B, C
+//! of its G5x and G92 offsets) are compared with the same tolerance (at least 1e-4°).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use vmc_twin::interp::{CanonKind, CanonMove, InterpConfig, Plane};
 
-/// One motion of the reference output, lengths converted to mm.
+/// One motion of the reference output, lengths converted to mm, angles in degrees.
 #[derive(Debug, Clone, PartialEq)]
 pub enum RefMove {
-    Traverse([f64; 3]),
-    Feed([f64; 3]),
-    /// first_end, second_end, first_centre, second_centre, axis_end (mm), rotation, plane.
-    Arc([f64; 5], i64, Plane),
+    /// X, Y, Z (mm), A, B, C (degrees).
+    Traverse([f64; 6]),
+    /// X, Y, Z (mm), A, B, C (degrees).
+    Feed([f64; 6]),
+    /// first_end, second_end, first_centre, second_centre, axis_end (mm), A, B, C (degrees),
+    /// rotation, plane.
+    Arc([f64; 8], i64, Plane),
 }
 
 /// A reference move with its comparison tolerance (1e-4 program unit, in mm).
@@ -41,6 +45,9 @@ pub fn args(line: &str) -> Vec<f64> {
 pub struct RefFrame {
     g5x_mm: [f64; 3],
     g92_mm: [f64; 3],
+    /// A, B, C of the G5x and G92 offsets, degrees.
+    g5x_abc_deg: [f64; 3],
+    g92_abc_deg: [f64; 3],
     rotation_deg: f64,
     tlo_mm: f64,
     /// How far the printed G5x, G92 and tool length values may be from the true ones, mm:
@@ -67,6 +74,11 @@ impl RefFrame {
 }
 
 impl RefFrame {
+    /// Machine angles of program angles: `a_machine = a_program + g5x + g92`.
+    pub fn machine_abc(&self, abc_deg: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|a| abc_deg[a] + self.g5x_abc_deg[a] + self.g92_abc_deg[a])
+    }
+
     /// The tolerance of a point `p_mm` (program coordinates) on the machine: `own_mm` (its own
     /// printing) plus the rounding of the printed offsets and of the rotation (4 decimals of a
     /// degree, at the point's distance from the origin).
@@ -79,6 +91,12 @@ impl RefFrame {
         };
         own_mm + self.rounding_mm.iter().sum::<f64>() + reach_mm * rotation_rad
     }
+}
+
+/// The A, B, C arguments of a motion call from index `first`; 0 where the stored outputs of
+/// the fuzzing test left them out (all three 0).
+fn angles(args: &[f64], first: usize) -> [f64; 3] {
+    [0, 1, 2].map(|i| args.get(first + i).copied().unwrap_or(0.0))
 }
 
 /// The plane's (first, second, axis) coordinate indices, as `ARC_FEED` orders them.
@@ -105,10 +123,12 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
         } else if line.contains("SET_G5X_OFFSET(") {
             let a = args(line);
             frame.g5x_mm = [a[1], a[2], a[3]].map(|v| v * mm_per_unit);
+            frame.g5x_abc_deg = [a[4], a[5], a[6]];
             frame.rounding_mm[0] = 0.5e-4 * mm_per_unit;
         } else if line.contains("SET_G92_OFFSET(") {
             let a = args(line);
             frame.g92_mm = [a[0], a[1], a[2]].map(|v| v * mm_per_unit);
+            frame.g92_abc_deg = [a[3], a[4], a[5]];
             frame.rounding_mm[1] = 0.5e-4 * mm_per_unit;
         } else if line.contains("SET_XY_ROTATION(") {
             frame.rotation_deg = args(line)[0];
@@ -129,6 +149,8 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
             let p_mm = [a[0], a[1], a[2]].map(|v| v * mm_per_unit);
             let tol = frame.tolerance_mm(tol, p_mm);
             let p = frame.machine_from_program(p_mm);
+            let abc = frame.machine_abc(angles(&a, 3));
+            let p = [p[0], p[1], p[2], abc[0], abc[1], abc[2]];
             let m = if line.contains("STRAIGHT_TRAVERSE(") {
                 RefMove::Traverse(p)
             } else {
@@ -148,7 +170,10 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
             let tol = frame.tolerance_mm(tol, end.map(|v| v * mm_per_unit));
             let end = frame.machine_from_program(end.map(|v| v * mm_per_unit));
             let centre = frame.machine_from_program(centre.map(|v| v * mm_per_unit));
-            let lengths = [end[i1], end[i2], centre[i1], centre[i2], end[ia]];
+            let abc = frame.machine_abc(angles(&a, 6));
+            let lengths = [
+                end[i1], end[i2], centre[i1], centre[i2], end[ia], abc[0], abc[1], abc[2],
+            ];
             moves.push((RefMove::Arc(lengths, a[4] as i64, plane), tol));
         }
     }
@@ -160,10 +185,18 @@ pub fn ours(moves: &[CanonMove]) -> Vec<RefMove> {
     moves
         .iter()
         .filter_map(|m| match m.kind {
-            CanonKind::Traverse { end_mm } => Some(RefMove::Traverse(end_mm)),
-            CanonKind::Feed { end_mm, .. } => Some(RefMove::Feed(end_mm)),
+            CanonKind::Traverse {
+                end_mm: p,
+                end_abc_deg: a,
+            } => Some(RefMove::Traverse([p[0], p[1], p[2], a[0], a[1], a[2]])),
+            CanonKind::Feed {
+                end_mm: p,
+                end_abc_deg: a,
+                ..
+            } => Some(RefMove::Feed([p[0], p[1], p[2], a[0], a[1], a[2]])),
             CanonKind::Arc {
                 end_mm,
+                end_abc_deg: a,
                 center_mm,
                 plane,
                 clockwise,
@@ -183,6 +216,9 @@ pub fn ours(moves: &[CanonMove]) -> Vec<RefMove> {
                     center_mm[a1],
                     center_mm[a2],
                     end_mm[ax],
+                    a[0],
+                    a[1],
+                    a[2],
                 ];
                 Some(RefMove::Arc(lengths, rotation, plane))
             }

@@ -5,7 +5,9 @@
 //! G43 H / G43.1 / G49 with tool changes, G28/G30, canned cycles G73 G81 G82 G83 G85 G89 with
 //! G98/G99, cutter radius compensation G41/G42 on convex contours (rectangles with an outward
 //! arc side, the entry and exit moves well longer than the radius), expressions with
-//! parameters and functions, and O-word `sub`/`call`/`if`/`while`/`repeat`.
+//! parameters and functions, and O-word `sub`/`call`/`if`/`while`/`repeat`; rotary words
+//! A, B, C on lines (also `G53`) and arcs, in work offsets (`G10 L2/L20`), `G92`, `G52` and
+//! `G28`/`G30`, and now and then on a canned cycle (which both must refuse).
 //!
 //! Deterministic: program `i` of seed `s` is the same text on every machine (SplitMix64, no
 //! dependency whose stream could change). Numbers are written with at most 3 decimals.
@@ -180,6 +182,17 @@ fn anchor(rng: &mut Rng, st: &mut State, out: &mut String) -> [f64; 3] {
     p
 }
 
+/// Rotary words (degrees, never scaled by G20): each of A, B, C with probability `p`.
+fn rotary(rng: &mut Rng, p: f64, span_deg: f64) -> String {
+    let mut words = String::new();
+    for axis in ['A', 'B', 'C'] {
+        if rng.chance(p) {
+            let _ = write!(words, " {axis}{}", n(rng.range(-span_deg, span_deg)));
+        }
+    }
+    words
+}
+
 fn step(rng: &mut Rng, st: &mut State, out: &mut String, subs: &mut String) {
     match rng.below(17) {
         0..=2 => lines(rng, st, out),
@@ -212,6 +225,9 @@ fn lines(rng: &mut Rng, st: &mut State, out: &mut String) {
                 };
                 let _ = write!(words, " {axis}{}", n(st.len(v)));
             }
+        }
+        if rng.chance(0.35) {
+            words += &rotary(rng, 0.5, if inc { 45.0 } else { 360.0 });
         }
         let _ = writeln!(out, "{dist} {g}{words}");
         st.incremental = inc;
@@ -266,6 +282,9 @@ fn arc(rng: &mut Rng, st: &mut State, out: &mut String) {
     if let Some(h) = helix {
         let _ = write!(line, " {la}{}", coord(h, start[ax]));
     }
+    if rng.chance(0.25) {
+        line += &rotary(rng, 0.5, 180.0);
+    }
     let short = (end[0] - start[a1]).hypot(end[1] - start[a2]) > st.len(0.5);
     if rng.chance(0.3) && short {
         // Radius form: negative R for the arc longer than half a turn.
@@ -310,6 +329,9 @@ fn offsets(rng: &mut Rng, st: &mut State, out: &mut String) {
                 let _ = write!(line, " {axis}{}", n(st.len(rng.range(-span, span))));
             }
         }
+        if rng.chance(0.4) {
+            line += &rotary(rng, 0.5, 90.0);
+        }
         let index = if p == 0 { st.coord } else { p as usize - 1 };
         if index == st.coord && l == 2 {
             // Turning the active system: the G92 offset is cleared first. LinuxCNC turns the
@@ -332,14 +354,16 @@ fn offsets(rng: &mut Rng, st: &mut State, out: &mut String) {
 fn g92(rng: &mut Rng, st: &mut State, out: &mut String) {
     let line = match rng.below(5) {
         0 | 1 => format!(
-            "G92 X{} Y{}",
+            "G92 X{} Y{}{}",
             n(st.len(rng.range(-50.0, 50.0))),
-            n(st.len(rng.range(-50.0, 50.0)))
+            n(st.len(rng.range(-50.0, 50.0))),
+            rotary(rng, 0.2, 90.0)
         ),
         2 => format!(
-            "G52 X{} Z{}",
+            "G52 X{} Z{}{}",
             n(st.len(rng.range(-20.0, 20.0))),
-            n(st.len(rng.range(-5.0, 5.0)))
+            n(st.len(rng.range(-5.0, 5.0))),
+            rotary(rng, 0.2, 30.0)
         ),
         3 => rng.pick(&["G92.1", "G92.2"]).to_string(),
         _ => "G92.3".to_string(),
@@ -363,6 +387,10 @@ fn cycle(rng: &mut Rng, st: &mut State, out: &mut String) {
     }
     let x = st.len(rng.range(-60.0, 60.0));
     let y = st.len(rng.range(-60.0, 60.0));
+    if rng.chance(0.03) {
+        // LinuxCNC refuses rotary words in a canned cycle block.
+        let _ = write!(words, " C{}", n(rng.range(-90.0, 90.0)));
+    }
     let _ = writeln!(
         out,
         "{ret} {code} X{} Y{} Z{} R{}{words}",
@@ -605,14 +633,25 @@ fn tool_length(rng: &mut Rng, st: &mut State, out: &mut String) {
 }
 
 fn home(rng: &mut Rng, st: &mut State, out: &mut String) {
-    let line = match rng.below(4) {
+    let line = match rng.below(6) {
         0 => "G28.1".to_string(),
         1 => "G30.1".to_string(),
-        2 => format!("G28 Z{}", n(st.len(rng.range(0.0, 20.0)))),
+        2 => format!(
+            "G28 Z{}{}",
+            n(st.len(rng.range(0.0, 20.0))),
+            rotary(rng, 0.3, 90.0)
+        ),
+        3 => format!("G28{}", rotary(rng, 0.7, 90.0)),
+        4 => format!(
+            "G53 G0 Z{}{}",
+            n(st.len(rng.range(0.0, 20.0))),
+            rotary(rng, 0.5, 180.0)
+        ),
         _ => format!(
-            "G30 X{} Y{}",
+            "G30 X{} Y{}{}",
             n(st.len(rng.range(-20.0, 20.0))),
-            n(st.len(rng.range(-20.0, 20.0)))
+            n(st.len(rng.range(-20.0, 20.0))),
+            rotary(rng, 0.3, 90.0)
         ),
     };
     let _ = writeln!(out, "G90 {line}");

@@ -22,7 +22,7 @@ impl Interpreter {
             let col = d
                 .motion
                 .map(|m| m.1)
-                .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+                .or_else(|| d.first_axis_word().map(|w| w.col))
                 .unwrap_or(block.first_col);
             if let Motion::Arc { clockwise } = m {
                 self.check_arc_words(block, d, col, clockwise)?;
@@ -49,9 +49,12 @@ impl Interpreter {
     fn motion_step(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
         let explicit = d.motion.map(|m| m.0);
         if let Some((ToolLength::Given, col)) = d.tool_length {
-            if let Some(w) = d.axes[0].or(d.axes[1]) {
+            if let Some(w) = d.axes[0]
+                .or(d.axes[1])
+                .or(d.abc.iter().flatten().copied().next())
+            {
                 let msg = format!(
-                    "G43.1 {} (tool offset across the spindle) is not supported",
+                    "G43.1 {} (a tool offset other than along Z) is not supported",
                     w.letter
                 );
                 return Err(GcodeError::unsupported(block.line, w.col, msg));
@@ -84,7 +87,7 @@ impl Interpreter {
                 return Err(GcodeError::invalid(
                     block.line,
                     col,
-                    "G92 needs at least one of X, Y, Z",
+                    "G92 needs at least one of X, Y, Z, A, B, C",
                 ));
             }
             if let Some((m, mcol)) = d.motion.filter(|m| m.0 != Motion::Cancel) {
@@ -93,7 +96,7 @@ impl Interpreter {
             }
             return Ok(MotionStep::None);
         }
-        if let Some(w) = d.axes.iter().flatten().next() {
+        if let Some(w) = d.first_axis_word() {
             return match explicit.or(self.motion) {
                 Some(Motion::Cancel) | None => {
                     let why = if explicit == Some(Motion::Cancel) {
@@ -129,6 +132,11 @@ impl Interpreter {
             _ => None,
         };
         if let Some(c) = cycle {
+            if let Some(w) = d.abc.iter().flatten().next() {
+                // LinuxCNC: "Cannot put an a in canned cycle".
+                let msg = format!("{} word in a canned cycle block is not allowed", w.letter);
+                return Err(inv(w, &msg));
+            }
             return cycles::check_words(line, c, d);
         }
         let g10 = d.non_modal.filter(|n| n.0 == NonModal::SetCoordData);
@@ -319,7 +327,7 @@ impl Interpreter {
 pub(super) fn motion_col(block: &Block, d: &Decoded) -> usize {
     d.motion
         .map(|m| m.1)
-        .or_else(|| d.axes.iter().flatten().next().map(|w| w.col))
+        .or_else(|| d.first_axis_word().map(|w| w.col))
         .unwrap_or(block.first_col)
 }
 

@@ -111,6 +111,7 @@ impl Interpreter {
             if let Some(r) = d.r {
                 self.rotations_deg[index] = r.value;
             }
+            self.set_rotary_coord_data(d, index, false);
             return;
         }
         // L20 (R is refused with it): where the current point is in system `index` (its
@@ -135,6 +136,7 @@ impl Interpreter {
             }
         }
         self.coord_index = active;
+        self.set_rotary_coord_data(d, index, true);
     }
 
     /// End point of a move, machine coordinates, mm. Uses the block's units/distance modes,
@@ -159,7 +161,7 @@ impl Interpreter {
             }
             return end;
         }
-        if !d.has_axis_words() {
+        if !d.has_xyz_words() {
             return self.pos_mm;
         }
         let mut p_mm = self.program_from_machine(self.pos_mm);
