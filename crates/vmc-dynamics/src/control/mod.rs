@@ -14,6 +14,7 @@
 
 pub mod blade;
 pub mod closed_loop;
+pub mod design;
 pub mod hinf;
 pub mod lqg;
 pub mod pade;
@@ -85,6 +86,17 @@ impl StateSpace {
         self.a.nrows()
     }
 
+    /// The same system in balanced coordinates (see [`balance`]).
+    pub fn balanced(&self) -> Self {
+        let (a, d) = balance(&self.a, 0);
+        Self {
+            a,
+            b: DMatrix::from_fn(self.b.nrows(), self.b.ncols(), |i, j| self.b[(i, j)] / d[i]),
+            c: DMatrix::from_fn(self.c.nrows(), self.c.ncols(), |i, j| self.c[(i, j)] * d[j]),
+            d: self.d.clone(),
+        }
+    }
+
     /// Frequency response G(iω) = C (iω I − A)⁻¹ B + D (p × m).
     pub fn frf(&self, omega_rad_per_s: f64) -> DMatrix<Complex<f64>> {
         let n = self.states();
@@ -100,9 +112,9 @@ impl StateSpace {
         self.c.map(|v| Complex::new(v, 0.0)) * x + self.d.map(|v| Complex::new(v, 0.0))
     }
 
-    /// Eigenvalues of A (the poles).
+    /// Eigenvalues of A (the poles), computed on the balanced matrix.
     pub fn poles(&self) -> Vec<Complex<f64>> {
-        self.a.complex_eigenvalues().iter().copied().collect()
+        balance(&self.a, 0).0.complex_eigenvalues().iter().copied().collect()
     }
 }
 
@@ -116,6 +128,54 @@ fn check(what: &'static str, expected: usize, got: usize) -> Result<(), ControlE
             got,
         })
     }
+}
+
+/// Diagonal balancing (Parlett–Reinsch, powers of 2): scales d with D⁻¹ A D better conditioned
+/// for eigenvalues and solves; the first `fixed` states keep the scale 1 (their units matter
+/// to the caller). Returns (D⁻¹ A D, d).
+pub fn balance(a: &DMatrix<f64>, fixed: usize) -> (DMatrix<f64>, Vec<f64>) {
+    let n = a.nrows();
+    let mut m = a.clone();
+    let mut d = vec![1.0; n];
+    for _ in 0..100 {
+        let mut done = true;
+        for i in fixed..n {
+            let (mut c, mut r) = (0.0, 0.0);
+            for j in 0..n {
+                if j != i {
+                    c += m[(j, i)].abs();
+                    r += m[(i, j)].abs();
+                }
+            }
+            if c == 0.0 || r == 0.0 {
+                continue;
+            }
+            let mut f = 1.0;
+            let s = c + r;
+            while c < r / 2.0 {
+                c *= 2.0;
+                r /= 2.0;
+                f *= 2.0;
+            }
+            while c >= r * 2.0 {
+                c /= 2.0;
+                r *= 2.0;
+                f /= 2.0;
+            }
+            if (c + r) < 0.95 * s {
+                done = false;
+                d[i] *= f;
+                for j in 0..n {
+                    m[(j, i)] *= f;
+                    m[(i, j)] /= f;
+                }
+            }
+        }
+        if done {
+            break;
+        }
+    }
+    (m, d)
 }
 
 /// Largest singular value of a complex matrix (2-norm).
