@@ -37,6 +37,10 @@ pub struct LqgWeights {
     pub force_intensity_n2: f64,
     /// Intensity of the white measurement noise, µm²/Hz.
     pub noise_intensity_um2: f64,
+    /// Corner of an optional first-order low-pass filter on the controller output, Hz (the
+    /// design sees the plant through it, as for H∞).
+    #[serde(default)]
+    pub lowpass_hz: Option<f64>,
 }
 
 /// H∞ weights (the performance output z = [w_z · tip (µm); w_u · u (V)], the disturbance
@@ -154,6 +158,14 @@ impl DesignPlant {
         positive("effort_weight_per_v2", w.effort_weight_per_v2)?;
         positive("force_intensity_n2", w.force_intensity_n2)?;
         positive("noise_intensity_um2", w.noise_intensity_um2)?;
+        if let Some(hz) = w.lowpass_hz {
+            let inner = LqgWeights {
+                lowpass_hz: None,
+                ..*w
+            };
+            let k = self.series_input(&lowpass_filter(hz)?).lqg(&inner)?;
+            return lowpass(&k, hz);
+        }
         let m = |v: f64| DMatrix::from_element(1, 1, v);
         let q = self.c_z.transpose() * &self.c_z * w.tip_weight_per_um2;
         Ok(lqg(
@@ -191,35 +203,41 @@ impl DesignPlant {
         })
     }
 
-    /// The plant seen through a first-order low-pass filter ω_f/(s + ω_f) on its command (one
-    /// more state, last).
-    pub fn with_input_filter(&self, corner_hz: f64) -> Result<Self, ControlError> {
-        positive("lowpass_hz", corner_hz)?;
-        let wf = 2.0 * std::f64::consts::PI * corner_hz;
-        let n = self.a.nrows();
-        let mut a = DMatrix::zeros(n + 1, n + 1);
+    /// The plant seen through a SISO system `f` on its command (f's states appended):
+    /// the command v drives f, whose output drives the plant.
+    pub fn series_input(&self, f: &StateSpace) -> Self {
+        let (n, nf) = (self.a.nrows(), f.states());
+        let mut a = DMatrix::zeros(n + nf, n + nf);
         a.view_mut((0, 0), (n, n)).copy_from(&self.a);
-        a.view_mut((0, n), (n, 1)).copy_from(&self.b_u);
-        a[(n, n)] = -wf;
-        let mut b_u = DMatrix::zeros(n + 1, 1);
-        b_u[(n, 0)] = wf;
+        a.view_mut((0, n), (n, nf)).copy_from(&(&self.b_u * &f.c));
+        a.view_mut((n, n), (nf, nf)).copy_from(&f.a);
+        let mut b_u = DMatrix::zeros(n + nf, 1);
+        b_u.view_mut((0, 0), (n, 1)).copy_from(&(&self.b_u * &f.d));
+        b_u.view_mut((n, 0), (nf, 1)).copy_from(&f.b);
         let grow = |m: &DMatrix<f64>| {
-            let mut out = DMatrix::zeros(n + 1, 1);
+            let mut out = DMatrix::zeros(n + nf, 1);
             out.view_mut((0, 0), (n, 1)).copy_from(m);
             out
         };
         let growc = |m: &DMatrix<f64>| {
-            let mut out = DMatrix::zeros(1, n + 1);
+            let mut out = DMatrix::zeros(1, n + nf);
             out.view_mut((0, 0), (1, n)).copy_from(m);
             out
         };
-        Ok(Self {
+        Self {
             a,
             b_w: grow(&self.b_w),
             b_u,
             c_y: growc(&self.c_y),
             c_z: growc(&self.c_z),
-        })
+        }
+    }
+
+    /// The plant behind a controller sampled at `sample_rate_hz`: its command delayed by the
+    /// Padé model of 1.5 samples (see [`super::closed_loop::sampled_model`]).
+    pub fn sampled(&self, sample_rate_hz: f64) -> Result<Self, ControlError> {
+        positive("sample_rate_hz", sample_rate_hz)?;
+        Ok(self.series_input(&pade(1.5 / sample_rate_hz, 2)?))
     }
 
     /// H∞ controller (input y in µm, output u in V) and its γ. With a low-pass filter the
@@ -228,7 +246,7 @@ impl DesignPlant {
     pub fn hinf(&self, w: &HinfWeights) -> Result<(StateSpace, f64), ControlError> {
         match w.lowpass_hz {
             Some(hz) => {
-                let p = self.with_input_filter(hz)?.generalised(w)?;
+                let p = self.series_input(&lowpass_filter(hz)?).generalised(w)?;
                 let h = hinf(&p, 1e-6, 1e6, 1e-3, 0.05)?;
                 Ok((lowpass(&h.controller, hz)?, h.gamma))
             }
@@ -238,6 +256,18 @@ impl DesignPlant {
             }
         }
     }
+}
+
+/// The filter ω_f/(s + ω_f) alone.
+pub fn lowpass_filter(corner_hz: f64) -> Result<StateSpace, ControlError> {
+    positive("lowpass_hz", corner_hz)?;
+    let wf = 2.0 * std::f64::consts::PI * corner_hz;
+    StateSpace::new(
+        DMatrix::from_element(1, 1, -wf),
+        DMatrix::from_element(1, 1, wf),
+        DMatrix::from_element(1, 1, 1.0),
+        DMatrix::zeros(1, 1),
+    )
 }
 
 /// A controller followed by a first-order low-pass filter ω_f/(s + ω_f) on its output.

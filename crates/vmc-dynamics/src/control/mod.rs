@@ -19,6 +19,7 @@ pub mod hinf;
 pub mod lqg;
 pub mod pade;
 pub mod riccati;
+pub mod simulate;
 
 use nalgebra::{Complex, DMatrix};
 use thiserror::Error;
@@ -46,6 +47,9 @@ pub enum ControlError {
     /// A matrix that must be invertible is singular.
     #[error("{0} is singular")]
     Singular(&'static str),
+    /// The loop of the structure and the controller is unstable without cutting.
+    #[error("the closed loop is unstable without cutting")]
+    UnstableLoop,
     /// No γ in the searched range gives an H∞ controller.
     #[error("no H-infinity controller with gamma <= {0}")]
     GammaTooSmall(f64),
