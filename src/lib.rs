@@ -9,6 +9,7 @@ pub use vmc_dynamics as dynamics;
 pub use vmc_predict as predict;
 
 pub mod benchmark;
+pub mod blade;
 pub mod calibration;
 pub mod chatter;
 pub mod cli;

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod campaign;
 pub mod chatter;
+pub mod control;
 pub mod check;
 pub mod cut;
 pub mod interpret;
