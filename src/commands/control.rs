@@ -399,13 +399,20 @@ pub fn cut(cfg: &ControlCutConfig, out: &mut dyn Write) -> Result<()> {
         r.tip_m[n / 2..].iter().fold(0.0f64, |m, v| m.max(v.abs())) * 1e6
     };
     for (label, r) in [("open loop  ", &ol), ("closed loop", &cl)] {
-        writeln!(
-            text,
-            "{label}: {}  (growth ratio {:.3}), largest tip vibration over the last half {:.2} µm",
-            verdict_name(r.verdict),
-            r.growth_ratio,
-            half(r)
-        )?;
+        if r.growth_ratio.is_infinite() {
+            writeln!(
+                text,
+                "{label}: chatter  (the vibration grew past 1 m: the linear force law has no loss of contact to bound it)"
+            )?;
+        } else {
+            writeln!(
+                text,
+                "{label}: {}  (growth ratio {:.3}), largest tip vibration over the last half {:.2} µm",
+                verdict_name(r.verdict),
+                r.growth_ratio,
+                half(r)
+            )?;
+        }
     }
     writeln!(
         text,
