@@ -164,7 +164,10 @@ impl Plant {
             bail!("{path}: cut.speed_band_rpm must be [low, high] with 0 < low < high, got [{lo}, {hi}]");
         }
         if !(c.feed_per_tooth_mm > 0.0 && c.feed_per_tooth_mm.is_finite()) {
-            bail!("{path}: cut.feed_per_tooth_mm must be > 0, got {}", c.feed_per_tooth_mm);
+            bail!(
+                "{path}: cut.feed_per_tooth_mm must be > 0, got {}",
+                c.feed_per_tooth_mm
+            );
         }
         let rate = f.controller.sample_rate_hz;
         if !(rate > 0.0 && rate.is_finite()) {
@@ -347,10 +350,14 @@ mod tests {
     #[test]
     fn bad_plant_files_name_the_field() {
         let bad = BLADE.replace("thickness_mm = 5.0", "thickness_mm = -5.0");
-        let e = Plant::from_toml_str(&bad, "b.toml").unwrap_err().to_string();
+        let e = Plant::from_toml_str(&bad, "b.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("thickness_mm"), "{e}");
         let bad = BLADE.replace("radial_depth_mm = 1.0", "radial_depth_mm = 20.0");
-        let e = Plant::from_toml_str(&bad, "b.toml").unwrap_err().to_string();
+        let e = Plant::from_toml_str(&bad, "b.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("radial_depth_mm"), "{e}");
         let bad = BLADE.replace("[cut]", "[cut]\nunknown = 1");
         assert!(Plant::from_toml_str(&bad, "b.toml").is_err());

@@ -56,21 +56,49 @@ fn lqg_design_lobes_and_cut_work_end_to_end() {
     let plant = blade();
     let out = run_ok(
         tmp.path(),
-        &["control", "design", "--plant", &plant, "--controller", "lqg", "-o", "ctrl.json"],
+        &[
+            "control",
+            "design",
+            "--plant",
+            &plant,
+            "--controller",
+            "lqg",
+            "-o",
+            "ctrl.json",
+        ],
     );
     assert!(out.contains("wrote ctrl.json"), "{out}");
     assert!(number_after(&out, "spectral radius") < 1.0, "{out}");
     let line1 = out.lines().find(|l| l.contains("mode 1")).unwrap();
-    let db1: f64 = line1.split_whitespace().rev().nth(1).unwrap().parse().unwrap();
+    let db1: f64 = line1
+        .split_whitespace()
+        .rev()
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
     let line2 = out.lines().find(|l| l.contains("mode 2")).unwrap();
-    let db2: f64 = line2.split_whitespace().rev().nth(1).unwrap().parse().unwrap();
+    let db2: f64 = line2
+        .split_whitespace()
+        .rev()
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!(db1 > 20.0 && db2 > 6.0, "{out}");
 
     let lobes = run_ok(
         tmp.path(),
         &[
-            "lobes", "--controller", "ctrl.json", "--rpm", "1800:2000:5", "--steps", "40",
-            "--out", "lobes.csv",
+            "lobes",
+            "--controller",
+            "ctrl.json",
+            "--rpm",
+            "1800:2000:5",
+            "--steps",
+            "40",
+            "--out",
+            "lobes.csv",
         ],
     );
     let open = number_after(&lobes, "open loop  : minimum critical depth");
@@ -84,12 +112,29 @@ fn lqg_design_lobes_and_cut_work_end_to_end() {
     let cut = run_ok(
         tmp.path(),
         &[
-            "cut", "--controller", "ctrl.json", "--rpm", "1900", "--depth-mm", &depth,
-            "--feed-per-tooth-mm", "0.08", "--revolutions", "100",
+            "cut",
+            "--controller",
+            "ctrl.json",
+            "--rpm",
+            "1900",
+            "--depth-mm",
+            &depth,
+            "--feed-per-tooth-mm",
+            "0.08",
+            "--revolutions",
+            "100",
         ],
     );
-    assert!(cut.lines().any(|l| l.starts_with("open loop") && l.contains("chatter")), "{cut}");
-    assert!(cut.lines().any(|l| l.starts_with("closed loop") && l.contains("stable")), "{cut}");
+    assert!(
+        cut.lines()
+            .any(|l| l.starts_with("open loop") && l.contains("chatter")),
+        "{cut}"
+    );
+    assert!(
+        cut.lines()
+            .any(|l| l.starts_with("closed loop") && l.contains("stable")),
+        "{cut}"
+    );
     assert!(number_after(&cut, "largest command") < 150.0, "{cut}");
 }
 
@@ -99,7 +144,16 @@ fn hinf_design_prints_gamma_and_strategy_2_needs_its_table() {
     let plant = blade();
     let out = run_ok(
         tmp.path(),
-        &["control", "design", "--plant", &plant, "--controller", "hinf", "--lowpass-hz", "2000"],
+        &[
+            "control",
+            "design",
+            "--plant",
+            &plant,
+            "--controller",
+            "hinf",
+            "--lowpass-hz",
+            "2000",
+        ],
     );
     assert!(number_after(&out, "gamma") > 0.0, "{out}");
     let text = std::fs::read_to_string(&plant).unwrap();
@@ -107,7 +161,16 @@ fn hinf_design_prints_gamma_and_strategy_2_needs_its_table() {
     std::fs::write(tmp.path().join("no-s2.toml"), &text[..cut_at]).unwrap();
     let o = vmc(
         tmp.path(),
-        &["control", "design", "--plant", "no-s2.toml", "--controller", "lqg", "--strategy", "2"],
+        &[
+            "control",
+            "design",
+            "--plant",
+            "no-s2.toml",
+            "--controller",
+            "lqg",
+            "--strategy",
+            "2",
+        ],
     );
     assert!(!o.status.success());
     assert!(stderr(&o).contains("[strategy2]"), "{}", stderr(&o));
@@ -119,15 +182,47 @@ fn bad_inputs_are_refused_with_a_reason() {
     let plant = blade();
     let o = vmc(
         tmp.path(),
-        &["control", "design", "--plant", &plant, "--controller", "lqg", "--strategy", "3"],
+        &[
+            "control",
+            "design",
+            "--plant",
+            &plant,
+            "--controller",
+            "lqg",
+            "--strategy",
+            "3",
+        ],
     );
-    assert!(!o.status.success() && stderr(&o).contains("--strategy"), "{}", stderr(&o));
-    std::fs::write(tmp.path().join("bad.json"), "{\"format\": \"something else\"}").unwrap();
+    assert!(
+        !o.status.success() && stderr(&o).contains("--strategy"),
+        "{}",
+        stderr(&o)
+    );
+    std::fs::write(
+        tmp.path().join("bad.json"),
+        "{\"format\": \"something else\"}",
+    )
+    .unwrap();
     let o = vmc(tmp.path(), &["lobes", "--controller", "bad.json"]);
-    assert!(!o.status.success() && stderr(&o).contains("bad.json"), "{}", stderr(&o));
+    assert!(
+        !o.status.success() && stderr(&o).contains("bad.json"),
+        "{}",
+        stderr(&o)
+    );
     let o = vmc(
         tmp.path(),
-        &["control", "design", "--plant", "missing.toml", "--controller", "lqg"],
+        &[
+            "control",
+            "design",
+            "--plant",
+            "missing.toml",
+            "--controller",
+            "lqg",
+        ],
     );
-    assert!(!o.status.success() && stderr(&o).contains("missing.toml"), "{}", stderr(&o));
+    assert!(
+        !o.status.success() && stderr(&o).contains("missing.toml"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -71,7 +71,7 @@ impl DesignArgs {
         }
         let lowpass_hz = match self.lowpass_hz {
             None => None,
-            Some(v) if v == 0.0 => Some(None),
+            Some(0.0) => Some(None),
             Some(v) if v > 0.0 && v.is_finite() => Some(Some(v)),
             Some(v) => bail!("--lowpass-hz must be >= 0 Hz, got {v}"),
         };
@@ -109,7 +109,9 @@ pub fn lobes_config(
         Some(r) => crate::milling::parse_speeds(r).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?,
         None => {
             let [lo, hi] = file.plant.speed_band_rpm;
-            (0..200).map(|i| lo + (hi - lo) * i as f64 / 199.0).collect()
+            (0..200)
+                .map(|i| lo + (hi - lo) * i as f64 / 199.0)
+                .collect()
         }
     };
     let steps_per_period = steps.unwrap_or(BLADE_SDM_STEPS);

@@ -15,7 +15,9 @@ use crate::dynamics::control::closed_loop::{
     attenuation, close, lobes as closed_lobes, open, sampled_model, ClosedLoop, LobeCut,
 };
 use crate::dynamics::control::design::{to_metres, CuttingCoupling, DesignPlant};
-use crate::dynamics::control::simulate::{simulate, ControlledCut, ControlledCutOptions, LoopElement};
+use crate::dynamics::control::simulate::{
+    simulate, ControlledCut, ControlledCutOptions, LoopElement,
+};
 use crate::dynamics::control::StateSpace;
 use crate::dynamics::cut::Verdict;
 use crate::dynamics::LobePoint;
@@ -70,7 +72,10 @@ fn design_controller(cfg: &DesignConfig, bp: &BladePlant) -> Result<(StateSpace,
         1 => DesignPlant::structure(bp),
         2 => {
             let Some(s2) = p.strategy2 else {
-                bail!("{}: strategy 2 needs a [strategy2] table (design_depth_mm, pade_order)", cfg.plant_source);
+                bail!(
+                    "{}: strategy 2 needs a [strategy2] table (design_depth_mm, pade_order)",
+                    cfg.plant_source
+                );
             };
             DesignPlant::coupled(
                 bp,
@@ -157,7 +162,11 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
         p.name,
         cfg.plant_source
     )?;
-    let freqs: Vec<String> = bp.frequencies_hz().iter().map(|f| format!("{f:.1}")).collect();
+    let freqs: Vec<String> = bp
+        .frequencies_hz()
+        .iter()
+        .map(|f| format!("{f:.1}"))
+        .collect();
     writeln!(
         text,
         "blade: {} modes, stack held: {} Hz; tip stiffness {:.1} N/mm (model), {:.1} N/mm (exact beam), free cantilever {:.1} N/mm",
@@ -168,7 +177,10 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
         p.blade.cantilever_tip_stiffness_n_per_mm()
     )?;
     if let Some(g) = gamma {
-        writeln!(text, "gamma {g:.4} (bisection, 5 % above the smallest feasible)")?;
+        writeln!(
+            text,
+            "gamma {g:.4} (bisection, 5 % above the smallest feasible)"
+        )?;
     }
     writeln!(
         text,
@@ -181,7 +193,10 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
         out.write_all(text.as_bytes())?;
         bail!("the closed loop is unstable: change the weights (more effort weight, a low-pass filter)");
     }
-    writeln!(text, "attenuation of each mode (peak |tip/F| open vs closed loop):")?;
+    writeln!(
+        text,
+        "attenuation of each mode (peak |tip/F| open vs closed loop):"
+    )?;
     for (i, m) in fig.modes.iter().enumerate() {
         writeln!(
             text,
@@ -203,7 +218,10 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
         ac.max_voltage_v,
         ac.max_voltage_v / fig.effort_peak_v_per_n
     )?;
-    writeln!(text, "closed-loop poles (rad/s, slowest first; continuous model with the sampling delay):")?;
+    writeln!(
+        text,
+        "closed-loop poles (rad/s, slowest first; continuous model with the sampling delay):"
+    )?;
     for pole in fig.poles_rad_per_s.iter().filter(|l| l[1] >= 0.0).take(8) {
         let wn = pole[0].hypot(pole[1]);
         writeln!(
@@ -274,8 +292,22 @@ pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
     let closed = close(&bp, &sampled_model(&k, p.sample_rate_hz)?)?;
     let cut = lobe_cut(p);
     let tol = (MAX_DEPTH_MM, DEPTH_TOL_MM);
-    let ol = closed_lobes(&bp, &open(&bp), &cut, &cfg.speeds_rpm, tol, cfg.steps_per_period)?;
-    let cl = closed_lobes(&bp, &closed, &cut, &cfg.speeds_rpm, tol, cfg.steps_per_period)?;
+    let ol = closed_lobes(
+        &bp,
+        &open(&bp),
+        &cut,
+        &cfg.speeds_rpm,
+        tol,
+        cfg.steps_per_period,
+    )?;
+    let cl = closed_lobes(
+        &bp,
+        &closed,
+        &cut,
+        &cfg.speeds_rpm,
+        tol,
+        cfg.steps_per_period,
+    )?;
     let mut text = String::new();
     writeln!(
         text,
@@ -312,7 +344,11 @@ pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
     };
     let mut csv = String::from("spindle_rpm,open_depth_mm,closed_depth_mm\n");
     let fmt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));
-    writeln!(text, "  {:>12} {:>16} {:>16}", "spindle_rpm", "open_depth_mm", "closed_depth_mm")?;
+    writeln!(
+        text,
+        "  {:>12} {:>16} {:>16}",
+        "spindle_rpm", "open_depth_mm", "closed_depth_mm"
+    )?;
     let every = cfg.speeds_rpm.len().div_ceil(41).max(1);
     for (i, &n) in cfg.speeds_rpm.iter().enumerate() {
         let (o, c) = (depth_at(&ol, n), depth_at(&cl, n));
@@ -376,7 +412,15 @@ pub fn cut(cfg: &ControlCutConfig, out: &mut dyn Write) -> Result<()> {
     };
     let cut = lobe_cut(p);
     let run = |c: Option<&LoopElement>| {
-        simulate(&bp, c, &cut, cfg.spindle_rpm, cfg.depth_mm, cfg.feed_per_tooth_mm, &options)
+        simulate(
+            &bp,
+            c,
+            &cut,
+            cfg.spindle_rpm,
+            cfg.depth_mm,
+            cfg.feed_per_tooth_mm,
+            &options,
+        )
     };
     let (ol, cl) = (run(None)?, run(Some(&element))?);
     let mut text = String::new();

@@ -148,7 +148,10 @@ mod tests {
             let w =
                 |x: f64| (b * x).cosh() - (b * x).cos() - sigma * ((b * x).sinh() - (b * x).sin());
             for xi in [0.0, 0.3, 0.7, 1.0] {
-                assert!((clamped_free_shape(n, xi) - w(xi) / w(1.0)).abs() < 1e-9, "{n} {xi}");
+                assert!(
+                    (clamped_free_shape(n, xi) - w(xi) / w(1.0)).abs() < 1e-9,
+                    "{n} {xi}"
+                );
             }
         }
         assert!(clamped_free_shape(9, 0.0).abs() < 1e-9);

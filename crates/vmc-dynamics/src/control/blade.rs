@@ -122,7 +122,10 @@ impl Blade {
         }
         let ac = &self.actuator;
         positive("actuator.position_mm", ac.position_mm)?;
-        positive("length_mm - actuator.position_mm", self.length_mm - ac.position_mm)?;
+        positive(
+            "length_mm - actuator.position_mm",
+            self.length_mm - ac.position_mm,
+        )?;
         positive("actuator.stiffness_n_per_um", ac.stiffness_n_per_um)?;
         positive("actuator.stroke_um", ac.stroke_um)?;
         positive("actuator.max_voltage_v", ac.max_voltage_v)?;
@@ -142,12 +145,7 @@ impl Blade {
 
     /// Modal mass ρ b h L / 4 in kg (shapes normalised to 1 at the free end).
     pub fn modal_mass_kg(&self) -> f64 {
-        self.density_kg_per_m3
-            * self.width_mm
-            * self.thickness_mm
-            * self.length_mm
-            * 1e-9
-            / 4.0
+        self.density_kg_per_m3 * self.width_mm * self.thickness_mm * self.length_mm * 1e-9 / 4.0
     }
 
     /// Clamped-free modes at the free end (stack absent).
@@ -196,9 +194,9 @@ impl Blade {
         let xi_s = self.sensor_position_mm / self.length_mm;
         let phi_a = DVector::from_fn(n, |k, _| clamped_free_shape(k, xi_a));
         let kp = self.actuator.stiffness_n_per_um * 1e6;
-        let stiffness = DMatrix::from_diagonal(&DVector::from_fn(n, |k, _| {
-            modes[k].stiffness_n_per_m
-        })) + &phi_a * phi_a.transpose() * kp;
+        let stiffness =
+            DMatrix::from_diagonal(&DVector::from_fn(n, |k, _| modes[k].stiffness_n_per_m))
+                + &phi_a * phi_a.transpose() * kp;
         let size = 2 * n + 1;
         let mut a = DMatrix::zeros(size, size);
         for k in 0..n {
@@ -299,7 +297,10 @@ pub(crate) mod tests {
         assert!((exact / 215.7 - 1.0).abs() < 0.01, "{exact}");
         // The truncated model is stiffer (Rayleigh–Ritz) and converges to the exact value.
         let k4 = b.plant().unwrap().static_tip_stiffness_n_per_mm();
-        let k8 = study_blade(8).plant().unwrap().static_tip_stiffness_n_per_mm();
+        let k8 = study_blade(8)
+            .plant()
+            .unwrap()
+            .static_tip_stiffness_n_per_mm();
         assert!(k4 >= k8 && k8 >= exact * 0.999, "{k4} {k8} {exact}");
         assert!(k8 / exact - 1.0 < 0.03, "{k8} {exact}");
     }
@@ -330,7 +331,11 @@ pub(crate) mod tests {
         let kf = b.actuator.stiffness_n_per_um * 1e6 * (b.actuator.position_mm * 1e-3).powi(3)
             / (3.0 * b.bending_stiffness_n_m2());
         let exact = kf / (1.0 + kf);
-        assert!((w_a / g / exact - 1.0).abs() < 0.01, "{} vs {exact}", w_a / g);
+        assert!(
+            (w_a / g / exact - 1.0).abs() < 0.01,
+            "{} vs {exact}",
+            w_a / g
+        );
     }
 
     struct StateSpaceCheck;

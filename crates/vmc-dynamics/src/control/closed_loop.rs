@@ -154,7 +154,11 @@ pub fn attenuation(plant: &BladePlant, closed: &ClosedLoop) -> Vec<ModeAttenuati
     let ol = open(plant);
     (0..f.len())
         .map(|k| {
-            let lo = if k == 0 { f[0] / 3.0 } else { (f[k - 1] * f[k]).sqrt() };
+            let lo = if k == 0 {
+                f[0] / 3.0
+            } else {
+                (f[k - 1] * f[k]).sqrt()
+            };
             let hi = if k + 1 == f.len() {
                 f[k] * 3.0
             } else {
@@ -270,7 +274,10 @@ pub(crate) mod tests {
         let cl = close(&p, &k).unwrap();
         assert!(cl.is_stable());
         let att = attenuation(&p, &cl);
-        assert!(att[0].attenuation_db > 20.0 && att[1].attenuation_db > 6.0, "{att:?}");
+        assert!(
+            att[0].attenuation_db > 20.0 && att[1].attenuation_db > 6.0,
+            "{att:?}"
+        );
         // Open-loop peak of mode 1 ≈ 1/(2ζ k_1) with k_1 the held blade's modal stiffness:
         // the same order as the static compliance / (2ζ).
         let static_m_per_n = 1e-3 / p.static_tip_stiffness_n_per_mm();
@@ -289,7 +296,12 @@ pub(crate) mod tests {
         let g = dp.generalised(&w).unwrap();
         let cl = crate::control::hinf::lower_lft(&g, &k).balanced();
         assert!(cl.poles().iter().all(|l| l.re < 0.0));
-        let (norm, _) = crate::control::hinf::hinf_norm_sweep(&cl, 2.0 * 3.1416 * 10.0, 2.0 * 3.1416 * 1e5, 4000);
+        let (norm, _) = crate::control::hinf::hinf_norm_sweep(
+            &cl,
+            2.0 * std::f64::consts::PI * 10.0,
+            2.0 * std::f64::consts::PI * 1e5,
+            4000,
+        );
         assert!(norm < gamma && norm > 0.5 * gamma, "{norm} vs {gamma}");
         let att = attenuation(&p, &close(&p, &to_metres(&k)).unwrap());
         assert!(att[0].attenuation_db > 20.0, "{att:?}");
@@ -303,11 +315,13 @@ pub(crate) mod tests {
         let mut w = hinf_weights();
         w.lowpass_hz = Some(3000.0);
         let (kf, _) = dp.hinf(&w).unwrap();
-        let e = close(&p, &to_metres(&k)).unwrap().effort_peak(5000.0, 20000.0).0;
+        let e = close(&p, &to_metres(&k))
+            .unwrap()
+            .effort_peak(5000.0, 20000.0)
+            .0;
         let cl = close(&p, &to_metres(&kf)).unwrap();
         assert!(cl.is_stable());
         let ef = cl.effort_peak(5000.0, 20000.0).0;
         assert!(ef < 0.5 * e, "{ef} vs {e}");
     }
 }
-

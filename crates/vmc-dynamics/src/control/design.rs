@@ -130,7 +130,8 @@ impl DesignPlant {
         let dz = d.d[(0, 0)];
         a.view_mut((0, 0), (n, n))
             .copy_from(&(&s.a + &s.b_w * &s.c_z * (k * (1.0 - dz))));
-        a.view_mut((0, n), (n, nd)).copy_from(&(&s.b_w * &d.c * (-k)));
+        a.view_mut((0, n), (n, nd))
+            .copy_from(&(&s.b_w * &d.c * (-k)));
         a.view_mut((n, 0), (nd, n)).copy_from(&(&d.b * &s.c_z));
         a.view_mut((n, n), (nd, nd)).copy_from(&d.a);
         let pad = |m: &DMatrix<f64>| {

@@ -71,7 +71,9 @@ pub fn central(p: &GeneralisedPlant, gamma: f64) -> Result<StateSpace, ControlEr
         e.min() >= -1e-9 * e.max().abs().max(1e-300)
     };
     if !psd(&x) || !psd(&y) {
-        return Err(ControlError::NoStabilisingSolution("H-infinity (X or Y not >= 0)"));
+        return Err(ControlError::NoStabilisingSolution(
+            "H-infinity (X or Y not >= 0)",
+        ));
     }
     let rho = (&x * &y)
         .complex_eigenvalues()
@@ -79,7 +81,9 @@ pub fn central(p: &GeneralisedPlant, gamma: f64) -> Result<StateSpace, ControlEr
         .map(|l| l.norm())
         .fold(0.0, f64::max);
     if rho >= gamma * gamma {
-        return Err(ControlError::NoStabilisingSolution("H-infinity (rho(XY) >= gamma^2)"));
+        return Err(ControlError::NoStabilisingSolution(
+            "H-infinity (rho(XY) >= gamma^2)",
+        ));
     }
     let n = p.a.nrows();
     let f = -(&r_inv * p.b2.transpose() * &x);
@@ -140,17 +144,17 @@ pub fn lower_lft(p: &GeneralisedPlant, k: &StateSpace) -> StateSpace {
     c.view_mut((0, n), (p.c1.nrows(), nk))
         .copy_from(&(&p.d12 * &k.c));
     let d = &dd * &p.d21;
-    StateSpace {
-        a,
-        b,
-        c,
-        d,
-    }
+    StateSpace { a, b, c, d }
 }
 
 /// H∞ norm by a frequency sweep: `points` log-spaced frequencies in [ω_lo, ω_hi] rad/s, then a
 /// golden-section refinement around the largest; returns (norm, ω at the peak).
-pub fn hinf_norm_sweep(sys: &StateSpace, omega_lo: f64, omega_hi: f64, points: usize) -> (f64, f64) {
+pub fn hinf_norm_sweep(
+    sys: &StateSpace,
+    omega_lo: f64,
+    omega_hi: f64,
+    points: usize,
+) -> (f64, f64) {
     let gain = |w: f64| super::max_singular_value(&sys.frf(w));
     let ratio = (omega_hi / omega_lo).powf(1.0 / (points.max(2) - 1) as f64);
     let mut best = (0.0, omega_lo);
@@ -193,10 +197,22 @@ mod tests {
             4,
             4,
             &[
-                0.0, 0.0, 1.0, 0.0, //
-                0.0, 0.0, 0.0, 1.0, //
-                -w1 * w1, 0.0, -2.0 * z1 * w1, 0.0, //
-                0.0, -w2 * w2, 0.0, -2.0 * z2 * w2,
+                0.0,
+                0.0,
+                1.0,
+                0.0, //
+                0.0,
+                0.0,
+                0.0,
+                1.0, //
+                -w1 * w1,
+                0.0,
+                -2.0 * z1 * w1,
+                0.0, //
+                0.0,
+                -w2 * w2,
+                0.0,
+                -2.0 * z2 * w2,
             ],
         );
         let b = DMatrix::from_row_slice(4, 1, &[0.0, 0.0, 1.0, 0.5]);
@@ -236,7 +252,10 @@ mod tests {
         let p = two_mode_plant(0.1, 0.1);
         let h = hinf(&p, 1e-3, 1e3, 1e-3, 0.02).unwrap();
         let cl = lower_lft(&p, &h.controller);
-        assert!(cl.poles().iter().all(|l| l.re < 0.0), "closed loop unstable");
+        assert!(
+            cl.poles().iter().all(|l| l.re < 0.0),
+            "closed loop unstable"
+        );
         let (norm, _) = hinf_norm_sweep(&cl, 1e-2, 1e2, 2000);
         assert!(norm < h.gamma, "{norm} >= {}", h.gamma);
         // Close to the optimum: no controller exists at 0.99 γ_min, and the achieved norm is

@@ -105,7 +105,10 @@ mod tests {
     /// K₂ = −2ζω + √(4ζ²ω² + 2K₁) (from the (1,2) and (2,2) entries of the Riccati equation).
     #[test]
     fn lqr_of_an_oscillator_has_the_closed_form_gain() {
-        for (w, z, q, r) in [(1.0, 0.05, 10.0, 0.1), (922.0 * 6.283, 0.011, 1e12, 1.0)] {
+        for (w, z, q, r) in [
+            (1.0, 0.05, 10.0, 0.1),
+            (922.0 * std::f64::consts::TAU, 0.011, 1e12, 1.0),
+        ] {
             let (a, b) = oscillator(w, z);
             let qm = DMatrix::from_row_slice(2, 2, &[q, 0.0, 0.0, 0.0]);
             let k = lqr(&a, &b, &qm, &DMatrix::from_element(1, 1, r)).unwrap();
@@ -133,10 +136,22 @@ mod tests {
             4,
             4,
             &[
-                0.0, 0.0, 1.0, 0.0, //
-                0.0, 0.0, 0.0, 1.0, //
-                -w1 * w1, 0.0, -2.0 * z1 * w1, 0.0, //
-                0.0, -w2 * w2, 0.0, -2.0 * z2 * w2,
+                0.0,
+                0.0,
+                1.0,
+                0.0, //
+                0.0,
+                0.0,
+                0.0,
+                1.0, //
+                -w1 * w1,
+                0.0,
+                -2.0 * z1 * w1,
+                0.0, //
+                0.0,
+                -w2 * w2,
+                0.0,
+                -2.0 * z2 * w2,
             ],
         );
         let b = DMatrix::from_row_slice(4, 1, &[0.0, 0.0, 1.0, 0.5]);

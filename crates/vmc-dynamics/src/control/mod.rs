@@ -118,7 +118,12 @@ impl StateSpace {
 
     /// Eigenvalues of A (the poles), computed on the balanced matrix.
     pub fn poles(&self) -> Vec<Complex<f64>> {
-        balance(&self.a, 0).0.complex_eigenvalues().iter().copied().collect()
+        balance(&self.a, 0)
+            .0
+            .complex_eigenvalues()
+            .iter()
+            .copied()
+            .collect()
     }
 }
 

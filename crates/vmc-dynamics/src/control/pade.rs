@@ -114,7 +114,10 @@ mod tests {
                 let exact = Complex::from_polar(1.0, -1.0);
                 let err = (g / exact).arg().abs();
                 let bound = phase_error_bound(order, 1.0);
-                assert!(err < bound && err > 0.8 * bound, "{order}: {err} vs {bound}");
+                assert!(
+                    err < bound && err > 0.8 * bound,
+                    "{order}: {err} vs {bound}"
+                );
                 assert!((g.arg() - reference[order - 1]).abs() < 1e-9, "{order}");
                 // Against e^(−jωτ) itself: |G − e^(−jωτ)| = 2 sin(err/2).
                 assert!(((g - exact).norm() - 2.0 * (err / 2.0).sin()).abs() < 1e-12);

@@ -60,7 +60,10 @@ pub fn lyapunov(f: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<DMatrix<f64>, Cont
         }
     }
     let rhs = DMatrix::from_iterator(n * n, 1, r.iter().map(|v| -v));
-    let sol = k.lu().solve(&rhs).ok_or(ControlError::Singular("Lyapunov operator"))?;
+    let sol = k
+        .lu()
+        .solve(&rhs)
+        .ok_or(ControlError::Singular("Lyapunov operator"))?;
     let d = DMatrix::from_column_slice(n, n, sol.as_slice());
     Ok((&d + d.transpose()) * 0.5)
 }
@@ -108,13 +111,15 @@ pub fn care(
     let fail = ControlError::NoStabilisingSolution(what);
     let w = sign(&h).ok_or(fail.clone())?;
     let mut lhs = DMatrix::zeros(2 * n, n);
-    lhs.view_mut((0, 0), (n, n)).copy_from(&w.view((0, n), (n, n)));
+    lhs.view_mut((0, 0), (n, n))
+        .copy_from(&w.view((0, n), (n, n)));
     lhs.view_mut((n, 0), (n, n))
         .copy_from(&(w.view((n, n), (n, n)) + DMatrix::identity(n, n)));
     let mut rhs = DMatrix::zeros(2 * n, n);
     rhs.view_mut((0, 0), (n, n))
         .copy_from(&(-(w.view((0, 0), (n, n)) + DMatrix::identity(n, n))));
-    rhs.view_mut((n, 0), (n, n)).copy_from(&(-w.view((n, 0), (n, n))));
+    rhs.view_mut((n, 0), (n, n))
+        .copy_from(&(-w.view((n, 0), (n, n))));
     let x = lhs
         .svd(true, true)
         .solve(&rhs, 1e-14)
@@ -133,7 +138,7 @@ pub fn care(
         let Ok(delta) = lyapunov(&f, &r) else { break };
         let candidate = &x + delta;
         let (r2, rel2) = residual(a, g, q, &candidate);
-        if !(rel2 < rel) {
+        if rel2.partial_cmp(&rel) != Some(std::cmp::Ordering::Less) {
             break;
         }
         x = candidate;
@@ -170,7 +175,10 @@ mod tests {
             )
             .unwrap();
             let x = (a + (a * a + g * q).sqrt()) / g;
-            assert!((s.x[(0, 0)] - x).abs() < 1e-12 * x.abs().max(1.0), "{a} {g} {q}");
+            assert!(
+                (s.x[(0, 0)] - x).abs() < 1e-12 * x.abs().max(1.0),
+                "{a} {g} {q}"
+            );
         }
     }
 

@@ -56,7 +56,11 @@ pub struct LoopElement {
 
 impl LoopElement {
     /// Zero-order-hold discretisation of a continuous controller (input m, output V).
-    pub fn new(k: &StateSpace, sample_rate_hz: f64, max_voltage_v: f64) -> Result<Self, ControlError> {
+    pub fn new(
+        k: &StateSpace,
+        sample_rate_hz: f64,
+        max_voltage_v: f64,
+    ) -> Result<Self, ControlError> {
         positive("sample_rate_hz", sample_rate_hz)?;
         positive("max_voltage_v", max_voltage_v)?;
         let ts = 1.0 / sample_rate_hz;
@@ -89,11 +93,15 @@ impl LoopElement {
         let e = big.exp();
         let size = n + nk + 1;
         let mut m = DMatrix::zeros(size, size);
-        m.view_mut((0, 0), (n, n)).copy_from(&e.view((0, 0), (n, n)));
-        m.view_mut((0, n + nk), (n, 1)).copy_from(&e.view((0, n), (n, 1)));
-        m.view_mut((n, 0), (nk, n)).copy_from(&(&self.b_d * &plant.c_y));
+        m.view_mut((0, 0), (n, n))
+            .copy_from(&e.view((0, 0), (n, n)));
+        m.view_mut((0, n + nk), (n, 1))
+            .copy_from(&e.view((0, n), (n, 1)));
+        m.view_mut((n, 0), (nk, n))
+            .copy_from(&(&self.b_d * &plant.c_y));
         m.view_mut((n, n), (nk, nk)).copy_from(&self.a_d);
-        m.view_mut((n + nk, 0), (1, n)).copy_from(&(&self.d * &plant.c_y));
+        m.view_mut((n + nk, 0), (1, n))
+            .copy_from(&(&self.d * &plant.c_y));
         m.view_mut((n + nk, n), (1, nk)).copy_from(&self.c);
         super::balance(&m, 0)
             .0
@@ -302,9 +310,16 @@ pub fn simulate(
     }
     let k = out.change_per_tooth_m.len();
     let max_of = |r: std::ops::Range<usize>| {
-        out.change_per_tooth_m[r].iter().copied().fold(0.0, f64::max)
+        out.change_per_tooth_m[r]
+            .iter()
+            .copied()
+            .fold(0.0, f64::max)
     };
-    let (second, last, first) = (max_of(k / 4..k / 2), max_of(k - k / 4..k), max_of(0..4.min(k)));
+    let (second, last, first) = (
+        max_of(k / 4..k / 2),
+        max_of(k - k / 4..k),
+        max_of(0..4.min(k)),
+    );
     out.growth_ratio = last / second.max(1e-300);
     if out.change_per_tooth_m.last() == Some(&f64::INFINITY) {
         out.growth_ratio = f64::INFINITY;
@@ -338,7 +353,10 @@ pub fn critical_depth(
 ) -> Result<Option<f64>, DynamicsError> {
     positive("tol_mm", tol_mm)?;
     let unstable = |a: f64| -> Result<bool, DynamicsError> {
-        Ok(simulate(plant, controller, cut, spindle_rpm, a, 0.0, options)?.verdict == Verdict::Chatter)
+        Ok(
+            simulate(plant, controller, cut, spindle_rpm, a, 0.0, options)?.verdict
+                == Verdict::Chatter,
+        )
     };
     if !unstable(hi)? {
         return Ok(None);
@@ -370,9 +388,17 @@ mod tests {
     }
 
     fn verdict(p: &BladePlant, c: Option<&LoopElement>, rpm: f64, depth: f64) -> Verdict {
-        simulate(p, c, &cut(), rpm, depth, 0.0, &ControlledCutOptions::default())
-            .unwrap()
-            .verdict
+        simulate(
+            p,
+            c,
+            &cut(),
+            rpm,
+            depth,
+            0.0,
+            &ControlledCutOptions::default(),
+        )
+        .unwrap()
+        .verdict
     }
 
     /// The acceptance check: closed-loop semi-discretisation (controller with its Padé sample
@@ -397,12 +423,19 @@ mod tests {
         for rpm in [2800.0, 3900.0] {
             for (cl, el) in [(open(&p), None), (closed.clone(), Some(&element))] {
                 // m = 160: the closed-loop limit lies on the 1.5 and 8 kHz modes here.
-                let a = lobes(&p, &cl, &cut(), &[rpm], (20.0, 1e-4), 160).unwrap()[0]
-                    .critical_depth_mm;
+                let a =
+                    lobes(&p, &cl, &cut(), &[rpm], (20.0, 1e-4), 160).unwrap()[0].critical_depth_mm;
                 let t = std::time::Instant::now();
                 assert_eq!(verdict(&p, el, rpm, 0.95 * a), Verdict::Stable, "{rpm} {a}");
-                assert_eq!(verdict(&p, el, rpm, 1.05 * a), Verdict::Chatter, "{rpm} {a}");
-                println!("{rpm} rpm: critical {a:.4} mm, two cuts in {:?}", t.elapsed());
+                assert_eq!(
+                    verdict(&p, el, rpm, 1.05 * a),
+                    Verdict::Chatter,
+                    "{rpm} {a}"
+                );
+                println!(
+                    "{rpm} rpm: critical {a:.4} mm, two cuts in {:?}",
+                    t.elapsed()
+                );
             }
         }
     }
