@@ -584,7 +584,7 @@ impl LobesArgs {
     /// The config of `lobes --controller`, when given.
     ///
     /// # Errors
-    /// See [`control::lobes_config`].
+    /// An unreadable or invalid controller file, malformed speeds, too few steps.
     pub fn controller_config(&self) -> Result<Option<commands::control::ControlLobesConfig>> {
         self.controller
             .as_deref()
