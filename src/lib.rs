@@ -10,6 +10,7 @@ pub use vmc_identify as identify;
 pub use vmc_predict as predict;
 
 pub mod benchmark;
+pub mod blade;
 pub mod calibration;
 pub mod chatter;
 pub mod cli;

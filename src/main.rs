@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Parser;
 
-use vmc_twin::cli::{Cli, Command};
+use vmc_twin::cli::{Cli, Command, ControlAction};
 use vmc_twin::commands;
 
 fn main() -> ExitCode {
@@ -39,8 +39,17 @@ fn run(command: Command) -> Result<()> {
             commands::select_sensors::select_sensors(&args.config()?, out)
         }
         Command::Check(args) => commands::check::check(&args.config()?, out),
-        Command::Lobes(args) => commands::lobes::lobes(&args.config()?, out),
-        Command::Cut(args) => commands::cut::cut(&args.config()?, out),
+        Command::Lobes(args) => match args.controller_config()? {
+            Some(cfg) => commands::control::lobes(&cfg, out),
+            None => commands::lobes::lobes(&args.config()?, out),
+        },
+        Command::Cut(args) => match args.controller_config()? {
+            Some(cfg) => commands::control::cut(&cfg, out),
+            None => commands::cut::cut(&args.config()?, out),
+        },
+        Command::Control(args) => match args.action {
+            ControlAction::Design(d) => commands::control::design(&d.config()?, out),
+        },
         Command::Chatter(args) => commands::chatter::chatter(&args.config()?, out),
         Command::Interpret(args) => commands::interpret::interpret(&args.config()?, out),
         Command::ProbeCampaign(args) => {

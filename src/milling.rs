@@ -89,9 +89,10 @@ struct ToolFile {
     modes: ModesSection,
 }
 
+/// The `[tool]` table of a tool file (also of a blade file).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ToolSection {
+pub(crate) struct ToolSection {
     teeth: u32,
     diameter_mm: f64,
     #[serde(default)]
@@ -122,6 +123,22 @@ struct ModeSpec {
     damping_ratio: f64,
     stiffness_n_per_m: Option<f64>,
     modal_mass_kg: Option<f64>,
+}
+
+impl ToolSection {
+    /// The cutter (not yet validated).
+    pub(crate) fn to_tool(&self) -> Tool {
+        Tool {
+            teeth: self.teeth,
+            diameter_mm: self.diameter_mm,
+            helix_deg: self.helix_deg,
+            kt_n_per_m2: self.kt_n_per_m2,
+            kn_n_per_m2: self.kn_n_per_m2,
+            kte_n_per_m: self.kte_n_per_m,
+            kne_n_per_m: self.kne_n_per_m,
+            process_damping_n_per_m: self.process_damping_n_per_m,
+        }
+    }
 }
 
 impl ToolDynamics {
@@ -162,17 +179,7 @@ impl ToolDynamics {
             path: path.to_string(),
             msg: crate::files::one_line_toml_error(&e),
         })?;
-        let t = f.tool;
-        let tool = Tool {
-            teeth: t.teeth,
-            diameter_mm: t.diameter_mm,
-            helix_deg: t.helix_deg,
-            kt_n_per_m2: t.kt_n_per_m2,
-            kn_n_per_m2: t.kn_n_per_m2,
-            kte_n_per_m: t.kte_n_per_m,
-            kne_n_per_m: t.kne_n_per_m,
-            process_damping_n_per_m: t.process_damping_n_per_m,
-        };
+        let tool = f.tool.to_tool();
         let modes_of = |specs: Vec<ModeSpec>, direction| {
             specs
                 .into_iter()

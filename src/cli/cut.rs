@@ -49,11 +49,52 @@ pub struct CutArgs {
     /// Write a Rerun recording: vibration and forces over time, the spectra, the report.
     #[arg(long, value_name = "FILE.rrd")]
     pub rrd: Option<PathBuf>,
+    /// A controller file from `control design`: cut its blade without and with the controller
+    /// (sampled, one-sample delay, saturation); the cutter, immersion and milling direction come
+    /// from the file, --tool/--immersion/--milling do not apply.
+    #[arg(long, conflicts_with_all = ["tool", "rrd"])]
+    pub controller: Option<PathBuf>,
     #[command(flatten)]
     pub force: ForceArg,
 }
 
 impl CutArgs {
+    /// The config of `cut --controller`, when given.
+    ///
+    /// # Errors
+    /// An unreadable or invalid controller file, a speed, depth or feed out of range, a
+    /// horizon under 16 or over 100 000 tooth periods.
+    pub fn controller_config(&self) -> Result<Option<commands::control::ControlCutConfig>> {
+        let Some(path) = self.controller.as_deref() else {
+            return Ok(None);
+        };
+        let file = crate::blade::ControllerFile::load(path)?;
+        validate_speed(self.rpm).map_err(|e| anyhow!("--rpm: {e}"))?;
+        positive("--depth-mm", self.depth_mm, "mm")?;
+        positive("--feed-per-tooth-mm", self.feed_per_tooth_mm, "mm")?;
+        let teeth = f64::from(file.plant.tool.teeth);
+        let period_s = file.plant.tool.tooth_period_s(self.rpm);
+        let periods = match (self.revolutions, self.duration_s) {
+            (Some(r), _) => r * teeth,
+            (None, Some(d)) => d / period_s,
+            (None, None) => CutOptions::default().tooth_periods as f64,
+        }
+        .round();
+        if !(MIN_TOOTH_PERIODS as f64..=MAX_TOOTH_PERIODS as f64).contains(&periods) {
+            bail!("the horizon is {periods} tooth periods; {MIN_TOOTH_PERIODS} to {MAX_TOOTH_PERIODS} are simulated");
+        }
+        Ok(Some(commands::control::ControlCutConfig {
+            file,
+            source: path.display().to_string(),
+            spindle_rpm: self.rpm,
+            depth_mm: self.depth_mm,
+            feed_per_tooth_mm: self.feed_per_tooth_mm,
+            tooth_periods: periods as usize,
+            out: self.out.clone(),
+            force: self.force.force,
+        }))
+    }
+
     /// The validated config.
     ///
     /// # Errors

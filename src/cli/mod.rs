@@ -5,6 +5,7 @@
 //! [`SensorsArg`], [`ForceArg`], [`RrdArgs`]), so a flag means the same everywhere.
 
 mod chatter;
+mod control;
 mod cut;
 mod fiveaxis;
 mod thermal;
@@ -20,6 +21,7 @@ use crate::record;
 use crate::sim::{SimConfig, SimConfigError};
 
 pub use chatter::ChatterArgs;
+pub use control::{ControlAction, ControlArgs};
 pub use cut::CutArgs;
 pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
@@ -71,6 +73,8 @@ pub enum Command {
     /// spectrum, the chatter frequency and the verdict (stable or chatter), with the
     /// semi-discretisation critical depth at that speed.
     Cut(CutArgs),
+    /// Active chatter control of a piezo-actuated blade: design LQG and H∞ controllers.
+    Control(ControlArgs),
     /// Which cuts of a milling program will chatter? For every feed move in material: the
     /// engagement from a Z-map of the stock, the critical depth at its speed and immersion, the
     /// margin and a verdict; exit status 1 if a cut is unstable.
@@ -579,12 +583,22 @@ pub struct LobesArgs {
     /// Milling direction.
     #[arg(long, value_enum, default_value = "down")]
     pub milling: MillingArg,
-    /// Spindle speeds, rpm: first:last:count (e.g. 5000:25000:201) or a comma-separated list.
-    #[arg(long, default_value = "5000:25000:201")]
-    pub rpm: String,
-    /// Write the lobes as CSV (spindle_rpm, critical_depth_mm, chatter_frequency_hz, kind).
+    /// Spindle speeds, rpm: first:last:count (e.g. 5000:25000:201) or a comma-separated list;
+    /// default 5000:25000:201, or 200 speeds over the plant's speed band with --controller.
+    #[arg(long)]
+    pub rpm: Option<String>,
+    /// Write the lobes as CSV (spindle_rpm, critical_depth_mm, chatter_frequency_hz, kind;
+    /// with --controller: spindle_rpm, open_depth_mm, closed_depth_mm).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// A controller file from `control design`: the lobes of its blade without and with the
+    /// controller in the loop (closed-loop semi-discretisation; --tool, --method, --immersion
+    /// and --milling do not apply: the blade's cut is in the file).
+    #[arg(long, conflicts_with_all = ["tool", "rrd"])]
+    pub controller: Option<PathBuf>,
+    /// Semi-discretisation steps per tooth period with --controller (default 160).
+    #[arg(long, requires = "controller")]
+    pub steps: Option<usize>,
     /// Write a Rerun recording of the lobe diagram (depth against speed, Hopf and flip lobes).
     #[arg(long, value_name = "FILE.rrd")]
     pub rrd: Option<PathBuf>,
@@ -593,6 +607,25 @@ pub struct LobesArgs {
 }
 
 impl LobesArgs {
+    /// The config of `lobes --controller`, when given.
+    ///
+    /// # Errors
+    /// An unreadable or invalid controller file, malformed speeds, too few steps.
+    pub fn controller_config(&self) -> Result<Option<commands::control::ControlLobesConfig>> {
+        self.controller
+            .as_deref()
+            .map(|path| {
+                control::lobes_config(
+                    path,
+                    self.rpm.as_deref(),
+                    self.steps,
+                    self.out.clone(),
+                    self.force.force,
+                )
+            })
+            .transpose()
+    }
+
     /// The validated config.
     ///
     /// # Errors
@@ -601,8 +634,9 @@ impl LobesArgs {
         let (tool, tool_source) = crate::milling::ToolDynamics::from_option(self.tool.as_deref())?;
         crate::dynamics::params::validate_immersion(self.immersion)
             .map_err(|e| anyhow::anyhow!("--immersion: {e}"))?;
+        let rpm = self.rpm.as_deref().unwrap_or("5000:25000:201");
         let speeds_rpm =
-            crate::milling::parse_speeds(&self.rpm).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?;
+            crate::milling::parse_speeds(rpm).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?;
         Ok(commands::lobes::LobesConfig {
             tool,
             tool_source,

@@ -7,6 +7,7 @@ pub mod calibrate;
 pub mod campaign;
 pub mod chatter;
 pub mod check;
+pub mod control;
 pub mod cut;
 pub mod identify;
 pub mod interpret;

@@ -46,6 +46,23 @@ pub fn clamped_free_root(n: usize) -> f64 {
     x
 }
 
+/// Shape of the n-th clamped-free mode (n from 0) at ξ = x/L ∈ [0, 1], normalised to 1 at the
+/// free end. Written with exponentials, (1 − σ) e^{βξ} + (1 + σ) e^{−βξ} over 2 for
+/// cosh − σ sinh, so that high modes (σ → 1) do not lose their digits to cancellation.
+pub fn clamped_free_shape(n: usize, xi: f64) -> f64 {
+    let b = clamped_free_root(n);
+    let den = b.sinh() + b.sin();
+    let sigma = (b.cosh() + b.cos()) / den;
+    // 1 − σ = (sinh b + sin b − cosh b − cos b)/den = (−e^{−b} + sin b − cos b)/den.
+    let one_minus_sigma = (-(-b).exp() + b.sin() - b.cos()) / den;
+    let w = |x: f64| {
+        let bx = b * x;
+        0.5 * (one_minus_sigma * bx.exp() + (1.0 + sigma) * (-bx).exp()) - bx.cos()
+            + sigma * bx.sin()
+    };
+    w(xi) / w(1.0)
+}
+
 impl Cantilever {
     /// Checks positivity and that the bore is smaller than the outer diameter.
     pub fn validate(&self) -> Result<(), DynamicsError> {
@@ -124,6 +141,21 @@ mod tests {
                 "{n}: {int}"
             );
         }
+        // The stable shape agrees with the textbook form and is 0 at the clamp, 1 at the tip.
+        for n in 0..3 {
+            let b = clamped_free_root(n);
+            let sigma = (b.cosh() + b.cos()) / (b.sinh() + b.sin());
+            let w =
+                |x: f64| (b * x).cosh() - (b * x).cos() - sigma * ((b * x).sinh() - (b * x).sin());
+            for xi in [0.0, 0.3, 0.7, 1.0] {
+                assert!(
+                    (clamped_free_shape(n, xi) - w(xi) / w(1.0)).abs() < 1e-9,
+                    "{n} {xi}"
+                );
+            }
+        }
+        assert!(clamped_free_shape(9, 0.0).abs() < 1e-9);
+        assert!((clamped_free_shape(9, 1.0) - 1.0).abs() < 1e-12);
         // Static check: first-mode tip stiffness is close to (but above) 3EI/L³.
         let c = Cantilever {
             youngs_modulus_pa: 210e9,

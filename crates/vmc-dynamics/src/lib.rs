@@ -31,6 +31,7 @@
 #![warn(missing_docs)]
 
 pub mod beam;
+pub mod control;
 pub mod cut;
 pub mod forces;
 pub mod lobes;

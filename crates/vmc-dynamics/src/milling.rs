@@ -431,6 +431,52 @@ impl SpeedSdm<'_> {
     }
 }
 
+/// Structures with more states than the tip modes (a blade propped by an actuator, a
+/// controller in the loop).
+impl MillingSdm {
+    /// Replaces the free structure ṡ = A₀ s by a linear system ż = A z whose first 2n states
+    /// are the modal state [q; q̇] of the tip modes given to [`MillingSdm::new`] (the cutting
+    /// force still enters q̈ through the modal masses and the tip displacement is still Σq);
+    /// the other states (actuator, controller, …) see the cut only through A.
+    /// `frequencies_hz` are the natural frequencies the chatter frequency is referred to.
+    pub fn with_augmented_system(
+        mut self,
+        a: &DMatrix<f64>,
+        frequencies_hz: &[f64],
+    ) -> Result<Self, DynamicsError> {
+        let n = self.a0.nrows();
+        if a.nrows() != a.ncols() || a.nrows() < n {
+            return Err(DynamicsError::TooFewSteps {
+                name: "augmented system size",
+                min: n,
+                value: a.nrows().min(a.ncols()),
+            });
+        }
+        if let Some(bad) = a.iter().find(|v| !v.is_finite()) {
+            crate::params::finite("augmented system", *bad)?;
+        }
+        let big = a.nrows();
+        let grow_rows = |m: &DMatrix<f64>| {
+            let mut out = DMatrix::zeros(big, m.ncols());
+            out.view_mut((0, 0), (n, m.ncols())).copy_from(m);
+            out
+        };
+        let grow_cols = |m: &DMatrix<f64>| {
+            let mut out = DMatrix::zeros(m.nrows(), big);
+            out.view_mut((0, 0), (m.nrows(), n)).copy_from(m);
+            out
+        };
+        self.b_in = grow_rows(&self.b_in);
+        self.c = grow_cols(&self.c);
+        self.c_v = grow_cols(&self.c_v);
+        self.a0 = a.clone();
+        if !frequencies_hz.is_empty() {
+            self.frequencies_hz = frequencies_hz.to_vec();
+        }
+        Ok(self)
+    }
+}
+
 /// Feed directions other than the tip's x axis.
 impl MillingSdm {
     /// Like [`MillingSdm::new`] for a feed direction at `feed_angle_rad` (counter-clockwise)

@@ -1,0 +1,490 @@
+//! `vmc-twin control design`, `lobes --controller` and `cut --controller`: active chatter
+//! control of the piezo-actuated blade — design an LQG or H∞ controller (strategy 1 on the
+//! structure, strategy 2 on the structure coupled to the cut), its figures, and what it buys
+//! in stability lobes and in a time-domain cut with saturation.
+
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+
+use crate::blade::{ControllerFile, Figures, ModeFigure, Plant, CONTROLLER_FORMAT};
+use crate::dynamics::control::blade::BladePlant;
+use crate::dynamics::control::closed_loop::{
+    attenuation, close, lobes as closed_lobes, open, sampled_model, ClosedLoop, LobeCut,
+};
+use crate::dynamics::control::design::{to_metres, CuttingCoupling, DesignPlant};
+use crate::dynamics::control::simulate::{
+    simulate, ControlledCut, ControlledCutOptions, LoopElement,
+};
+use crate::dynamics::control::StateSpace;
+use crate::dynamics::cut::Verdict;
+use crate::dynamics::LobePoint;
+use crate::files;
+
+/// Controller type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// LQR + Kalman filter.
+    Lqg,
+    /// Glover–Doyle H∞.
+    Hinf,
+}
+
+/// What to design, validated.
+pub struct DesignConfig {
+    /// The plant file's contents.
+    pub plant: Plant,
+    /// Where it came from.
+    pub plant_source: String,
+    /// LQG or H∞.
+    pub kind: Kind,
+    /// 1 or 2.
+    pub strategy: u8,
+    /// Overrides the file's low-pass corner of the chosen controller, Hz (`Some(None)`: none).
+    pub lowpass_hz: Option<Option<f64>>,
+    /// The controller file to write.
+    pub out: Option<PathBuf>,
+    /// Overwrite it.
+    pub force: bool,
+}
+
+fn kind_name(k: Kind) -> &'static str {
+    match k {
+        Kind::Lqg => "lqg",
+        Kind::Hinf => "hinf",
+    }
+}
+
+fn lobe_cut(p: &Plant) -> LobeCut {
+    LobeCut {
+        tool: p.tool,
+        immersion: p.immersion,
+        milling: p.milling,
+    }
+}
+
+/// Designs the controller on the plant; returns it (y in m → u in V) and γ for H∞.
+fn design_controller(cfg: &DesignConfig, bp: &BladePlant) -> Result<(StateSpace, Option<f64>)> {
+    let p = &cfg.plant;
+    let base = match cfg.strategy {
+        1 => DesignPlant::structure(bp),
+        2 => {
+            let Some(s2) = p.strategy2 else {
+                bail!(
+                    "{}: strategy 2 needs a [strategy2] table (design_depth_mm, pade_order)",
+                    cfg.plant_source
+                );
+            };
+            DesignPlant::coupled(
+                bp,
+                &CuttingCoupling {
+                    tool: p.tool,
+                    immersion: p.immersion,
+                    milling: p.milling,
+                    depth_mm: s2.design_depth_mm,
+                    spindle_rpm: s2.design_rpm.unwrap_or(p.spindle_rpm),
+                    pade_order: s2.pade_order,
+                },
+            )?
+        }
+        s => bail!("--strategy must be 1 or 2, got {s}"),
+    };
+    let dp = base.sampled(p.sample_rate_hz)?;
+    Ok(match cfg.kind {
+        Kind::Lqg => {
+            let mut w = p.lqg;
+            if let Some(lp) = cfg.lowpass_hz {
+                w.lowpass_hz = lp;
+            }
+            (to_metres(&dp.lqg(&w)?), None)
+        }
+        Kind::Hinf => {
+            let mut w = p.hinf;
+            if let Some(lp) = cfg.lowpass_hz {
+                w.lowpass_hz = lp;
+            }
+            let (k, g) = dp.hinf(&w)?;
+            (to_metres(&k), Some(g))
+        }
+    })
+}
+
+/// The figures of a controller on its blade.
+fn figures(p: &Plant, bp: &BladePlant, k: &StateSpace) -> Result<(Figures, ClosedLoop)> {
+    let closed = close(bp, &sampled_model(k, p.sample_rate_hz)?)?;
+    let element = LoopElement::new(k, p.sample_rate_hz, p.blade.actuator.max_voltage_v)?;
+    let f = bp.frequencies_hz();
+    let (effort, effort_hz) = closed.effort_peak(f[0] / 3.0, 3.0 * f[f.len() - 1]);
+    let mut poles: Vec<[f64; 2]> = closed.poles().iter().map(|l| [l.re, l.im]).collect();
+    poles.sort_by(|a, b| (a[0].hypot(a[1])).total_cmp(&b[0].hypot(b[1])));
+    let modes = attenuation(bp, &closed)
+        .iter()
+        .map(|m| ModeFigure {
+            frequency_hz: m.frequency_hz,
+            open_peak_m_per_n: m.open_peak_m_per_n,
+            closed_peak_m_per_n: m.closed_peak_m_per_n,
+            attenuation_db: m.attenuation_db,
+        })
+        .collect();
+    Ok((
+        Figures {
+            poles_rad_per_s: poles,
+            modes,
+            effort_peak_v_per_n: effort,
+            effort_peak_hz: effort_hz,
+            sampled_loop_spectral_radius: element.loop_spectral_radius(bp),
+        },
+        closed,
+    ))
+}
+
+/// Designs the controller, prints its figures and writes the controller file.
+///
+/// # Errors
+/// No stabilising design, an unstable closed or sampled loop, an output that may not be
+/// written.
+pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
+    if let Some(path) = &cfg.out {
+        files::check_writable(path, cfg.force)?;
+    }
+    let p = &cfg.plant;
+    let bp = p.blade.plant()?;
+    let (k, gamma) = design_controller(cfg, &bp)?;
+    let (fig, closed) = figures(p, &bp, &k)?;
+    let mut text = String::new();
+    writeln!(
+        text,
+        "vmc-twin control design: {} (strategy {}) on {} ({})",
+        kind_name(cfg.kind),
+        cfg.strategy,
+        p.name,
+        cfg.plant_source
+    )?;
+    let freqs: Vec<String> = bp
+        .frequencies_hz()
+        .iter()
+        .map(|f| format!("{f:.1}"))
+        .collect();
+    writeln!(
+        text,
+        "blade: {} modes, stack held: {} Hz; tip stiffness {:.1} N/mm (model), {:.1} N/mm (exact beam), free cantilever {:.1} N/mm",
+        bp.modes(),
+        freqs.join(", "),
+        bp.static_tip_stiffness_n_per_mm(),
+        p.blade.propped_tip_stiffness_n_per_mm(),
+        p.blade.cantilever_tip_stiffness_n_per_mm()
+    )?;
+    if let Some(g) = gamma {
+        writeln!(
+            text,
+            "gamma {g:.4} (bisection, 5 % above the smallest feasible)"
+        )?;
+    }
+    writeln!(
+        text,
+        "controller: {} states, sampled at {:.0} Hz with a one-sample delay; sampled-loop spectral radius {:.5}",
+        k.states(),
+        p.sample_rate_hz,
+        fig.sampled_loop_spectral_radius
+    )?;
+    if !closed.is_stable() || fig.sampled_loop_spectral_radius >= 1.0 {
+        out.write_all(text.as_bytes())?;
+        bail!("the closed loop is unstable: change the weights (more effort weight, a low-pass filter)");
+    }
+    writeln!(
+        text,
+        "attenuation of each mode (peak |tip/F| open vs closed loop):"
+    )?;
+    for (i, m) in fig.modes.iter().enumerate() {
+        writeln!(
+            text,
+            "  mode {} {:>8.1} Hz  open {:.3e} m/N  closed {:.3e} m/N  {:>6.1} dB",
+            i + 1,
+            m.frequency_hz,
+            m.open_peak_m_per_n,
+            m.closed_peak_m_per_n,
+            m.attenuation_db
+        )?;
+    }
+    let ac = &p.blade.actuator;
+    writeln!(
+        text,
+        "actuator effort: peak |u/F| {:.3} V/N at {:.1} Hz ({:.3} µm of stroke per N); {:.0} V saturation at {:.1} N",
+        fig.effort_peak_v_per_n,
+        fig.effort_peak_hz,
+        fig.effort_peak_v_per_n * ac.gain_m_per_v() * 1e6,
+        ac.max_voltage_v,
+        ac.max_voltage_v / fig.effort_peak_v_per_n
+    )?;
+    writeln!(
+        text,
+        "closed-loop poles (rad/s, slowest first; continuous model with the sampling delay):"
+    )?;
+    for pole in fig.poles_rad_per_s.iter().filter(|l| l[1] >= 0.0).take(8) {
+        let wn = pole[0].hypot(pole[1]);
+        writeln!(
+            text,
+            "  {:>12.1} {:+12.1}i   {:>8.1} Hz  zeta {:.4}",
+            pole[0],
+            pole[1],
+            wn / (2.0 * std::f64::consts::PI),
+            -pole[0] / wn
+        )?;
+    }
+    out.write_all(text.as_bytes())?;
+    if let Some(path) = &cfg.out {
+        let file = ControllerFile {
+            format: CONTROLLER_FORMAT.to_string(),
+            kind: kind_name(cfg.kind).to_string(),
+            strategy: cfg.strategy,
+            gamma,
+            plant: p.clone(),
+            controller: ControllerFile::matrices(&k),
+            figures: fig,
+        };
+        let json = serde_json::to_string_pretty(&file)?;
+        files::write_atomic(path, json.as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    Ok(())
+}
+
+/// Lobes with a controller, validated.
+pub struct ControlLobesConfig {
+    /// The controller file.
+    pub file: ControllerFile,
+    /// Where it came from.
+    pub source: String,
+    /// Spindle speeds, rpm.
+    pub speeds_rpm: Vec<f64>,
+    /// Semi-discretisation steps per tooth period.
+    pub steps_per_period: usize,
+    /// CSV output.
+    pub out: Option<PathBuf>,
+    /// Overwrite it.
+    pub force: bool,
+}
+
+/// Deepest depth searched by the lobes, mm.
+const MAX_DEPTH_MM: f64 = 50.0;
+/// Depth tolerance of the lobes, mm.
+const DEPTH_TOL_MM: f64 = 1e-4;
+
+fn minimum(points: &[LobePoint]) -> Option<&LobePoint> {
+    points
+        .iter()
+        .min_by(|a, b| a.critical_depth_mm.total_cmp(&b.critical_depth_mm))
+}
+
+/// Open- and closed-loop lobes of the blade; prints both minima and the table, writes the CSV.
+///
+/// # Errors
+/// An unstable loop, an output that may not be written.
+pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
+    if let Some(path) = &cfg.out {
+        files::check_writable(path, cfg.force)?;
+    }
+    let p = &cfg.file.plant;
+    let bp = p.blade.plant()?;
+    let k = cfg.file.state_space()?;
+    let closed = close(&bp, &sampled_model(&k, p.sample_rate_hz)?)?;
+    let cut = lobe_cut(p);
+    let tol = (MAX_DEPTH_MM, DEPTH_TOL_MM);
+    let ol = closed_lobes(
+        &bp,
+        &open(&bp),
+        &cut,
+        &cfg.speeds_rpm,
+        tol,
+        cfg.steps_per_period,
+    )?;
+    let cl = closed_lobes(
+        &bp,
+        &closed,
+        &cut,
+        &cfg.speeds_rpm,
+        tol,
+        cfg.steps_per_period,
+    )?;
+    let mut text = String::new();
+    writeln!(
+        text,
+        "vmc-twin lobes: {} with the {} controller (strategy {}) of {}, {} speeds, semi-discretisation with {} steps per tooth period",
+        p.name,
+        cfg.file.kind,
+        cfg.file.strategy,
+        cfg.source,
+        cfg.speeds_rpm.len(),
+        cfg.steps_per_period
+    )?;
+    let (mo, mc) = (minimum(&ol), minimum(&cl));
+    for (label, m) in [("open loop  ", mo), ("closed loop", mc)] {
+        match m {
+            Some(m) => writeln!(
+                text,
+                "{label}: minimum critical depth {:.4} mm at {:.0} rpm (chatter at {:.1} Hz)",
+                m.critical_depth_mm, m.spindle_rpm, m.chatter_frequency_hz
+            )?,
+            None => writeln!(text, "{label}: no boundary below {MAX_DEPTH_MM} mm")?,
+        }
+    }
+    if let (Some(a), Some(b)) = (mo, mc) {
+        writeln!(
+            text,
+            "the controller multiplies the minimum critical depth by {:.2} (linear loop, no saturation: confirm with `cut --controller`)",
+            b.critical_depth_mm / a.critical_depth_mm
+        )?;
+    }
+    let depth_at = |pts: &[LobePoint], n: f64| {
+        pts.iter()
+            .find(|l| l.spindle_rpm == n)
+            .map(|l| l.critical_depth_mm)
+    };
+    let mut csv = String::from("spindle_rpm,open_depth_mm,closed_depth_mm\n");
+    let fmt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6}"));
+    writeln!(
+        text,
+        "  {:>12} {:>16} {:>16}",
+        "spindle_rpm", "open_depth_mm", "closed_depth_mm"
+    )?;
+    let every = cfg.speeds_rpm.len().div_ceil(41).max(1);
+    for (i, &n) in cfg.speeds_rpm.iter().enumerate() {
+        let (o, c) = (depth_at(&ol, n), depth_at(&cl, n));
+        writeln!(csv, "{n},{},{}", fmt(o), fmt(c))?;
+        if i % every == 0 {
+            writeln!(text, "  {n:>12.0} {:>16} {:>16}", fmt(o), fmt(c))?;
+        }
+    }
+    out.write_all(text.as_bytes())?;
+    if let Some(path) = &cfg.out {
+        files::write_atomic(path, csv.as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    Ok(())
+}
+
+/// A cut of the blade with a controller, validated.
+pub struct ControlCutConfig {
+    /// The controller file.
+    pub file: ControllerFile,
+    /// Where it came from.
+    pub source: String,
+    /// Spindle speed, rpm.
+    pub spindle_rpm: f64,
+    /// Axial depth, mm.
+    pub depth_mm: f64,
+    /// Feed per tooth, mm.
+    pub feed_per_tooth_mm: f64,
+    /// Horizon in tooth periods.
+    pub tooth_periods: usize,
+    /// CSV output.
+    pub out: Option<PathBuf>,
+    /// Overwrite it.
+    pub force: bool,
+}
+
+fn verdict_name(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Stable => "stable",
+        Verdict::Chatter => "chatter",
+    }
+}
+
+/// Simulates the cut without and with the controller (sampled, saturated) and reports both.
+///
+/// # Errors
+/// Values the dynamics refuses, an output that may not be written.
+pub fn cut(cfg: &ControlCutConfig, out: &mut dyn Write) -> Result<()> {
+    if let Some(path) = &cfg.out {
+        files::check_writable(path, cfg.force)?;
+    }
+    let p = &cfg.file.plant;
+    let bp = p.blade.plant()?;
+    let k = cfg.file.state_space()?;
+    let ac = &p.blade.actuator;
+    let element = LoopElement::new(&k, p.sample_rate_hz, ac.max_voltage_v)?;
+    let options = ControlledCutOptions {
+        sample_period_s: 1.0 / p.sample_rate_hz,
+        tooth_periods: cfg.tooth_periods,
+        ..ControlledCutOptions::default()
+    };
+    let cut = lobe_cut(p);
+    let run = |c: Option<&LoopElement>| {
+        simulate(
+            &bp,
+            c,
+            &cut,
+            cfg.spindle_rpm,
+            cfg.depth_mm,
+            cfg.feed_per_tooth_mm,
+            &options,
+        )
+    };
+    let (ol, cl) = (run(None)?, run(Some(&element))?);
+    let mut text = String::new();
+    writeln!(
+        text,
+        "vmc-twin cut: {} at {} rpm, a_p {} mm, f_z {} mm, a_e/D {:.4}, {} tooth periods, {} controller (strategy {}) of {} sampled at {:.0} Hz",
+        p.name,
+        cfg.spindle_rpm,
+        cfg.depth_mm,
+        cfg.feed_per_tooth_mm,
+        p.immersion,
+        cfg.tooth_periods,
+        cfg.file.kind,
+        cfg.file.strategy,
+        cfg.source,
+        p.sample_rate_hz
+    )?;
+    let half = |r: &ControlledCut| {
+        let n = r.tip_m.len();
+        r.tip_m[n / 2..].iter().fold(0.0f64, |m, v| m.max(v.abs())) * 1e6
+    };
+    for (label, r) in [("open loop  ", &ol), ("closed loop", &cl)] {
+        if r.growth_ratio.is_infinite() {
+            writeln!(
+                text,
+                "{label}: chatter  (the vibration grew past 1 m: the linear force law has no loss of contact to bound it)"
+            )?;
+        } else {
+            writeln!(
+                text,
+                "{label}: {}  (growth ratio {:.3}), largest tip vibration over the last half {:.2} µm",
+                verdict_name(r.verdict),
+                r.growth_ratio,
+                half(r)
+            )?;
+        }
+    }
+    writeln!(
+        text,
+        "actuator: largest command {:.1} V of ±{:.0} V ({:.2} µm of the {:.0} µm stroke), over the last half {:.1} V, saturated {:.1} % of the samples",
+        cl.max_command_v,
+        ac.max_voltage_v,
+        cl.max_command_v * ac.gain_m_per_v() * 1e6,
+        ac.stroke_um,
+        cl.max_command_last_half_v,
+        100.0 * cl.saturated_fraction
+    )?;
+    out.write_all(text.as_bytes())?;
+    if let Some(path) = &cfg.out {
+        let mut csv = String::from("time_s,tip_open_um,tip_closed_um,command_v,force_closed_n\n");
+        let n = ol.tip_m.len().min(cl.tip_m.len());
+        for i in 0..n {
+            writeln!(
+                csv,
+                "{:.8},{:.6},{:.6},{:.4},{:.4}",
+                i as f64 * cl.sample_period_s,
+                ol.tip_m[i] * 1e6,
+                cl.tip_m[i] * 1e6,
+                cl.command_v[i],
+                cl.force_n[i]
+            )?;
+        }
+        files::write_atomic(path, csv.as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    Ok(())
+}
