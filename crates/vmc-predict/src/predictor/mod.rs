@@ -534,10 +534,6 @@ pub struct TrainSummary {
     pub nets: Vec<NetSummary>,
 }
 
-/// Checks that a model's sensor list equals the machine's, names and order.
-///
-/// # Errors
-
 /// A tool change for a model fitted on one tool's tip error: accepted only when the new tool is
 /// that tool (offset within 1 nm).
 ///
@@ -564,6 +560,9 @@ pub(crate) fn same_tool_only(
     }
 }
 
+/// Checks that a model's sensor list equals the machine's, names and order.
+///
+/// # Errors
 /// [`PredictError::SensorMismatch`] listing both lists.
 pub fn check_sensor_names(model: &[String], machine: &[String]) -> Result<(), PredictError> {
     if model == machine {
