@@ -48,7 +48,7 @@
 //! order, through a [`CheckObserver`] (the shape a recorder needs to draw them).
 
 pub use crate::collision_spec as spec;
-mod stock;
+pub mod stock;
 #[cfg(test)]
 mod tests;
 

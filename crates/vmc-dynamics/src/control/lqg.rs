@@ -2,7 +2,7 @@
 //!
 //! LQR: u = −K x minimises ∫ xᵀQx + uᵀRu dt, K = R⁻¹BᵀX with X the stabilising solution of
 //! AᵀX + XA − XBR⁻¹BᵀX + Q = 0. Kalman filter of ẋ = Ax + Gw + …, y = Cx + v with white
-//! E[wwᵀ] = W δ, E[vvᵀ] = V δ: x̂̇ = Ax̂ + Bu + L(y − Cx̂), L = PCᵀV⁻¹ with P the stabilising
+//! E\[wwᵀ\] = W δ, E\[vvᵀ\] = V δ: x̂̇ = Ax̂ + Bu + L(y − Cx̂), L = PCᵀV⁻¹ with P the stabilising
 //! solution of AP + PAᵀ − PCᵀV⁻¹CP + GWGᵀ = 0. LQG (separation principle): the controller
 //! ẋ_c = (A − BK − LC) x_c + L y, u = −K x_c.
 
@@ -38,7 +38,7 @@ pub fn lqr(
     Ok(Gain { gain, riccati })
 }
 
-/// Kalman gain L = PCᵀV⁻¹ for process noise G w (E[wwᵀ] = W) and measurement noise V.
+/// Kalman gain L = PCᵀV⁻¹ for process noise G w (E\[wwᵀ\] = W) and measurement noise V.
 pub fn kalman(
     a: &DMatrix<f64>,
     g: &DMatrix<f64>,
