@@ -520,3 +520,53 @@ fn a_chatter_recording_draws_the_program_cuts_on_the_lobes_of_their_engagements(
         "chatter recording",
     );
 }
+
+#[test]
+fn controlled_lobes_are_drawn_with_the_open_loop_lobes() {
+    let dir = TempDir::new("ctl-lobes");
+    let d = dir.path();
+    let plant = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/benchmarks/blade.toml");
+    ok(
+        vmc(
+            d,
+            &[
+                "control",
+                "design",
+                "--plant",
+                plant.to_str().unwrap(),
+                "--controller",
+                "lqg",
+                "-o",
+                "lqg.json",
+            ],
+        ),
+        "control design",
+    );
+    let args = [
+        "lobes",
+        "--controller",
+        "lqg.json",
+        "--rpm",
+        "2000:4000:5",
+        "--steps",
+        "40",
+        "--rrd",
+        "lobes.rrd",
+    ];
+    let out = ok(vmc(d, &args), "lobes --controller --rrd");
+    assert!(out.contains("wrote lobes.rrd"), "{out}");
+    let file = d.join("lobes.rrd");
+    assert_verified(&file);
+    assert_has(
+        &printed(&file, "-vv"),
+        &[
+            "chatter/depth_mm/lobes/open_loop",
+            "chatter/depth_mm/lobes/with_lqg__strategy_1_",
+            "diagram/lobes/open_loop",
+            "diagram/legend",
+            "report",
+        ],
+        &["spindle_rpm"],
+        "controlled lobes recording",
+    );
+}

@@ -101,7 +101,7 @@ pub fn lobes_config(
     path: &Path,
     rpm: Option<&str>,
     steps: Option<usize>,
-    out: Option<PathBuf>,
+    (out, rrd): (Option<PathBuf>, Option<PathBuf>),
     force: bool,
 ) -> Result<commands::control::ControlLobesConfig> {
     let file = ControllerFile::load(path)?;
@@ -124,6 +124,7 @@ pub fn lobes_config(
         speeds_rpm,
         steps_per_period,
         out,
+        rrd,
         force,
     })
 }

@@ -594,12 +594,13 @@ pub struct LobesArgs {
     /// A controller file from `control design`: the lobes of its blade without and with the
     /// controller in the loop (closed-loop semi-discretisation; --tool, --method, --immersion
     /// and --milling do not apply: the blade's cut is in the file).
-    #[arg(long, conflicts_with_all = ["tool", "rrd"])]
+    #[arg(long, conflicts_with = "tool")]
     pub controller: Option<PathBuf>,
     /// Semi-discretisation steps per tooth period with --controller (default 160).
     #[arg(long, requires = "controller")]
     pub steps: Option<usize>,
-    /// Write a Rerun recording of the lobe diagram (depth against speed, Hopf and flip lobes).
+    /// Write a Rerun recording of the lobe diagram (depth against speed, Hopf and flip lobes;
+    /// with --controller: the open- and closed-loop lobes).
     #[arg(long, value_name = "FILE.rrd")]
     pub rrd: Option<PathBuf>,
     #[command(flatten)]
@@ -619,7 +620,7 @@ impl LobesArgs {
                     path,
                     self.rpm.as_deref(),
                     self.steps,
-                    self.out.clone(),
+                    (self.out.clone(), self.rrd.clone()),
                     self.force.force,
                 )
             })

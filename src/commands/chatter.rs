@@ -98,8 +98,9 @@ pub fn chatter(cfg: &ChatterConfig, out: &mut dyn Write) -> Result<()> {
             String::from_utf8_lossy(&text)
         );
         let title = format!("vmc-twin chatter {file}");
-        let bytes =
-            crate::record::chatter::record_chatter(path, cfg.force, &title, &curves, &cuts, &md)?;
+        let bytes = crate::record::chatter::record_lobe_diagram(
+            path, cfg.force, &title, &curves, &cuts, &md,
+        )?;
         super::wrote_recording(out, path, bytes, "")?;
     }
     let unstable: Vec<String> = report

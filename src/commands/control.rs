@@ -263,7 +263,9 @@ pub struct ControlLobesConfig {
     pub steps_per_period: usize,
     /// CSV output.
     pub out: Option<PathBuf>,
-    /// Overwrite it.
+    /// A Rerun recording of the open- and closed-loop lobes.
+    pub rrd: Option<PathBuf>,
+    /// Overwrite them.
     pub force: bool,
 }
 
@@ -285,6 +287,9 @@ fn minimum(points: &[LobePoint]) -> Option<&LobePoint> {
 pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(path) = &cfg.out {
         files::check_writable(path, cfg.force)?;
+    }
+    if let Some(path) = &cfg.rrd {
+        crate::record::check_rrd_path(path, cfg.force)?;
     }
     let p = &cfg.file.plant;
     let bp = p.blade.plant()?;
@@ -361,6 +366,27 @@ pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(path) = &cfg.out {
         files::write_atomic(path, csv.as_bytes(), cfg.force)?;
         writeln!(out, "wrote {}", path.display())?;
+    }
+    if let Some(path) = &cfg.rrd {
+        use crate::record::chatter::{record_lobe_diagram, LobeCurve};
+        let curves = [
+            LobeCurve {
+                name: "open loop".into(),
+                points: ol,
+            },
+            LobeCurve {
+                name: format!("with {} (strategy {})", cfg.file.kind, cfg.file.strategy),
+                points: cl,
+            },
+        ];
+        let md = format!(
+            "# vmc-twin lobes --controller\n\nThe blade's stability lobes without and with the \
+             controller (closed-loop semi-discretisation, linear loop: no saturation).\n\n\
+             ```text\n{text}```\n"
+        );
+        let title = format!("vmc-twin lobes --controller {}", cfg.source);
+        let bytes = record_lobe_diagram(path, cfg.force, &title, &curves, &[], &md)?;
+        super::wrote_recording(out, path, bytes, "")?;
     }
     Ok(())
 }

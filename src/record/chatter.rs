@@ -1,5 +1,6 @@
-//! The recording of `chatter --rrd`: the stability lobes at the program's engagements with its
-//! cuts as points on them.
+//! Lobe diagrams: the recording of `chatter --rrd` (the stability lobes at the program's
+//! engagements with its cuts as points on them) and of `lobes --controller --rrd` (the lobes
+//! without and with the controller, no cuts).
 //!
 //! | entity | archetype | content |
 //! |---|---|---|
@@ -62,14 +63,19 @@ fn rgb(c: [u8; 3]) -> rerun::Color {
     rerun::Color::from_rgb(c[0], c[1], c[2])
 }
 
-fn blueprint() -> Blueprint {
-    let depth = TimeSeriesView::new(
-        "Critical axial depth (mm) against spindle speed (rpm), with the program's cuts",
-    )
+fn blueprint(with_cuts: bool) -> Blueprint {
+    let cuts = if with_cuts {
+        " and the program's cuts"
+    } else {
+        ""
+    };
+    let depth = TimeSeriesView::new(format!(
+        "Critical axial depth (mm) against spindle speed (rpm){cuts}"
+    ))
     .with_origin("/chatter/depth_mm");
-    let diagram = Spatial2DView::new(
-        "Stability lobes (critical a_p against spindle speed) and the program's cuts",
-    )
+    let diagram = Spatial2DView::new(format!(
+        "Stability lobes (critical a_p against spindle speed){cuts}"
+    ))
     .with_origin("/diagram");
     let report = TextDocumentView::new("Report").with_origin("/report");
     let left = Vertical::new([diagram.into(), depth.into()]).with_row_shares([3.0, 1.0]);
@@ -87,11 +93,12 @@ fn slug(name: &str) -> String {
         .collect()
 }
 
-/// Writes the diagram; gives the file's size in bytes.
+/// Writes the diagram of `curves` and `cuts` (none for a plain lobe comparison); gives the
+/// file's size in bytes.
 ///
 /// # Errors
 /// The recording cannot be written.
-pub fn record_chatter(
+pub fn record_lobe_diagram(
     path: &Path,
     force: bool,
     title: &str,
@@ -99,7 +106,7 @@ pub fn record_chatter(
     cuts: &[CutPoint],
     report: &str,
 ) -> Result<u64, RecordError> {
-    let file = RrdFile::create(path, force, title, blueprint())?;
+    let file = RrdFile::create(path, force, title, blueprint(!cuts.is_empty()))?;
     let rec = file.stream();
     let speed_index = |rpm: &mut dyn Iterator<Item = f64>| {
         rerun::TimeColumn::new_sequence("spindle_rpm", rpm.map(|n| n.round() as i64))
@@ -188,8 +195,20 @@ fn log_diagram(
         .iter()
         .flat_map(|c| c.points.iter().map(|p| p.critical_depth_mm))
         .fold(f64::INFINITY, f64::min);
+    // Every curve's own minimum stays in view too (a controlled loop's lobes lie far above the
+    // open loop's).
+    let highest_minimum = curves
+        .iter()
+        .filter_map(|c| {
+            c.points
+                .iter()
+                .map(|p| p.critical_depth_mm)
+                .min_by(f64::total_cmp)
+        })
+        .fold(0.0, f64::max);
     let top = (2.0 * deepest_cut)
         .max(3.0 * lowest_lobe.min(1e9))
+        .max(1.5 * highest_minimum.min(1e9))
         .max(1e-3);
     let [w, h] = DIAGRAM_WH;
     let xy = |rpm: f64, depth: f64| -> [f32; 2] {
