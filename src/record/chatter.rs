@@ -173,8 +173,9 @@ fn tick_step(span: f64) -> f64 {
         .unwrap_or(10.0 * pow)
 }
 
-/// The whole diagram as 2D primitives: frame, ticks with labels, curves, cuts.
-fn log_diagram(
+/// The whole diagram as 2D primitives under `diagram/`: frame, ticks with labels, curves, cuts,
+/// legend.
+pub(super) fn log_diagram(
     rec: &rerun::RecordingStream,
     curves: &[LobeCurve],
     cuts: &[CutPoint],

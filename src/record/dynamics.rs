@@ -9,6 +9,7 @@
 //! | `cut/force_n/{fx,fy}` | `Scalars` | cutting force on the tool (N) on `sim_time` |
 //! | `cut/change_per_tooth_um` | `Scalars` | change of the vibration over one tooth period (µm), once per tooth: the verdict's quantity |
 //! | `spectrum/vibration_um`, `spectrum/disturbance_um` | `BarChart` | amplitude spectra (µm against Hz) of the vibration and of the vibration minus the steady cut, last half of the horizon |
+//! | `diagram/…` | `LineStrips2D`, `Points2D` | `lobes`: the boundary drawn whole in a 2D view (see [`super::chatter`]) |
 //! | `report` | `TextDocument` | the command's printed report |
 //!
 //! Speeds are whole rpm on the `spindle_rpm` timeline (a sequence), so a time-series view plots
@@ -17,12 +18,14 @@
 use std::path::Path;
 
 use rerun::blueprint::{
-    BarChartView, Blueprint, Horizontal, TextDocumentView, TimeSeriesView, Vertical,
+    BarChartView, Blueprint, Horizontal, Spatial2DView, TextDocumentView, TimeSeriesView, Vertical,
 };
 
 use crate::dynamics::{BoundaryKind, CutSimulation, LobePoint};
 
-use super::{layout::framed, RecordError, RrdFile};
+use super::chatter::{log_diagram, LobeCurve};
+use super::layout::{framed, framed_with};
+use super::{RecordError, RrdFile};
 
 const HOPF_RGB: [u8; 3] = [70, 140, 240];
 const FLIP_RGB: [u8; 3] = [245, 150, 40];
@@ -31,19 +34,23 @@ fn rgb(c: [u8; 3]) -> rerun::Color {
     rerun::Color::from_rgb(c[0], c[1], c[2])
 }
 
-/// Layout of a lobes recording: depth against speed above, chatter frequency and report below.
+/// Layout of a lobes recording: the whole diagram, depth against speed by kind, chatter
+/// frequency and report.
 fn lobes_blueprint() -> Blueprint {
+    let diagram = Spatial2DView::new("Stability lobes (critical a_p against spindle speed)")
+        .with_origin("/diagram");
     let depth = TimeSeriesView::new("Critical axial depth (mm) against spindle speed (rpm)")
         .with_origin("/lobes/critical_depth_mm");
     let freq =
         TimeSeriesView::new("Chatter frequency (Hz)").with_origin("/lobes/chatter_frequency_hz");
     let report = TextDocumentView::new("Report").with_origin("/report");
-    let below = Horizontal::new([freq.into(), report.into()]);
-    framed(
-        Horizontal::new([Vertical::new([depth.into(), below.into()])
+    let below = Horizontal::new([depth.into(), freq.into(), report.into()]);
+    framed_with(
+        Horizontal::new([Vertical::new([diagram.into(), below.into()])
             .with_row_shares([2.0, 1.0])
             .into()]),
         "spindle_rpm",
+        rerun::blueprint::components::PlayState::Paused,
     )
 }
 
@@ -140,6 +147,11 @@ pub fn record_lobes(
             send(&entity, &pts, value).map_err(|x| file.err(x))?;
         }
     }
+    let curve = LobeCurve {
+        name: "critical depth".into(),
+        points: points.to_vec(),
+    };
+    log_diagram(rec, &[curve], &[]).map_err(|x| file.err(x))?;
     rec.log_static("report", &rerun::TextDocument::from_markdown(report))
         .map_err(|x| file.err(x))?;
     file.finish()
