@@ -192,31 +192,7 @@ mod tests {
     use super::*;
 
     fn two_mode_plant(sigma_noise: f64, rho: f64) -> GeneralisedPlant {
-        let (w1, w2, z1, z2) = (1.0, 3.0, 0.05, 0.02);
-        let a = DMatrix::from_row_slice(
-            4,
-            4,
-            &[
-                0.0,
-                0.0,
-                1.0,
-                0.0, //
-                0.0,
-                0.0,
-                0.0,
-                1.0, //
-                -w1 * w1,
-                0.0,
-                -2.0 * z1 * w1,
-                0.0, //
-                0.0,
-                -w2 * w2,
-                0.0,
-                -2.0 * z2 * w2,
-            ],
-        );
-        let b = DMatrix::from_row_slice(4, 1, &[0.0, 0.0, 1.0, 0.5]);
-        let c = DMatrix::from_row_slice(1, 4, &[1.0, 1.0, 0.0, 0.0]);
+        let (a, b, c) = crate::control::lqg::tests::two_modes();
         let mut b1 = DMatrix::zeros(4, 2);
         b1.view_mut((0, 0), (4, 1)).copy_from(&b);
         let mut c1 = DMatrix::zeros(2, 4);

@@ -91,7 +91,7 @@ pub fn lqg(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     fn oscillator(w: f64, z: f64) -> (DMatrix<f64>, DMatrix<f64>) {
@@ -130,7 +130,9 @@ mod tests {
         assert!((k.gain[(0, 0)] - p / v).abs() < 1e-12);
     }
 
-    fn two_modes() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    /// Two lightly damped modes (1 and 3 rad/s), one input, one output: a test plant shared
+    /// with the H∞ tests.
+    pub(in crate::control) fn two_modes() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
         let (w1, w2, z1, z2) = (1.0, 3.0, 0.05, 0.02);
         let a = DMatrix::from_row_slice(
             4,
