@@ -163,6 +163,31 @@ fn invalid(path: &str, field: impl Into<String>, msg: impl Into<String>) -> Mach
     }
 }
 
+/// The text of a machine file (3- or 5-axis), read errors named by the file.
+///
+/// # Errors
+/// [`MachineError::Io`].
+pub(crate) fn read_machine_file(path: &Path) -> Result<String, MachineError> {
+    crate::files::read_text(path).map_err(|err| MachineError::Io {
+        path: path.display().to_string(),
+        err,
+    })
+}
+
+/// A machine description parsed from TOML (not yet validated); `path` names it in errors.
+///
+/// # Errors
+/// [`MachineError::Parse`] with the TOML error on one line.
+pub(crate) fn parse_machine_toml<T: serde::de::DeserializeOwned>(
+    text: &str,
+    path: &str,
+) -> Result<T, MachineError> {
+    toml::from_str(text).map_err(|e| MachineError::Parse {
+        path: path.to_string(),
+        msg: crate::files::one_line_toml_error(&e),
+    })
+}
+
 impl MachineSpec {
     /// The embedded reference machine.
     pub fn reference() -> Self {
@@ -173,19 +198,12 @@ impl MachineSpec {
 
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, MachineError> {
-        let text = crate::files::read_text(path).map_err(|err| MachineError::Io {
-            path: path.display().to_string(),
-            err,
-        })?;
-        Self::from_toml_str(&text, &path.display().to_string())
+        Self::from_toml_str(&read_machine_file(path)?, &path.display().to_string())
     }
 
     /// Parses and validates a machine description; `path` names it in errors.
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, MachineError> {
-        let spec: MachineSpec = toml::from_str(text).map_err(|e| MachineError::Parse {
-            path: path.to_string(),
-            msg: crate::files::one_line_toml_error(&e),
-        })?;
+        let spec: MachineSpec = parse_machine_toml(text, path)?;
         spec.validate(path)?;
         Ok(spec)
     }

@@ -191,10 +191,7 @@ impl FiveAxisSpec {
     /// # Errors
     /// An unreadable file, bad TOML, or the first invalid field.
     pub fn load(path: &Path) -> Result<Self, MachineError> {
-        let text = crate::files::read_text(path).map_err(|err| MachineError::Io {
-            path: path.display().to_string(),
-            err,
-        })?;
+        let text = crate::machine::read_machine_file(path)?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
@@ -203,10 +200,7 @@ impl FiveAxisSpec {
     /// # Errors
     /// Bad TOML or the first invalid field.
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, MachineError> {
-        let spec: FiveAxisSpec = toml::from_str(text).map_err(|e| MachineError::Parse {
-            path: path.to_string(),
-            msg: crate::files::one_line_toml_error(&e),
-        })?;
+        let spec: FiveAxisSpec = crate::machine::parse_machine_toml(text, path)?;
         spec.validate(path)?;
         Ok(spec)
     }
