@@ -124,50 +124,106 @@ pub fn monodromy(steps: &[Step], c: &DMatrix<f64>) -> DMatrix<f64> {
 
 /// Monodromy matrix from borrowed steps. The discrete state is ordered
 /// z_i = [x_i; y_{i−m}; y_{i−m+1}; …; y_{i−1}], so step j reads delayed blocks j and j + 1 and
-/// the row block X_j = ∂x_j/∂z_0 is zero beyond its first n + (j + 1)·d columns: each step
-/// multiplies only that prefix (no dense products of the (n + m d)-square step matrices).
+/// the row block X_j = ∂x_j/∂z_0 is zero beyond its first n + (j + 1)·d columns.
+/// Delayed samples that no step reads have zero columns (and their rows are not needed): the
+/// full matrix is [`monodromy_compact`]'s with those rows and columns put back as zeros.
 pub fn monodromy_from(steps: &[StepRef<'_>], c: &DMatrix<f64>) -> DMatrix<f64> {
+    let (n, d) = (c.ncols(), c.nrows());
+    let big_n = n + steps.len() * d;
+    let (compact, blocks) = monodromy_compact(steps, c);
+    let index = |i: usize| {
+        if i < n {
+            i
+        } else {
+            n + blocks[(i - n) / d] * d + (i - n) % d
+        }
+    };
+    let mut phi = DMatrix::zeros(big_n, big_n);
+    for j in 0..compact.ncols() {
+        for i in 0..compact.nrows() {
+            phi[(index(i), index(j))] = compact[(i, j)];
+        }
+    }
+    phi
+}
+
+/// The monodromy matrix restricted to the states that matter: x and the delayed samples some
+/// step reads (in milling at small radial immersion, those of the few steps in which a tooth
+/// cuts), with the indices of those delayed blocks. Same eigenvalues as the full matrix but
+/// for zeros.
+///
+/// Each step multiplies only the nonzero prefix of the row block X_j = ∂x_j/∂z_0 (no dense
+/// products of (n + m d)-square step matrices), and a run of free steps (no delayed input)
+/// that share one transition matrix P and whose outputs nothing reads is taken in one
+/// product with P^L (L the run's length, by repeated squaring).
+pub fn monodromy_compact(steps: &[StepRef<'_>], c: &DMatrix<f64>) -> (DMatrix<f64>, Vec<usize>) {
     let m = steps.len();
     let d = c.nrows();
     let n = c.ncols();
-    let big_n = n + m * d;
-    let mut x = DMatrix::zeros(n, big_n);
+    // Block k of z (= y_{k−m} at the start, y_k at the end) is read by step k (R0) or step
+    // k − 1 (R1).
+    let read = |k: usize| steps[k].r.is_some() || (k > 0 && steps[k - 1].r.is_some());
+    let blocks: Vec<usize> = (0..m).filter(|&k| read(k)).collect();
+    let mut slot = vec![usize::MAX; m];
+    for (i, &k) in blocks.iter().enumerate() {
+        slot[k] = i;
+    }
+    // Kept blocks with index ≤ j, for j = 0 … m − 1.
+    let mut kept_upto = vec![0; m];
+    let mut count = 0;
+    for (j, kept) in kept_upto.iter_mut().enumerate() {
+        if slot[j] != usize::MAX {
+            count += 1;
+        }
+        *kept = count;
+    }
+    let size = n + blocks.len() * d;
+    let mut x = DMatrix::zeros(n, size);
     x.view_mut((0, 0), (n, n)).fill_with_identity();
-    let mut next = DMatrix::zeros(n, big_n);
-    let mut phi = DMatrix::zeros(big_n, big_n);
-    for (j, step) in steps.iter().enumerate() {
-        let width = (n + (j + 1) * d).min(big_n);
-        // Plain loops: n and d are small, where generic products cost more in dispatch than
-        // in arithmetic. Column-major storage, column k of X is x[k*n..(k+1)*n].
-        {
-            let xs = x.as_slice();
-            let ns = next.as_mut_slice();
-            for k in 0..width {
-                let col = &xs[k * n..(k + 1) * n];
-                // y_j = C x_j is block j of z_m.
-                for r in 0..d {
-                    let mut acc = 0.0;
-                    for (i, v) in col.iter().enumerate() {
-                        acc += c[(r, i)] * v;
-                    }
-                    phi[(n + j * d + r, k)] = acc;
-                }
-                for r in 0..n {
-                    let mut acc = 0.0;
-                    for (i, v) in col.iter().enumerate() {
-                        acc += step.p[(r, i)] * v;
-                    }
-                    ns[k * n + r] = acc;
-                }
+    let mut next = DMatrix::zeros(n, size);
+    let mut phi = DMatrix::zeros(size, size);
+    let mut powers: Vec<(*const DMatrix<f64>, usize, DMatrix<f64>)> = Vec::new();
+    let mut j = 0;
+    while j < m {
+        let step = steps[j];
+        let width = n + kept_upto[j] * d;
+        if slot[j] != usize::MAX {
+            // y_j = C x_j is block j of z_m.
+            phi.view_mut((n + slot[j] * d, 0), (d, width))
+                .gemm(1.0, c, &x.columns(0, width), 0.0);
+        }
+        let mut len = 1;
+        if step.r.is_none() {
+            while j + len < m
+                && steps[j + len].r.is_none()
+                && std::ptr::eq(steps[j + len].p, step.p)
+                && !read(j + len)
+            {
+                len += 1;
             }
         }
+        let p: &DMatrix<f64> = if len == 1 {
+            step.p
+        } else {
+            let key = step.p as *const DMatrix<f64>;
+            let at = match powers.iter().position(|(k, l, _)| *k == key && *l == len) {
+                Some(at) => at,
+                None => {
+                    powers.push((key, len, matrix_power(step.p, len)));
+                    powers.len() - 1
+                }
+            };
+            &powers[at].2
+        };
+        next.columns_mut(0, width)
+            .gemm(1.0, p, &x.columns(0, width), 0.0);
         if let Some((r0, r1)) = step.r {
-            // y_{j−m} is block j of z_0.
-            let mut b0 = next.view_mut((0, n + j * d), (n, d));
+            // y_{j−m} is block j of z_0 (kept: step j reads it).
+            let mut b0 = next.view_mut((0, n + slot[j] * d), (n, d));
             b0 += r0;
             if j + 1 < m {
-                // y_{j−m+1} is block j + 1 of z_0 (these columns are still zero in `next`).
-                let mut b1 = next.view_mut((0, n + (j + 1) * d), (n, d));
+                // y_{j−m+1} is block j + 1 of z_0 (its columns are still zero in `next`).
+                let mut b1 = next.view_mut((0, n + slot[j + 1] * d), (n, d));
                 b1 += r1;
             } else {
                 // y_0 = C x_0 with x_0 the first n entries of z_0.
@@ -175,9 +231,27 @@ pub fn monodromy_from(steps: &[StepRef<'_>], c: &DMatrix<f64>) -> DMatrix<f64> {
             }
         }
         std::mem::swap(&mut x, &mut next);
+        j += len;
     }
-    phi.view_mut((0, 0), (n, big_n)).copy_from(&x);
-    phi
+    phi.view_mut((0, 0), (n, size)).copy_from(&x);
+    (phi, blocks)
+}
+
+/// P^k (k ≥ 1) by repeated squaring: P · P^(k−1).
+fn matrix_power(p: &DMatrix<f64>, k: usize) -> DMatrix<f64> {
+    let mut out = p.clone();
+    let mut base = p.clone();
+    let mut rest = k.saturating_sub(1);
+    while rest > 0 {
+        if rest & 1 == 1 {
+            out = &out * &base;
+        }
+        rest >>= 1;
+        if rest > 0 {
+            base = &base * &base;
+        }
+    }
+    out
 }
 
 /// Eigenvalues of Φ after removing the zero columns (and their rows), which carry only zero multipliers.
@@ -341,6 +415,88 @@ mod tests {
                 "order {order}, errors {errs:?}"
             );
         }
+    }
+
+    /// The full (n + m d)-square matrix of one step: x ← P x + R0 y_{i−m} + R1 y_{i−m+1}, the
+    /// delayed blocks shift by one and the newest is C x.
+    fn dense_step(step: StepRef<'_>, c: &DMatrix<f64>, m: usize) -> DMatrix<f64> {
+        let (n, d) = (c.ncols(), c.nrows());
+        let big = n + m * d;
+        let mut s = DMatrix::zeros(big, big);
+        s.view_mut((0, 0), (n, n)).copy_from(step.p);
+        if let Some((r0, r1)) = step.r {
+            s.view_mut((0, n), (n, d)).copy_from(r0);
+            s.view_mut((0, n + d), (n, d)).copy_from(r1);
+        }
+        for k in 0..m - 1 {
+            for r in 0..d {
+                s[(n + k * d + r, n + (k + 1) * d + r)] = 1.0;
+            }
+        }
+        s.view_mut((n + (m - 1) * d, 0), (d, n)).copy_from(c);
+        s
+    }
+
+    /// The monodromy matrix (free runs taken as powers, only the read delayed samples kept)
+    /// equals the product of the dense step matrices, and the compact matrix has the same
+    /// nonzero multipliers, on a period of 14 steps: a free run, three cutting steps with
+    /// different coefficients, a longer free run, two cutting steps at the end.
+    #[test]
+    fn monodromy_equals_the_dense_product_of_its_steps() {
+        let (m, dt) = (14, 0.05);
+        let c = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
+        let b = DMatrix::from_row_slice(2, 1, &[0.0, -0.4]);
+        let free = Step::free(&DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -4.0, -0.2]), dt);
+        let cut: Vec<Step> = (0..5)
+            .map(|i| {
+                let k = 4.0 + 0.7 * i as f64;
+                let a = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -k, -0.2]);
+                Step::new(&a, &(&b * (1.0 + 0.1 * i as f64)), dt)
+            })
+            .collect();
+        let pattern = [0, 0, 0, 1, 2, 3, 0, 0, 0, 0, 0, 0, 4, 5];
+        let refs: Vec<StepRef<'_>> = pattern
+            .iter()
+            .map(|&k| {
+                if k == 0 {
+                    free.as_ref()
+                } else {
+                    cut[k - 1].as_ref()
+                }
+            })
+            .collect();
+        let mut dense = DMatrix::identity(2 + m, 2 + m);
+        for s in &refs {
+            dense = dense_step(*s, &c, m) * dense;
+        }
+        let phi = monodromy_from(&refs, &c);
+        // Columns of delayed samples that no step reads are zero in Φ, not in the dense product
+        // (they feed rows that nothing reads); compare the columns that are read.
+        let (compact, blocks) = monodromy_compact(&refs, &c);
+        assert_eq!(blocks, vec![3, 4, 5, 6, 12, 13]);
+        let keep: Vec<usize> = (0..2).chain(blocks.iter().map(|k| 2 + k)).collect();
+        for &j in &keep {
+            for &i in &keep {
+                assert!(
+                    (phi[(i, j)] - dense[(i, j)]).abs() < 1e-12,
+                    "({i}, {j}): {} vs {}",
+                    phi[(i, j)],
+                    dense[(i, j)]
+                );
+            }
+        }
+        let mut full: Vec<f64> = dense
+            .complex_eigenvalues()
+            .iter()
+            .map(|l| l.norm())
+            .collect();
+        let mut small: Vec<f64> = multipliers(&compact).iter().map(|l| l.norm()).collect();
+        full.sort_by(|a, b| b.total_cmp(a));
+        small.sort_by(|a, b| b.total_cmp(a));
+        for (a, b) in full.iter().zip(&small) {
+            assert!((a - b).abs() < 1e-10, "{full:?} vs {small:?}");
+        }
+        assert!(full[small.len()..].iter().all(|v| *v < 1e-10), "{full:?}");
     }
 
     #[test]

@@ -373,3 +373,45 @@ fn time_domain_frequency_and_kind_match_sdm() {
         );
     }
 }
+
+/// The critical depth by ITP (the tracer's refinement) lies within the tolerance of the one
+/// plain bisection of the same bracket finds, at Hopf and flip speeds, in fewer stability
+/// evaluations over the whole set (bisection needs ⌈log₂(20 mm / 1e-4 mm)⌉ = 18 per speed).
+#[test]
+fn itp_refinement_matches_bisection_in_fewer_evaluations() {
+    let (tool, modes) = (benchmark_tool(), benchmark_modes());
+    let sdm = MillingSdm::new(&tool, &modes, 0.05, Milling::Down, SdmOptions::default()).unwrap();
+    let (max_mm, tol) = (20.0, 1e-4);
+    let (mut bisection_evaluations, mut itp_evaluations) = (0, 0);
+    for n in [6000.0, 9000.0, 10000.0, 12000.0, 14500.0] {
+        let s = sdm.at_speed(n).unwrap();
+        let (mut lo, mut hi) = (0.0, max_mm);
+        assert!(!s.stability(hi).unwrap().is_stable());
+        while hi - lo > tol {
+            let mid = 0.5 * (lo + hi);
+            bisection_evaluations += 1;
+            if s.stability(mid).unwrap().is_stable() {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let before = sdm.evaluations();
+        let p = s.critical_depth(None, max_mm, tol).unwrap().unwrap();
+        let itp = sdm.evaluations() - before;
+        assert!(
+            (p.critical_depth_mm - 0.5 * (lo + hi)).abs() <= tol,
+            "{n} rpm: ITP {} vs bisection {}",
+            p.critical_depth_mm,
+            0.5 * (lo + hi)
+        );
+        // Its worst case: the first evaluation at the maximum, bisection's count plus one.
+        assert!(itp <= 1 + 18 + 1, "{n} rpm: {itp} evaluations");
+        itp_evaluations += itp;
+    }
+    println!("evaluations for 5 speeds: ITP {itp_evaluations}, bisection {bisection_evaluations}");
+    assert!(
+        itp_evaluations < bisection_evaluations,
+        "ITP {itp_evaluations} vs bisection {bisection_evaluations}"
+    );
+}

@@ -26,7 +26,10 @@ fn rotation(f_hz: f64, period_s: f64) -> f64 {
 
 /// A helix of 0 gives the straight-tooth model bit for bit: values of semi-discretisation and
 /// of both time-domain force models on a 3-tooth, 3-mode tool with edge forces and process
-/// damping, recorded before helical teeth were added, are reproduced to 1e-12 relative.
+/// damping, recorded from the straight-tooth model, are reproduced to 1e-12 relative, the
+/// semi-discretisation's to 2e-9: the critical multiplier of a non-normal monodromy matrix
+/// amplifies rounding, and the order of the sums in its product (grouped free-flight steps,
+/// blocked matrix products) moves it by up to 4e-10 here.
 #[test]
 fn helix_zero_reproduces_the_straight_tooth_results() {
     let mut tool = Tool::new(3, 16.0, 7e8, 2.1e8);
@@ -41,6 +44,7 @@ fn helix_zero_reproduces_the_straight_tooth_results() {
         y: vec![Mode::from_mass(820.0, 0.015, 0.06)],
     };
     let close = |a: f64, b: f64| assert!((a - b).abs() <= 1e-12 * b.abs(), "{a:e} vs {b:e}");
+    let close_sdm = |a: f64, b: f64| assert!((a - b).abs() <= 2e-9 * b.abs(), "{a:e} vs {b:e}");
     #[allow(clippy::type_complexity)]
     let recorded: [(f64, Milling, f64, f64, f64, [f64; 2], f64); 2] = [
         (
@@ -65,8 +69,8 @@ fn helix_zero_reproduces_the_straight_tooth_results() {
     for (imm, milling, rho, f_hz, growth, last, amp) in recorded {
         let sdm = MillingSdm::new(&tool, &modes, imm, milling, SdmOptions::default()).unwrap();
         let st = sdm.stability(9000.0, 0.35).unwrap();
-        close(st.spectral_radius, rho);
-        close(st.chatter_frequency_hz, f_hz);
+        close_sdm(st.spectral_radius, rho);
+        close_sdm(st.chatter_frequency_hz, f_hz);
         let td = TimeDomain::new(&tool, &modes, imm, milling, TimeOptions::default()).unwrap();
         close(td.growth_ratio(9000.0, 0.35).unwrap(), growth);
         let p = td
