@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use super::ForceArg;
+use super::{ForceArg, RrdArgs};
 use crate::commands::identify::IdentifyConfig;
 use crate::commands::probe_campaign::ProbeCampaignConfig;
 use crate::commands::run_fiveaxis::FiveAxisRunConfig;
@@ -31,6 +31,8 @@ pub struct ProbeCampaignArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub force: ForceArg,
+    #[command(flatten)]
+    pub rrd: RrdArgs,
 }
 
 impl ProbeCampaignArgs {
@@ -54,6 +56,7 @@ impl ProbeCampaignArgs {
             noise_2sigma_um: self.noise_2sigma_um,
             out: self.out,
             force: self.force.force,
+            rrd: self.rrd.checked()?,
         })
     }
 }
@@ -87,6 +90,8 @@ pub struct IdentifyArgs {
     pub seed: Option<u64>,
     #[command(flatten)]
     pub force: ForceArg,
+    #[command(flatten)]
+    pub rrd: RrdArgs,
 }
 
 impl IdentifyArgs {
@@ -113,6 +118,7 @@ impl IdentifyArgs {
             heldout_poses: self.heldout_poses,
             seed: self.seed,
             force: self.force.force,
+            rrd: self.rrd.checked()?,
         })
     }
 }

@@ -434,3 +434,128 @@ pub fn write_summary(s: &FiveAxisSummary, out: &mut dyn std::io::Write) -> std::
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 1e-6 µm (1 pm): rounding of the exact transforms.
+    const TOL_UM: f64 = 1e-6;
+
+    fn spec() -> FiveAxisSpec {
+        FiveAxisSpec::from_toml_str(
+            include_str!("../../machines/trunnion-ac.toml"),
+            "trunnion-ac.toml",
+        )
+        .unwrap()
+    }
+
+    fn points(spec: &FiveAxisSpec, sampling: Sampling) -> Vec<Commanded> {
+        let text = "G0 A-30 C90\nG0 X10 Y20 Z-250\nG4 P1\nG1 X-20 A-60 C180 F1000\nG4 P2\nM2\n";
+        let plan = plan_program(text, "t.ngc", spec).unwrap();
+        commanded_points(&plan, sampling)
+    }
+
+    #[test]
+    fn dwell_points_sit_in_the_middle_of_each_dwell_at_the_commanded_axes() {
+        let s = spec();
+        let text = "G0 A-30 C90\nG0 X10 Y20 Z-250\nG4 P1\nG1 X-20 A-60 C180 F1000\nG4 P2\nM2\n";
+        let plan = plan_program(text, "t.ngc", &s).unwrap();
+        let pts = commanded_points(&plan, Sampling::Dwells);
+        assert_eq!(pts.len(), 2);
+        let dwell = &plan.segments()[2];
+        assert_eq!(pts[0].line, 3);
+        assert!((pts[0].time_s - (dwell.t_start_s + 0.5)).abs() < 1e-12);
+        assert_eq!(pts[0].q_mm, [10.0, 20.0, -250.0]);
+        assert_eq!(pts[0].abc_deg, [-30.0, 0.0, 90.0]);
+        assert_eq!(pts[1].q_mm, [-20.0, 20.0, -250.0]);
+        assert_eq!(pts[1].abc_deg, [-60.0, 0.0, 180.0]);
+        // Every cycle: more points, the dwells among them.
+        let all = commanded_points(&plan, Sampling::EveryCycle(0.01));
+        assert!(all.len() > 100);
+        assert_eq!(all.iter().filter(|p| p.at_dwell).count(), 2);
+    }
+
+    #[test]
+    fn without_errors_the_tool_tip_error_is_zero() {
+        let s = spec();
+        let g = s.geometry();
+        let zero = |_: &Pose| ErrorState::default();
+        for p in evaluate(&g, &points(&s, Sampling::EveryCycle(0.01)), &zero, None).unwrap() {
+            assert!(crate::report::norm(p.error_before_um) < TOL_UM, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn a_datum_offset_is_seen_reversed_in_the_workpiece_frame_at_every_pose() {
+        // The workpiece frame moved by δW on the table: the tip relative to it is −δW, whatever
+        // the angles (the workpiece frame turns with the table).
+        let s = spec();
+        let g = s.geometry();
+        let offset = |_: &Pose| ErrorState {
+            workpiece_mm: [0.010, -0.020, 0.005],
+            ..ErrorState::default()
+        };
+        for p in evaluate(&g, &points(&s, Sampling::EveryCycle(0.01)), &offset, None).unwrap() {
+            let e = p.error_before_um;
+            for (k, want) in [-10.0, 20.0, -5.0].into_iter().enumerate() {
+                assert!((e[k] - want).abs() < TOL_UM, "{e:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_stylus_offset_turns_into_the_workpiece_frame_with_the_table() {
+        // δT = 10 µm along bed x. The table turned by −C about z (A = 0): in the workpiece frame
+        // the offset reads R_z(C)·δT, (0, 10, 0) µm at C = 90°.
+        let s = spec();
+        let g = s.geometry();
+        let tool = |_: &Pose| ErrorState {
+            tool_mm: [0.010, 0.0, 0.0],
+            ..ErrorState::default()
+        };
+        let c = Commanded {
+            time_s: 0.0,
+            line: 1,
+            q_mm: [0.0, -150.0, -200.0],
+            abc_deg: [0.0, 0.0, 90.0],
+            at_dwell: true,
+        };
+        let e = evaluate(&g, &[c], &tool, None).unwrap()[0].error_before_um;
+        assert!(
+            e[0].abs() < TOL_UM && (e[1] - 10.0).abs() < TOL_UM && e[2].abs() < TOL_UM,
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn a_model_equal_to_the_machine_compensates_every_point_to_the_solver_tolerance() {
+        let s = spec();
+        let g = s.geometry();
+        let truth = crate::fiveaxis::TrueMachine::new(&s, 3).unwrap();
+        let t = |p: &Pose| truth.state_at(p);
+        let pts = evaluate(&g, &points(&s, Sampling::EveryCycle(0.01)), &t, Some(&t)).unwrap();
+        for p in &pts {
+            assert!(crate::report::norm(p.error_before_um) > 1.0, "{p:?}");
+            // Newton stops below 1e-10 mm; 1e-3 µm leaves room.
+            assert!(
+                crate::report::norm(p.error_after_um.unwrap()) < 1e-3,
+                "{p:?}"
+            );
+        }
+        let sum = summarise(&pts, "t.ngc", "trunnion-ac", 3, Some("m.json")).unwrap();
+        assert!(sum.reduction.unwrap() > 0.999_99);
+    }
+
+    #[test]
+    fn a_machine_without_rotary_speed_limits_cannot_run_programs() {
+        let text = include_str!("../../machines/trunnion-ac.toml")
+            .replace("max_speed_deg_per_s = 90.0", "");
+        let s = FiveAxisSpec::from_toml_str(&text, "m.toml").unwrap();
+        let e = plan_program("G0 A-10\nM2\n", "t.ngc", &s).unwrap_err();
+        assert!(
+            e.to_string().contains("rotary axis A has no speed limits"),
+            "{e}"
+        );
+    }
+}
