@@ -127,7 +127,9 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
     let max = json["heldout_max_residual_um"].as_f64().unwrap();
     assert!(share > 0.9 && share < 1.0, "{share}");
     assert!(mean > 0.0 && mean < max, "{mean} {max}");
-    assert_eq!(json["parameters"].as_array().unwrap().len(), 19);
+    // The default model: 19 location and assembly errors and the harmonics 2 (cos, sin) of the
+    // twelve rotary motion errors.
+    assert_eq!(json["parameters"].as_array().unwrap().len(), 19 + 24);
     // The D-optimal choice of 20 of them.
     succeed(
         &t.0,
@@ -241,7 +243,7 @@ fn too_few_configurations_for_the_parameters_are_refused() {
         ],
     );
     let e = one_line_error(&t.0, &["identify", "--data", "p.csv", "--machine", &m]);
-    assert_eq!(e, "p.csv: too few configurations: 5 configurations give 15 readings for 19 parameters (need at least 8 configurations)");
+    assert_eq!(e, "p.csv: too few configurations: 5 configurations give 15 readings for 43 parameters (need at least 16 configurations)");
     let e = one_line_error(
         &t.0,
         &[
@@ -261,8 +263,8 @@ fn too_few_configurations_for_the_parameters_are_refused() {
 }
 
 /// The figures of docs/results.md, guarded: on realisations 1–3, 50 spread configurations leave
-/// at most 4 µm mean on 500 held-out poses and characterise at least 94 % (measured: 94.9–95.9 %,
-/// 2.2–2.8 µm).
+/// at most 4 µm mean on 500 held-out poses and characterise at least 95 % (measured with the
+/// default model, harmonics 2: 95.5–96.7 %, 1.9–2.2 µm).
 #[test]
 fn fifty_configurations_characterise_about_95_percent_on_three_realisations() {
     let t = Tmp::new("seeds");
@@ -290,7 +292,7 @@ fn fifty_configurations_characterise_about_95_percent_on_three_realisations() {
             serde_json::from_str(&std::fs::read_to_string(t.0.join(&json)).unwrap()).unwrap();
         let share = v["heldout_characterised_share"].as_f64().unwrap();
         let mean = v["heldout_mean_residual_um"].as_f64().unwrap();
-        assert!(share >= 0.94, "seed {seed}: {share}");
+        assert!(share >= 0.95, "seed {seed}: {share}");
         assert!(mean < 4.0, "seed {seed}: {mean} µm");
         assert_eq!(v["heldout_poses"].as_u64(), Some(500));
     }

@@ -77,9 +77,9 @@ pub struct IdentifyArgs {
     /// sensitivity only, before looking at the measurements).
     #[arg(long)]
     pub design_configs: Option<usize>,
-    /// Also fit the rotary motion errors' harmonics of orders 2..=N (0: location and
-    /// assembly errors only).
-    #[arg(long, default_value_t = 0)]
+    /// Also fit the rotary motion errors' harmonics of orders 2..=N (0 or 1: location and
+    /// assembly errors only). Default 2: see docs/decisions/2026-11-24-five-axis-harmonics.md.
+    #[arg(long, default_value_t = 2)]
     pub harmonics: u32,
     /// Held-out poses for the judge.
     #[arg(long, default_value_t = 500)]
