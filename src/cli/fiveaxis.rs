@@ -182,6 +182,7 @@ pub(super) fn run_config(args: super::RunArgs) -> Result<FiveAxisRunConfig> {
     Ok(FiveAxisRunConfig {
         program: args.program,
         machine,
+        machine_file: path.display().to_string(),
         seed: args.seed,
         out_dir: args.out,
         force: args.force.force,

@@ -131,7 +131,7 @@ pub struct ForceArg {
     pub force: bool,
 }
 
-/// Rerun recording options (run and campaign).
+/// Rerun recording options (run, campaign, probe-campaign, identify).
 #[derive(clap::Args)]
 pub struct RrdArgs {
     /// Write a Rerun recording (.rrd) of the run; open it with `rerun FILE.rrd`.

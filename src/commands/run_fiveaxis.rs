@@ -21,6 +21,8 @@ pub struct FiveAxisRunConfig {
     pub program: PathBuf,
     /// The machine.
     pub machine: FiveAxisSpec,
+    /// The machine file's name (in errors).
+    pub machine_file: String,
     /// Seed of the machine realisation.
     pub seed: u64,
     /// Folder for `samples.csv` and `summary.json`.
@@ -44,7 +46,11 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     let spec = &cfg.machine;
     let name = cfg.program.display().to_string();
     let text = files::read_named(&cfg.program, "program")?;
-    let plan = five::plan_program(&text, &name, spec)?;
+    let plan = five::plan_program(&text, &name, spec, &cfg.machine_file)?;
+    if let Sampling::EveryCycle(dt_s) = cfg.sampling {
+        // No thermal steps on this machine: only the number of samples is limited.
+        crate::program::check_run_size(&name, 0.0, 1.0, plan.duration_s(), Some(dt_s))?;
+    }
     let out_files = match &cfg.out_dir {
         Some(dir) => {
             let names = ["samples.csv", "summary.json"].map(String::from);

@@ -95,14 +95,19 @@ pub struct FivePoint {
     pub error_after_um: Option<[f64; 3]>,
 }
 
-/// Interprets and plans `text` (named `file` in errors) on `spec`, checking the linear and
-/// rotary travels.
+/// Interprets and plans `text` (named `file` in errors) on `spec` (read from `machine_file`),
+/// checking the linear and rotary travels.
 ///
 /// # Errors
 /// Syntax or semantic errors, a machine file without rotary speed limits, a move beyond a
 /// travel limit (with its line).
-pub fn plan_program(text: &str, file: &str, spec: &FiveAxisSpec) -> Result<Plan, FiveAxisRunError> {
-    let rotary = spec.rotary_limits(&spec.machine.name)?;
+pub fn plan_program(
+    text: &str,
+    file: &str,
+    spec: &FiveAxisSpec,
+    machine_file: &str,
+) -> Result<Plan, FiveAxisRunError> {
+    let rotary = spec.rotary_limits(machine_file)?;
     let start_mm = spec.axes.home_mm;
     let cfg = InterpConfig {
         start_mm,
@@ -452,7 +457,7 @@ mod tests {
 
     fn points(spec: &FiveAxisSpec, sampling: Sampling) -> Vec<Commanded> {
         let text = "G0 A-30 C90\nG0 X10 Y20 Z-250\nG4 P1\nG1 X-20 A-60 C180 F1000\nG4 P2\nM2\n";
-        let plan = plan_program(text, "t.ngc", spec).unwrap();
+        let plan = plan_program(text, "t.ngc", spec, "m.toml").unwrap();
         commanded_points(&plan, sampling)
     }
 
@@ -460,7 +465,7 @@ mod tests {
     fn dwell_points_sit_in_the_middle_of_each_dwell_at_the_commanded_axes() {
         let s = spec();
         let text = "G0 A-30 C90\nG0 X10 Y20 Z-250\nG4 P1\nG1 X-20 A-60 C180 F1000\nG4 P2\nM2\n";
-        let plan = plan_program(text, "t.ngc", &s).unwrap();
+        let plan = plan_program(text, "t.ngc", &s, "m.toml").unwrap();
         let pts = commanded_points(&plan, Sampling::Dwells);
         assert_eq!(pts.len(), 2);
         let dwell = &plan.segments()[2];
@@ -552,7 +557,7 @@ mod tests {
         let text = include_str!("../../machines/trunnion-ac.toml")
             .replace("max_speed_deg_per_s = 90.0", "");
         let s = FiveAxisSpec::from_toml_str(&text, "m.toml").unwrap();
-        let e = plan_program("G0 A-10\nM2\n", "t.ngc", &s).unwrap_err();
+        let e = plan_program("G0 A-10\nM2\n", "t.ngc", &s, "m.toml").unwrap_err();
         assert!(
             e.to_string().contains("rotary axis A has no speed limits"),
             "{e}"
