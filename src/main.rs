@@ -29,7 +29,7 @@ fn run(command: Command) -> Result<()> {
     let stdout = std::io::stdout();
     let out = &mut stdout.lock();
     match command {
-        Command::Run(args) => commands::run::run(&args.config()?, out),
+        Command::Run(args) => commands::run::run_target(&args.config()?, out),
         Command::Calibrate(args) => commands::calibrate::calibrate(&args.config()?, out),
         Command::Campaign(args) => commands::campaign::campaign(&args.config()?, out),
         Command::Train(args) => commands::train::train(&args.config()?, out),

@@ -250,16 +250,19 @@ pub fn norm(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
+/// Writes one row of error statistics (`name`, max and RMS per component and of |E|).
+pub fn write_stats_row(out: &mut dyn Write, name: &str, st: &ErrorStats) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "  {name:<22} max |Ex| {:>6.2}  |Ey| {:>6.2}  |Ez| {:>6.2}  |E| {:>6.2} µm   RMS Ex {:>6.2}  Ey {:>6.2}  Ez {:>6.2}  |E| {:>6.2} µm",
+        st.max_abs_um[0], st.max_abs_um[1], st.max_abs_um[2], st.max_abs_um[3],
+        st.rms_um[0], st.rms_um[1], st.rms_um[2], st.rms_um[3]
+    )
+}
+
 /// Writes the summary lines for a terminal.
 pub fn write_summary(s: &RunSummary, out: &mut dyn Write) -> std::io::Result<()> {
-    let row = |out: &mut dyn Write, name: &str, st: &ErrorStats| -> std::io::Result<()> {
-        writeln!(
-            out,
-            "  {name:<22} max |Ex| {:>6.2}  |Ey| {:>6.2}  |Ez| {:>6.2}  |E| {:>6.2} µm   RMS Ex {:>6.2}  Ey {:>6.2}  Ez {:>6.2}  |E| {:>6.2} µm",
-            st.max_abs_um[0], st.max_abs_um[1], st.max_abs_um[2], st.max_abs_um[3],
-            st.rms_um[0], st.rms_um[1], st.rms_um[2], st.rms_um[3]
-        )
-    };
+    let row = write_stats_row;
     writeln!(
         out,
         "summary ({} points, t = {:.0} … {:.0} s, mean sensor temperature {:.2} °C):",

@@ -570,3 +570,137 @@ fn controlled_lobes_are_drawn_with_the_open_loop_lobes() {
         "controlled lobes recording",
     );
 }
+
+#[test]
+fn the_five_axis_recordings_hold_the_moving_trunnion_the_probing_and_the_error_fields() {
+    let dir = TempDir::new("fiveaxis");
+    let d = dir.path();
+    let m = repo_file("machines/trunnion-ac.toml");
+    let m = m.to_str().unwrap();
+    let out = ok(
+        vmc(
+            d,
+            &[
+                "probe-campaign",
+                "--machine",
+                m,
+                "--configs",
+                "30",
+                "-o",
+                "p.csv",
+                "--rrd",
+                "probe.rrd",
+                "--magnify",
+                "500",
+            ],
+        ),
+        "probe-campaign --rrd",
+    );
+    assert!(out.contains("wrote probe.rrd"), "{out}");
+    ok(
+        vmc(
+            d,
+            &[
+                "identify",
+                "--data",
+                "p.csv",
+                "--machine",
+                m,
+                "-o",
+                "id.json",
+                "--heldout-poses",
+                "100",
+                "--rrd",
+                "id.rrd",
+            ],
+        ),
+        "identify --rrd",
+    );
+    let program = repo_file("trajectories/trunnion_5axis.ngc");
+    ok(
+        vmc(
+            d,
+            &[
+                "run",
+                program.to_str().unwrap(),
+                "--machine",
+                m,
+                "--identified",
+                "id.json",
+                "--rrd",
+                "run.rrd",
+            ],
+        ),
+        "run --rrd (five-axis)",
+    );
+    let table = "machine/X/Y/A/C";
+    let w = "machine/X/Y/A/C/workpiece";
+    for (file, entities, timeline) in [
+        (
+            "run.rrd",
+            vec![
+                format!("{table}"),
+                "machine/X/Y/A".into(),
+                "machine/Z".into(),
+                format!("{w}/spheres"),
+                format!("{w}/paths/commanded"),
+                format!("{w}/paths/actual_uncompensated"),
+                format!("{w}/paths/actual_compensated"),
+                format!("{w}/errors/before"),
+                format!("{w}/errors/after"),
+                "errors/before/norm".into(),
+                "errors/after/norm".into(),
+                "axes/a_deg".into(),
+                "axes/c_deg".into(),
+                "report".into(),
+            ],
+            "sim_time",
+        ),
+        (
+            "probe.rrd",
+            vec![
+                format!("{table}"),
+                format!("{w}/probed/points"),
+                format!("{w}/probed/centre_error"),
+                "errors/before/norm".into(),
+                "report".into(),
+            ],
+            "configuration",
+        ),
+        (
+            "id.rrd",
+            vec![
+                format!("{table}"),
+                format!("{w}/heldout/before"),
+                format!("{w}/heldout/after"),
+                "errors/after/norm".into(),
+                "report".into(),
+            ],
+            "pose",
+        ),
+    ] {
+        let rrd = d.join(file);
+        assert_verified(&rrd);
+        let refs: Vec<&str> = entities.iter().map(String::as_str).collect();
+        assert_has(&printed(&rrd, "-vv"), &refs, &[timeline], file);
+    }
+    // The rotary axes move: the A and C transforms are logged at many times.
+    let p = printed(&d.join("run.rrd"), "-vv");
+    for axis in ["machine/X/Y/A", "machine/X/Y/A/C"] {
+        let rows: usize = p
+            .lines()
+            .filter(|l| {
+                l.ends_with(&format!(" - /{axis} - ")) || l.ends_with(&format!(" - /{axis} -"))
+            })
+            .filter_map(|l| l.split(" with ").nth(1)?.split(' ').next()?.parse().ok())
+            .max()
+            .unwrap_or(0);
+        assert!(rows > 100, "{axis}: {rows} rows");
+    }
+    let data = printed(&d.join("run.rrd"), "-vvv");
+    assert!(
+        data.contains("×2000"),
+        "default magnification in the run recording"
+    );
+    assert!(printed(&d.join("probe.rrd"), "-vvv").contains("×500"));
+}

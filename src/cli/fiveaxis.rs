@@ -1,12 +1,14 @@
-//! Arguments of `probe-campaign` and `identify` (five-axis machines).
+//! Arguments of `probe-campaign` and `identify`, and `run`'s config on a five-axis machine.
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 
-use super::ForceArg;
+use super::{ForceArg, RrdArgs};
 use crate::commands::identify::IdentifyConfig;
 use crate::commands::probe_campaign::ProbeCampaignConfig;
+use crate::commands::run_fiveaxis::FiveAxisRunConfig;
+use crate::fiveaxis::run::Sampling;
 use crate::fiveaxis::FiveAxisSpec;
 
 /// Arguments of `probe-campaign`.
@@ -29,6 +31,8 @@ pub struct ProbeCampaignArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub force: ForceArg,
+    #[command(flatten)]
+    pub rrd: RrdArgs,
 }
 
 impl ProbeCampaignArgs {
@@ -52,6 +56,7 @@ impl ProbeCampaignArgs {
             noise_2sigma_um: self.noise_2sigma_um,
             out: self.out,
             force: self.force.force,
+            rrd: self.rrd.checked()?,
         })
     }
 }
@@ -72,9 +77,9 @@ pub struct IdentifyArgs {
     /// sensitivity only, before looking at the measurements).
     #[arg(long)]
     pub design_configs: Option<usize>,
-    /// Also fit the rotary motion errors' harmonics of orders 2..=N (0: location and
-    /// assembly errors only).
-    #[arg(long, default_value_t = 0)]
+    /// Also fit the rotary motion errors' harmonics of orders 2..=N (0 or 1: location and
+    /// assembly errors only). Default 2: see docs/decisions/2026-11-24-five-axis-harmonics.md.
+    #[arg(long, default_value_t = 2)]
     pub harmonics: u32,
     /// Held-out poses for the judge.
     #[arg(long, default_value_t = 500)]
@@ -85,6 +90,8 @@ pub struct IdentifyArgs {
     pub seed: Option<u64>,
     #[command(flatten)]
     pub force: ForceArg,
+    #[command(flatten)]
+    pub rrd: RrdArgs,
 }
 
 impl IdentifyArgs {
@@ -111,6 +118,76 @@ impl IdentifyArgs {
             heldout_poses: self.heldout_poses,
             seed: self.seed,
             force: self.force.force,
+            rrd: self.rrd.checked()?,
         })
     }
+}
+
+/// The config of `run` on a five-axis machine (the machine file is one); options of the
+/// three-axis thermal twin are refused, each with what to do.
+///
+/// # Errors
+/// An invalid machine file, an option this machine does not take, a non-positive cycle, a bad
+/// recording path or magnification.
+pub(super) fn run_config(args: super::RunArgs) -> Result<FiveAxisRunConfig> {
+    let path = args.machine.machine.clone().unwrap_or_default();
+    let machine = FiveAxisSpec::load(&path)?;
+    let name = &machine.machine.name;
+    let refused: [(bool, &str, &str); 7] = [
+        (
+            args.sensors.sensors.is_some(),
+            "--sensors",
+            "it has no thermal model, hence no sensors",
+        ),
+        (
+            !args.warmup.is_empty(),
+            "--warmup",
+            "it has no thermal model",
+        ),
+        (
+            args.thermal_step_s != 1.0,
+            "--thermal-step-s",
+            "it has no thermal model",
+        ),
+        (
+            args.tools.is_some(),
+            "--tools",
+            "it carries one tool (the machine file's [tool])",
+        ),
+        (
+            args.model.is_some(),
+            "--model",
+            "compensate with the identified model of `identify` (--identified)",
+        ),
+        (args.strict, "--strict", "it applies to a trained --model"),
+        (
+            args.allow_other_machine,
+            "--allow-other-machine",
+            "it applies to a trained --model",
+        ),
+    ];
+    if let Some((_, option, why)) = refused.iter().find(|r| r.0) {
+        anyhow::bail!("{option} does not apply to the five-axis machine {name}: {why}");
+    }
+    anyhow::ensure!(
+        args.interp_cycle_ms.is_finite() && args.interp_cycle_ms > 0.0,
+        "--interp-cycle-ms must be > 0, got {}",
+        args.interp_cycle_ms
+    );
+    let sampling = if args.every_cycle {
+        Sampling::EveryCycle(args.interp_cycle_ms * 1e-3)
+    } else {
+        Sampling::Dwells
+    };
+    Ok(FiveAxisRunConfig {
+        program: args.program,
+        machine,
+        machine_file: path.display().to_string(),
+        seed: args.seed,
+        out_dir: args.out,
+        force: args.force.force,
+        sampling,
+        identified: args.identified,
+        rrd: args.rrd.checked()?,
+    })
 }

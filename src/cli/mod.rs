@@ -131,7 +131,7 @@ pub struct ForceArg {
     pub force: bool,
 }
 
-/// Rerun recording options (run and campaign).
+/// Rerun recording options (run, campaign, probe-campaign, identify).
 #[derive(clap::Args)]
 pub struct RrdArgs {
     /// Write a Rerun recording (.rrd) of the run; open it with `rerun FILE.rrd`.
@@ -230,6 +230,10 @@ pub struct RunArgs {
     /// Use a model calibrated on another machine or realisation (a note says which).
     #[arg(long, requires = "model")]
     pub allow_other_machine: bool,
+    /// Five-axis machine: the identified model (JSON from `identify`) to compensate with; each
+    /// point is reported before and after.
+    #[arg(long, conflicts_with = "model")]
+    pub identified: Option<PathBuf>,
     #[command(flatten)]
     pub rrd: RrdArgs,
 }
@@ -239,8 +243,25 @@ impl RunArgs {
     ///
     /// # Errors
     /// An unreadable or invalid machine or sensor set, a non-positive cycle or step, a model
-    /// without `--compensate`, a bad recording path or magnification.
-    pub fn config(self) -> Result<commands::run::RunConfig> {
+    /// without `--compensate`, a bad recording path or magnification, an option the machine's
+    /// kind does not take.
+    pub fn config(self) -> Result<commands::run::RunTarget> {
+        if let Some(path) = &self.machine.machine {
+            if commands::is_five_axis_machine(path)? {
+                return fiveaxis::run_config(self).map(commands::run::RunTarget::FiveAxis);
+            }
+        }
+        if let Some(path) = &self.identified {
+            anyhow::bail!(
+                "{}: --identified takes the identified model of a five-axis machine; this machine has no rotary axes (use --model with --compensate)",
+                path.display()
+            );
+        }
+        self.three_axis_config()
+            .map(commands::run::RunTarget::ThreeAxis)
+    }
+
+    fn three_axis_config(self) -> Result<commands::run::RunConfig> {
         let machine = self.machine.load(Some(&self.sensors))?;
         let sim = SimConfig::new(self.thermal_step_s, self.interp_cycle_ms * 1e-3).map_err(
             |e| match e {

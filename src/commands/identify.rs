@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::files;
 use crate::fiveaxis::campaign::parse_csv;
-use crate::fiveaxis::heldout::{judge, HeldOut, HeldOutPlan};
+use crate::fiveaxis::heldout::{judge_poses, HeldOut, HeldOutPlan};
 use crate::fiveaxis::{FiveAxisSpec, TrueMachine};
 use vmc_identify::chain::Pose;
 use vmc_identify::design::d_optimal;
@@ -39,6 +39,8 @@ pub struct IdentifyConfig {
     pub seed: Option<u64>,
     /// Overwrite.
     pub force: bool,
+    /// A Rerun recording of the held-out error field to write.
+    pub rrd: Option<super::RrdOutput>,
 }
 
 /// One parameter in the output, in µm or µrad.
@@ -89,6 +91,9 @@ const COV_FLOOR_MM2: f64 = 1e-10;
 /// written, a held-out judge without a seed.
 pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
     files::check_writable(&cfg.out, cfg.force)?;
+    if let Some(rrd) = &cfg.rrd {
+        crate::record::check_rrd_path(&rrd.path, cfg.force)?;
+    }
     let spec = &cfg.machine;
     let name = cfg.data.display().to_string();
     let text = files::read_named(&cfg.data, "probing file")?;
@@ -128,8 +133,10 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
         poses: cfg.heldout_poses,
         ..HeldOutPlan::default()
     };
-    let held = judge(spec, &truth, &model, &plan)?;
-    print_report(out, spec, &name, &id, &chosen, time_ms, &held, seed)?;
+    let (held, judged) = judge_poses(spec, &truth, &model, &plan)?;
+    let mut text = Vec::new();
+    print_report(&mut text, spec, &name, &id, &chosen, time_ms, &held, seed)?;
+    out.write_all(&text)?;
     let result = IdentifiedFile {
         machine: spec.machine.name.clone(),
         data: name,
@@ -174,6 +181,22 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
     let json = serde_json::to_string_pretty(&result)?;
     files::write_atomic(&cfg.out, json.as_bytes(), cfg.force)?;
     writeln!(out, "→ {}", cfg.out.display())?;
+    if let Some(rrd) = &cfg.rrd {
+        let id = format!(
+            "vmc-twin identify {} on {} harmonics {} design {:?} held-out seed {seed}",
+            result.data, spec.machine.name, cfg.harmonics, cfg.design_configs
+        );
+        let bytes = crate::record::fiveaxis::record_heldout(
+            &rrd.path,
+            cfg.force,
+            &id,
+            rrd.settings.magnify,
+            spec,
+            &judged,
+            &String::from_utf8_lossy(&text),
+        )?;
+        super::wrote_recording(out, &rrd.path, bytes, "")?;
+    }
     Ok(())
 }
 

@@ -14,6 +14,7 @@ pub mod interpret;
 pub mod lobes;
 pub mod probe_campaign;
 pub mod run;
+pub mod run_fiveaxis;
 pub mod select_sensors;
 pub mod thermal;
 pub mod train;
@@ -60,6 +61,18 @@ pub fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<Machi
         )
     })?;
     Ok(spec)
+}
+
+/// Whether the machine file at `path` describes a five-axis machine (it has `[[rotary]]` axes);
+/// the three- and five-axis descriptions are otherwise read by their own parsers.
+///
+/// # Errors
+/// An unreadable file or bad TOML.
+pub fn is_five_axis_machine(path: &Path) -> Result<bool> {
+    let text = crate::machine::read_machine_file(path)?;
+    let table: toml::Table =
+        crate::machine::parse_machine_toml(&text, &path.display().to_string())?;
+    Ok(table.contains_key("rotary"))
 }
 
 /// Refuses a seed given twice: its runs would count twice in the medians.

@@ -25,6 +25,8 @@ pub struct ProbeCampaignConfig {
     pub out: PathBuf,
     /// Overwrite.
     pub force: bool,
+    /// A Rerun recording to write.
+    pub rrd: Option<super::RrdOutput>,
 }
 
 /// Runs the campaign and writes the file.
@@ -33,6 +35,9 @@ pub struct ProbeCampaignConfig {
 /// An output that may not be written, too few reachable configurations, a failed probing.
 pub fn probe_campaign(cfg: &ProbeCampaignConfig, out: &mut dyn Write) -> Result<()> {
     files::check_writable(&cfg.out, cfg.force)?;
+    if let Some(rrd) = &cfg.rrd {
+        crate::record::check_rrd_path(&rrd.path, cfg.force)?;
+    }
     let spec = &cfg.machine;
     let machine = TrueMachine::new(spec, cfg.seed)?;
     let probe = VirtualProbe::of(spec, cfg.noise_2sigma_um);
@@ -56,8 +61,9 @@ pub fn probe_campaign(cfg: &ProbeCampaignConfig, out: &mut dyn Write) -> Result<
         .collect();
     let mean = bias_um.iter().sum::<f64>() / bias_um.len() as f64;
     let max = bias_um.iter().copied().fold(0.0, f64::max);
+    let mut text = Vec::new();
     writeln!(
-        out,
+        text,
         "probing campaign on {} (seed {}): {} configurations × {} points, trigger noise {} µm (2σ) → {}",
         spec.machine.name,
         cfg.seed,
@@ -67,8 +73,25 @@ pub fn probe_campaign(cfg: &ProbeCampaignConfig, out: &mut dyn Write) -> Result<
         cfg.out.display()
     )?;
     writeln!(
-        out,
+        text,
         "sphere-centre bias (measured − nominal): mean {mean:.1} µm, max {max:.1} µm"
     )?;
+    out.write_all(&text)?;
+    if let Some(rrd) = &cfg.rrd {
+        let id = format!(
+            "vmc-twin probe-campaign on {} seed {} configs {}",
+            spec.machine.name, cfg.seed, cfg.configs
+        );
+        let bytes = crate::record::fiveaxis::record_probing(
+            &rrd.path,
+            cfg.force,
+            &id,
+            rrd.settings.magnify,
+            spec,
+            &rows,
+            &String::from_utf8_lossy(&text),
+        )?;
+        super::wrote_recording(out, &rrd.path, bytes, "")?;
+    }
     Ok(())
 }

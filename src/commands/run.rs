@@ -51,6 +51,25 @@ pub struct RunConfig {
     pub tools: crate::tools::ToolTable,
 }
 
+/// A run on the machine the file describes.
+pub enum RunTarget {
+    /// The three-axis thermal twin.
+    ThreeAxis(RunConfig),
+    /// A five-axis machine (see [`super::run_fiveaxis`]).
+    FiveAxis(super::run_fiveaxis::FiveAxisRunConfig),
+}
+
+/// Runs `target` on its kind of machine.
+///
+/// # Errors
+/// See [`run`] and [`super::run_fiveaxis::run`].
+pub fn run_target(target: &RunTarget, out: &mut dyn Write) -> Result<()> {
+    match target {
+        RunTarget::ThreeAxis(cfg) => run(cfg, out),
+        RunTarget::FiveAxis(cfg) => super::run_fiveaxis::run(cfg, out),
+    }
+}
+
 /// The compensating controller of a run: the model, its inputs checked against its trained
 /// ranges.
 type RunController = Guarded<Compensator<AnyPredictor>>;

@@ -65,6 +65,19 @@ pub struct HeldOut {
     pub characterised_share: f64,
 }
 
+/// One judged pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JudgedPose {
+    /// Rotary angles, degrees, in the geometry's order.
+    pub rotary_deg: [f64; 2],
+    /// The target point in the workpiece frame, mm.
+    pub target_w_mm: [f64; 3],
+    /// Error without compensation, workpiece frame, µm.
+    pub before_um: [f64; 3],
+    /// Error with the identified model, workpiece frame, µm.
+    pub after_um: [f64; 3],
+}
+
 /// Judges the compensation model `model` (errors as a function of the pose) on held-out poses.
 ///
 /// # Errors
@@ -75,6 +88,19 @@ pub fn judge(
     model: &dyn Fn(&Pose) -> ErrorState,
     plan: &HeldOutPlan,
 ) -> Result<HeldOut, HtmError> {
+    judge_poses(spec, machine, model, plan).map(|(verdict, _)| verdict)
+}
+
+/// [`judge`], with the error before and after at every pose.
+///
+/// # Errors
+/// [`HtmError`] when the compensation cannot be solved.
+pub fn judge_poses(
+    spec: &FiveAxisSpec,
+    machine: &TrueMachine,
+    model: &dyn Fn(&Pose) -> ErrorState,
+    plan: &HeldOutPlan,
+) -> Result<(HeldOut, Vec<JudgedPose>), HtmError> {
     let geom = machine.geometry();
     let lim = spec.rotary_limits_deg();
     let mut rng = StdRng::seed_from_u64(plan.seed ^ 0x4e1d_0007_0000_0000);
@@ -85,6 +111,7 @@ pub fn judge(
         .map_or([0.0; 3], |r| r.point_mm);
     let datum = Vector3::from(geom.datum_mm);
     let (mut before, mut after) = (Vec::new(), Vec::new());
+    let mut poses = Vec::new();
     let mut attempts = 0;
     while before.len() < plan.poses && attempts < 100 * plan.poses {
         attempts += 1;
@@ -112,18 +139,27 @@ pub fn judge(
             };
             tip_in_workpiece_mm(geom, &pose, &machine.state_at(&pose))
         };
-        before.push((real_tip(q_nom) - target).norm() * 1e3);
+        let e_before = (real_tip(q_nom) - target) * 1e3;
         let q_comp = linear_axes_for(geom, rot, target, model)?;
-        after.push((real_tip(q_comp) - target).norm() * 1e3);
+        let e_after = (real_tip(q_comp) - target) * 1e3;
+        before.push(e_before.norm());
+        after.push(e_after.norm());
+        poses.push(JudgedPose {
+            rotary_deg: rot,
+            target_w_mm: target.into(),
+            before_um: e_before.into(),
+            after_um: e_after.into(),
+        });
     }
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
-    Ok(HeldOut {
+    let verdict = HeldOut {
         poses: before.len(),
         before_mean_um: mean(&before),
         before_max_um: max(&before),
         after_mean_um: mean(&after),
         after_max_um: max(&after),
         characterised_share: 1.0 - mean(&after) / mean(&before).max(1e-300),
-    })
+    };
+    Ok((verdict, poses))
 }

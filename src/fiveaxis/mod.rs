@@ -10,7 +10,9 @@
 
 pub mod campaign;
 pub mod heldout;
+pub mod identified;
 pub mod probe;
+pub mod run;
 pub mod spec;
 pub mod truth;
 

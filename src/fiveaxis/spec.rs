@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::errors::spec::ValueUnit;
 use crate::errors::ErrorFieldSpec;
 use crate::machine::{AxesSpec, MachineError, MachineInfo, ToolSpec};
+use crate::motion::{MotionLimits, RotaryAxisLimits, RotaryLimits};
 use vmc_identify::chain::{Chain, Geometry, RotaryAxis, RotaryGeometry};
 
 /// One rotary axis: its nominal line and travel limits.
@@ -22,6 +23,14 @@ pub struct RotarySpec {
     pub min_deg: Option<f64>,
     /// Upper travel limit, degrees (required).
     pub max_deg: Option<f64>,
+    /// Largest angular speed, deg/s, rapids included; needed to run programs (`run`), not to
+    /// probe (no default; a trunnion table of this class: 90 for A, 180 for C).
+    #[serde(default)]
+    pub max_speed_deg_per_s: Option<f64>,
+    /// Largest angular acceleration, deg/s²; needed to run programs, with
+    /// `max_speed_deg_per_s` (no default; typical: 360 for A, 720 for C).
+    #[serde(default)]
+    pub max_accel_deg_per_s2: Option<f64>,
 }
 
 /// The reference sphere on the table and the stylus ball.
@@ -131,6 +140,10 @@ pub struct FiveAxisSpec {
     pub machine: MachineInfo,
     /// Linear travels.
     pub axes: AxesSpec,
+    /// Kinematic limits of X, Y, Z for running programs (default: [`MotionLimits::default`],
+    /// 30 m/min rapids, 10 m/min feed, 2 m/s²).
+    #[serde(default)]
+    pub motion: MotionLimits,
     /// Rotary axes, in chain order (workpiece to tool).
     pub rotary: Vec<RotarySpec>,
     /// The probe stylus in the spindle.
@@ -252,6 +265,14 @@ impl FiveAxisSpec {
                     format!("rotary axis {}: min_deg must be below max_deg", r.axis),
                 ));
             }
+            for (name, v) in [
+                ("max_speed_deg_per_s", r.max_speed_deg_per_s),
+                ("max_accel_deg_per_s2", r.max_accel_deg_per_s2),
+            ] {
+                if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+                    return Err(invalid(path, field(name), "must be positive and finite"));
+                }
+            }
             if !r.point_mm.iter().all(|v| v.is_finite()) {
                 return Err(invalid(path, field("point_mm"), "must be finite"));
             }
@@ -332,6 +353,9 @@ impl FiveAxisSpec {
         if !(p.clearance_mm > 0.0 && p.clearance_mm.is_finite()) {
             return Err(invalid(path, "probe.clearance_mm", "must be positive"));
         }
+        self.motion
+            .validate()
+            .map_err(|e| invalid(path, "motion", e.to_string()))?;
         self.linear_errors
             .validate(&|_| false)
             .map_err(|e| invalid(path, "linear_errors", e.to_string()))?;
@@ -464,6 +488,49 @@ impl FiveAxisSpec {
             .iter()
             .map(|r| (r.min_deg.unwrap_or(0.0), r.max_deg.unwrap_or(0.0)))
             .collect()
+    }
+
+    /// Travel limits of the rotary axes by G-code letter (A, B, C), degrees; `None` for an axis
+    /// the machine lacks.
+    #[must_use]
+    pub fn rotary_travel_abc_deg(&self) -> [Option<(f64, f64)>; 3] {
+        let mut out = [None; 3];
+        for r in &self.rotary {
+            if let (Some(axis), Some(lo), Some(hi)) = (parse_axis(&r.axis), r.min_deg, r.max_deg) {
+                out[axis.index()] = Some((lo, hi));
+            }
+        }
+        out
+    }
+
+    /// Speed and acceleration limits of the rotary axes for the planner.
+    ///
+    /// # Errors
+    /// [`MachineError::Invalid`] naming the first rotary axis without them (`path` names the
+    /// file).
+    pub fn rotary_limits(&self, path: &str) -> Result<RotaryLimits, MachineError> {
+        let mut limits = RotaryLimits::default();
+        for (i, r) in self.rotary.iter().enumerate() {
+            let (Some(axis), Some(speed), Some(accel)) = (
+                parse_axis(&r.axis),
+                r.max_speed_deg_per_s,
+                r.max_accel_deg_per_s2,
+            ) else {
+                return Err(invalid(
+                    path,
+                    format!("rotary[{i}].max_speed_deg_per_s"),
+                    format!(
+                        "rotary axis {} has no speed limits: give max_speed_deg_per_s and max_accel_deg_per_s2 to run programs on this machine",
+                        r.axis
+                    ),
+                ));
+            };
+            limits.axes[axis.index()] = Some(RotaryAxisLimits {
+                max_speed_deg_per_s: speed,
+                max_accel_deg_per_s2: accel,
+            });
+        }
+        Ok(limits)
     }
 
     /// Whether linear axes `q` are within travel (with `margin_mm` inside each limit).

@@ -55,7 +55,7 @@ pub use limits::MotionLimits;
 pub use profile::SpeedProfile;
 pub use rotary::{RotaryAxisLimits, RotaryLimits, ROTARY_AXES};
 pub use sampling::{AxisActivity, DwellPoint, Sample, Samples, DEFAULT_INTERPOLATION_CYCLE_S};
-pub use travel::{check_travel, segment_travel_violations};
+pub use travel::{check_rotary_travel, check_travel, segment_travel_violations};
 
 use thiserror::Error;
 
@@ -160,6 +160,22 @@ pub enum MotionError {
         min_mm: f64,
         /// Upper travel limit (mm).
         max_mm: f64,
+    },
+    /// A move turns a rotary axis beyond its travel limits.
+    #[error(
+        "line {line}: rotary axis {axis} reaches {angle_deg}°, outside its travel [{min_deg}, {max_deg}]°"
+    )]
+    RotaryOutOfTravel {
+        /// Source line of the offending move.
+        line: usize,
+        /// `'A'`, `'B'` or `'C'`.
+        axis: char,
+        /// The angle reached (degrees).
+        angle_deg: f64,
+        /// Lower travel limit (degrees).
+        min_deg: f64,
+        /// Upper travel limit (degrees).
+        max_deg: f64,
     },
     /// A segment reaches outside an axis's travel.
     #[error(

@@ -183,3 +183,29 @@ fn invalid_rotary_limits_are_named() {
         other => panic!("expected InvalidLimit, got {other:?}"),
     }
 }
+
+#[test]
+fn a_move_beyond_a_rotary_travel_limit_is_refused_with_its_line_and_the_angle() {
+    let plan = plan_5x(&[
+        rapid(1, [0.0; 3], [-30.0, 0.0, 90.0]),
+        feed(2, [0.0; 3], [-120.0, 0.0, 90.0], 3600.0),
+    ]);
+    let travel = [Some((-110.0, 30.0)), None, Some((0.0, 360.0))];
+    let err = check_rotary_travel(&plan, &travel).unwrap_err();
+    assert_eq!(
+        err,
+        MotionError::RotaryOutOfTravel {
+            line: 2,
+            axis: 'A',
+            angle_deg: -120.0,
+            min_deg: -110.0,
+            max_deg: 30.0
+        }
+    );
+    assert!(err
+        .to_string()
+        .contains("line 2: rotary axis A reaches -120°"));
+    // At the limit exactly is inside.
+    let at_limit = plan_5x(&[rapid(1, [0.0; 3], [-110.0, 0.0, 360.0])]);
+    assert!(check_rotary_travel(&at_limit, &travel).is_ok());
+}

@@ -4,6 +4,10 @@
 //! which includes the points where the angle crosses a multiple of π/2: an arc can bulge past a
 //! limit while both its end points are inside. A tolerance of 1e-9 mm (1 pm) absorbs the
 //! rounding of `c + r·cos θ` on programs that touch a limit exactly.
+//!
+//! Rotary axes turn linearly with the path within a segment, so a segment's end angles bound
+//! it; [`check_rotary_travel`] checks them against the travel limits in degrees (tolerance
+//! 1e-9°).
 
 use super::{Geometry, MotionError, Plan, Segment};
 
@@ -110,6 +114,39 @@ pub fn check_travel(
             .next()
         {
             return Err(e);
+        }
+    }
+    Ok(())
+}
+
+/// Overshoot tolerated before an angle counts as outside the travel (degrees).
+const ROTARY_TRAVEL_TOLERANCE_DEG: f64 = 1e-9;
+
+/// Checks that the rotary axes A, B, C stay within `travel_deg` (`[min, max]` degrees per axis,
+/// `None` for an axis the machine lacks or that has no limit) over the whole plan; reports the
+/// first move (in time order) that leaves it, with the angle it reaches.
+pub fn check_rotary_travel(
+    plan: &Plan,
+    travel_deg: &[Option<(f64, f64)>; 3],
+) -> Result<(), MotionError> {
+    for seg in plan.segments() {
+        for (i, limits) in travel_deg.iter().enumerate() {
+            let Some((min_deg, max_deg)) = *limits else {
+                continue;
+            };
+            for angle_deg in [seg.start_abc_deg[i], seg.end_abc_deg[i]] {
+                if angle_deg < min_deg - ROTARY_TRAVEL_TOLERANCE_DEG
+                    || angle_deg > max_deg + ROTARY_TRAVEL_TOLERANCE_DEG
+                {
+                    return Err(MotionError::RotaryOutOfTravel {
+                        line: seg.line,
+                        axis: super::ROTARY_AXES[i],
+                        angle_deg,
+                        min_deg,
+                        max_deg,
+                    });
+                }
+            }
         }
     }
     Ok(())

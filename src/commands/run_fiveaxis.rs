@@ -1,0 +1,167 @@
+//! `vmc-twin run` on a five-axis machine: a program with A/C words on the machine's truth, the
+//! tool tip error in the workpiece frame at every point, and with `--identified` the same points
+//! compensated by the identified model (see [`crate::fiveaxis::run`]).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use super::{wrote_recording, RrdOutput};
+use crate::files;
+use crate::fiveaxis::identified::IdentifiedModel;
+use crate::fiveaxis::run::{self as five, FiveAxisSummary, FivePoint, Sampling};
+use crate::fiveaxis::{FiveAxisSpec, TrueMachine};
+use crate::record;
+use vmc_identify::chain::Pose;
+
+/// What to run on a five-axis machine, validated.
+pub struct FiveAxisRunConfig {
+    /// The G-code program.
+    pub program: PathBuf,
+    /// The machine.
+    pub machine: FiveAxisSpec,
+    /// The machine file's name (in errors).
+    pub machine_file: String,
+    /// Seed of the machine realisation.
+    pub seed: u64,
+    /// Folder for `samples.csv` and `summary.json`.
+    pub out_dir: Option<PathBuf>,
+    /// Overwrite existing output files.
+    pub force: bool,
+    /// Where to measure.
+    pub sampling: Sampling,
+    /// An identified model (`identify`'s JSON) to compensate with.
+    pub identified: Option<PathBuf>,
+    /// A Rerun recording to write.
+    pub rrd: Option<RrdOutput>,
+}
+
+/// Runs the program, prints the report to `out`, writes the files asked for.
+///
+/// # Errors
+/// An unreadable or invalid program, a move beyond a travel, an unusable identified model,
+/// outputs that may not be written.
+pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
+    let spec = &cfg.machine;
+    let name = cfg.program.display().to_string();
+    let text = files::read_named(&cfg.program, "program")?;
+    let plan = five::plan_program(&text, &name, spec, &cfg.machine_file)?;
+    if let Sampling::EveryCycle(dt_s) = cfg.sampling {
+        // No thermal steps on this machine: only the number of samples is limited.
+        crate::program::check_run_size(&name, 0.0, 1.0, plan.duration_s(), Some(dt_s))?;
+    }
+    let out_files = match &cfg.out_dir {
+        Some(dir) => {
+            let names = ["samples.csv", "summary.json"].map(String::from);
+            let files = files::prepare_output_folder(dir, &names, cfg.force)?;
+            Some((files[0].clone(), files[1].clone()))
+        }
+        None => None,
+    };
+    if let Some(rrd) = &cfg.rrd {
+        record::check_rrd_path(&rrd.path, cfg.force)?;
+    }
+    let geom = spec.geometry();
+    let model = match &cfg.identified {
+        Some(path) => {
+            let text = files::read_named(path, "identified model")?;
+            Some(
+                IdentifiedModel::from_json_str(&text, &spec.machine.name, &geom)
+                    .with_context(|| path.display().to_string())?,
+            )
+        }
+        None => None,
+    };
+    let truth = TrueMachine::new(spec, cfg.seed)?;
+    let points = five::commanded_points(&plan, cfg.sampling);
+    let truth_at = |p: &Pose| truth.state_at(p);
+    let model_at = model.as_ref().map(|m| move |p: &Pose| m.state_at(p));
+    let evaluated = five::evaluate(
+        &geom,
+        &points,
+        &truth_at,
+        model_at.as_ref().map(|f| f as &dyn Fn(&Pose) -> _),
+    )
+    .with_context(|| name.clone())?;
+    let identified_name = cfg.identified.as_ref().map(|p| p.display().to_string());
+    let summary = five::summarise(
+        &evaluated,
+        &name,
+        &spec.machine.name,
+        cfg.seed,
+        identified_name.as_deref(),
+    )
+    .with_context(|| {
+        format!("{name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion")
+    })?;
+    let report = report_text(cfg, &evaluated, &summary, model.as_ref())?;
+    out.write_all(report.as_bytes())?;
+    if let Some(rrd) = &cfg.rrd {
+        let id = format!(
+            "vmc-twin run {name} on {} seed {} identified {}",
+            spec.machine.name,
+            cfg.seed,
+            identified_name.as_deref().unwrap_or("none")
+        );
+        let bytes = record::fiveaxis::record_run(
+            &rrd.path,
+            cfg.force,
+            &id,
+            rrd.settings.magnify,
+            spec,
+            &plan,
+            &evaluated,
+            &report,
+        )?;
+        wrote_recording(out, &rrd.path, bytes, "")?;
+    }
+    if let Some((csv, json)) = out_files {
+        files::write_atomic(
+            &csv,
+            five::samples_csv(&geom, &evaluated).as_bytes(),
+            cfg.force,
+        )?;
+        let text = serde_json::to_string_pretty(&summary)?;
+        files::write_atomic(&json, text.as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {} and {}", csv.display(), json.display())?;
+    }
+    Ok(())
+}
+
+/// The printed report: what ran, the per-point table, the summary.
+fn report_text(
+    cfg: &FiveAxisRunConfig,
+    points: &[FivePoint],
+    summary: &FiveAxisSummary,
+    model: Option<&IdentifiedModel>,
+) -> Result<String> {
+    let mut out: Vec<u8> = Vec::new();
+    let spec = &cfg.machine;
+    writeln!(
+        out,
+        "vmc-twin run: {} on {} (seed {}; five-axis, chain {})",
+        cfg.program.display(),
+        spec.machine.name,
+        cfg.seed,
+        spec.machine.chain
+    )?;
+    writeln!(out, "thermal state: {}", five::NO_THERMAL_MODEL)?;
+    if let (Some(m), Some(path)) = (model, &cfg.identified) {
+        writeln!(
+            out,
+            "compensation: identified model {} ({} parameters{}); the controller corrects X, Y, Z",
+            path.display(),
+            m.set.len(),
+            if m.harmonics >= 2 {
+                format!(", rotary motion harmonics up to order {}", m.harmonics)
+            } else {
+                String::new()
+            }
+        )?;
+    }
+    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; X, Y, Z and the angles are the commanded axes")?;
+    five::write_table(&spec.geometry(), points, &mut out)?;
+    five::write_summary(summary, &mut out)?;
+    Ok(String::from_utf8_lossy(&out).to_string())
+}
