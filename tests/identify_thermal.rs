@@ -156,7 +156,10 @@ fn the_fit_recovers_a_network_simulated_by_the_twin_to_a_millionth() {
     }
     for (g, w) in fit.gains.iter().zip(&GAINS) {
         for (a, b) in g.iter().zip(w) {
-            assert!((a - b).abs() < 1e-6 * b.abs().max(1.0), "gains {g:?} vs {w:?}");
+            assert!(
+                (a - b).abs() < 1e-6 * b.abs().max(1.0),
+                "gains {g:?} vs {w:?}"
+            );
         }
     }
     assert!(fit.at_bounds.is_empty(), "{:?}", fit.at_bounds);
@@ -176,7 +179,10 @@ fn with_thermistors_quantised_to_a_sixteenth_of_a_kelvin_the_fit_stays_within_it
         } else {
             0.05
         };
-        assert!(rel < bound, "{name}: relative error {rel} (bound {bound}); {fit:?}");
+        assert!(
+            rel < bound,
+            "{name}: relative error {rel} (bound {bound}); {fit:?}"
+        );
     }
     for (g, w) in fit.gains.iter().zip(&GAINS) {
         for (a, b) in g.iter().zip(w) {
@@ -193,8 +199,8 @@ fn with_thermistors_quantised_to_a_sixteenth_of_a_kelvin_the_fit_stays_within_it
     };
     let pred = fit.predict(&data).expect("predict");
     for (p, d) in pred.iter().zip(&drifts) {
-        let rms = (p.iter().zip(d).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / d.len() as f64)
-            .sqrt();
+        let rms =
+            (p.iter().zip(d).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
         assert!(rms < 0.1, "drift RMS error {rms} µm");
     }
 }

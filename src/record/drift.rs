@@ -45,8 +45,12 @@ pub fn record_drift(
     let file = RrdFile::create(path, force, title, blueprint)?;
     let rec = file.stream();
     for (k, name) in names.iter().enumerate() {
-        let mut series: Vec<(String, &str, [u8; 3], &[f64])> =
-            vec![(format!("drift/{name}/measured"), "measured", MEASURED_RGB, &drifts[k])];
+        let mut series: Vec<(String, &str, [u8; 3], &[f64])> = vec![(
+            format!("drift/{name}/measured"),
+            "measured",
+            MEASURED_RGB,
+            &drifts[k],
+        )];
         for (i, (label, p)) in preds.iter().enumerate() {
             series.push((
                 format!("drift/{name}/pred{i}"),
@@ -56,7 +60,12 @@ pub fn record_drift(
             ));
         }
         if let Some((label, p)) = black_box {
-            series.push((format!("drift/{name}/black_box"), label, BLACK_BOX_RGB, &p[k]));
+            series.push((
+                format!("drift/{name}/black_box"),
+                label,
+                BLACK_BOX_RGB,
+                &p[k],
+            ));
         }
         for (entity, label, c, values) in series {
             rec.log_static(
@@ -70,10 +79,8 @@ pub fn record_drift(
             let rows: Vec<usize> = (0..values.len().min(time_s.len()))
                 .filter(|&r| values[r].is_finite())
                 .collect();
-            let times = rerun::TimeColumn::new_duration_secs(
-                "test_time",
-                rows.iter().map(|&r| time_s[r]),
-            );
+            let times =
+                rerun::TimeColumn::new_duration_secs("test_time", rows.iter().map(|&r| time_s[r]));
             let cols = rerun::Scalars::new(rows.iter().map(|&r| values[r]))
                 .columns_of_unit_batches()
                 .map_err(|x| file.err(x))?;

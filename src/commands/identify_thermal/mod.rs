@@ -107,7 +107,11 @@ pub fn identify_thermal(cfg: &IdentifyThermalConfig, out: &mut dyn Write) -> Res
     let mut required: Vec<(String, &'static str)> = vec![(cfg.rpm.clone(), "speed")];
     required.extend(cfg.drifts.iter().map(|c| (c.clone(), "drift")));
     required.extend(cfg.temps.iter().map(|c| (c.clone(), "temperature")));
-    required.extend(cfg.node_temps.iter().map(|c| (c.clone(), "node temperature")));
+    required.extend(
+        cfg.node_temps
+            .iter()
+            .map(|c| (c.clone(), "node temperature")),
+    );
     required.extend(cfg.ambient.iter().map(|c| (c.clone(), "ambient")));
     if let Some((inputs, _)) = &cfg.baseline {
         required.extend(inputs.iter().map(|c| (c.clone(), "baseline input")));
@@ -194,7 +198,10 @@ pub fn identify_thermal(cfg: &IdentifyThermalConfig, out: &mut dyn Write) -> Res
             &cols.drifts,
             &[
                 ("grey-box, speed only (fitted on every row)", &pred),
-                ("grey-box, speed only (each cycle held out)", &grey.held_out_pred),
+                (
+                    "grey-box, speed only (each cycle held out)",
+                    &grey.held_out_pred,
+                ),
             ],
             black
                 .as_ref()
@@ -349,7 +356,11 @@ fn black_box(
     let pred = model.predict(&table.time_s, &cols)?;
     Ok(BlackBox {
         rmse,
-        forms: ev.channels.iter().map(|c| c.form.name().to_string()).collect(),
+        forms: ev
+            .channels
+            .iter()
+            .map(|c| c.form.name().to_string())
+            .collect(),
         pred,
     })
 }

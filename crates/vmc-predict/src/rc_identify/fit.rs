@@ -67,7 +67,9 @@ pub(super) fn check_rows(data: &RcData, rows: Option<&[usize]>) -> Result<(), Rc
             )));
         }
     }
-    if let Some(r) = (1..n).find(|&r| data.time_s[r].partial_cmp(&data.time_s[r - 1]) != Some(std::cmp::Ordering::Greater)) {
+    if let Some(r) = (1..n).find(|&r| {
+        data.time_s[r].partial_cmp(&data.time_s[r - 1]) != Some(std::cmp::Ordering::Greater)
+    }) {
         return Err(RcError::BadData(format!(
             "time must increase strictly (row {r}: {} s after {} s)",
             data.time_s[r],
@@ -114,14 +116,18 @@ struct Layout {
     names: Vec<String>,
     lo: Vec<f64>,
     hi: Vec<f64>,
+    /// Bounds in natural units (for the exponentials of log-parameters, which may round
+    /// past them).
+    nat: Vec<[f64; 2]>,
 }
 
 impl Layout {
     fn new(s: &RcSettings) -> Self {
-        let (mut names, mut lo, mut hi) = (vec![], vec![], vec![]);
+        let (mut names, mut lo, mut hi, mut nat) = (vec![], vec![], vec![], vec![]);
         let b = &s.bounds;
         let mut push = |name: String, kind: Kind, [l, h]: [f64; 2]| {
             names.push(name);
+            nat.push([l, h]);
             let (l, h) = match kind {
                 Kind::Log => (l.ln(), h.ln()),
                 Kind::Plain => (l, h),
@@ -148,9 +154,9 @@ impl Layout {
             convection: s.speed_convection,
             c0: s.node0_capacity_j_per_k,
             names,
-
             lo,
             hi,
+            nat,
         }
     }
 
@@ -171,11 +177,15 @@ impl Layout {
 
     fn unpack(&self, p: &[f64]) -> RcNetwork {
         let n = self.nodes;
-        let e = |s: &[f64]| s.iter().map(|v| v.exp()).collect::<Vec<_>>();
+        let e = |from: usize, to: usize| {
+            (from..to)
+                .map(|j| p[j].exp().clamp(self.nat[j][0], self.nat[j][1]))
+                .collect::<Vec<_>>()
+        };
         let mut capacity = vec![self.c0];
-        capacity.extend(e(&p[..n - 1]));
-        let links = e(&p[n - 1..2 * n - 2]);
-        let ambient = e(&p[2 * n - 2..3 * n - 2]);
+        capacity.extend(e(0, n - 1));
+        let links = e(n - 1, 2 * n - 2);
+        let ambient = e(2 * n - 2, 3 * n - 2);
         RcNetwork {
             capacity_j_per_k: capacity,
             link_w_per_k: links,
@@ -255,7 +265,10 @@ impl Problem<'_> {
         let mut s = self.data.drifts.len();
         for (i, t) in self.data.node_temps.iter().enumerate() {
             if let (Some(t), Some(rise)) = (t, x.rises.get(i)) {
-                res.extend(rows.iter().map(|&r| (rise[r] - (t[r] - t[0])) / self.scales[s]));
+                res.extend(
+                    rows.iter()
+                        .map(|&r| (rise[r] - (t[r] - t[0])) / self.scales[s]),
+                );
                 s += 1;
             }
         }
@@ -372,6 +385,19 @@ fn starts(s: &RcSettings) -> Vec<RcNetwork> {
         .collect()
 }
 
+/// `net` with one more node at the end of the chain: five times the last capacity, the last
+/// node's conductance to ambient, linked by a conductance a thousandth of it (within bounds).
+fn extended(net: &RcNetwork, bounds: &super::RcBounds) -> RcNetwork {
+    let mut n = net.clone();
+    let last_c = n.capacity_j_per_k.last().copied().unwrap_or(1.0);
+    let last_h = n.ambient_w_per_k.last().copied().unwrap_or(1.0);
+    let [lo, hi] = bounds.conductance_w_per_k;
+    n.capacity_j_per_k.push(5.0 * last_c);
+    n.ambient_w_per_k.push(last_h);
+    n.link_w_per_k.push((1e-3 * last_h).clamp(lo * 10.0, hi));
+    n
+}
+
 /// Standard deviation over `rows` (1 if zero).
 fn sd(v: &[f64], rows: &[usize]) -> f64 {
     let n = rows.len().max(1) as f64;
@@ -446,7 +472,23 @@ pub fn identify(
         mode,
         layout: Layout::new(settings),
     };
-    let best = starts(settings)
+    // Nested start: the best network of one node fewer, extended by a weakly linked node (it
+    // starts from that fit's predictions, so the larger network fits at least as well).
+    let mut starts = starts(settings);
+    if settings.nodes > 1 {
+        let fewer = RcSettings {
+            nodes: settings.nodes - 1,
+            ..settings.clone()
+        };
+        let sub_data = RcData {
+            node_temps: &data.node_temps[..data.node_temps.len().min(fewer.nodes)],
+            ..*data
+        };
+        if let Ok(f) = identify(&sub_data, rows, &fewer, mode) {
+            starts.push(extended(&f.network, &settings.bounds));
+        }
+    }
+    let best = starts
         .iter()
         .filter_map(|s| levenberg_marquardt(&prob, prob.layout.pack(s), settings.start_iter))
         .min_by(|a, b| a.cost.total_cmp(&b.cost))

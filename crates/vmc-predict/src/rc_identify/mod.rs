@@ -40,7 +40,8 @@
 //! (heat input against drift gains) is not identified either: only the products are, and the
 //! fit returns one member of that family.
 //!
-//! Several starting points (time constants of about 10 min, 30 min and 1.5 h at node 0) are
+//! Several starting points (time constants of about 10 min, 30 min and 1.5 h at node 0, and,
+//! for two nodes or more, the fit with one node fewer extended by a weakly linked node) are
 //! fitted a few iterations each; the best is then fitted to convergence. Deterministic.
 
 mod fit;
@@ -178,9 +179,14 @@ impl RcFit {
             v.push("ambient".into());
         }
         if self.mode == Mode::WithTemps {
-            v.extend((0..self.gains.first().map_or(0, Vec::len).saturating_sub(v.len())).map(
-                |j| format!("θ{j}"),
-            ));
+            v.extend(
+                (0..self
+                    .gains
+                    .first()
+                    .map_or(0, Vec::len)
+                    .saturating_sub(v.len()))
+                    .map(|j| format!("θ{j}")),
+            );
         }
         v
     }

@@ -59,7 +59,11 @@ fn a_three_node_network_is_recovered_from_its_own_drifts_and_node_temperatures()
         .iter()
         .map(|c| {
             (0..t.len())
-                .map(|r| c[0] + (0..3).map(|i| c[i + 1] * (temps[i][r] - amb[0])).sum::<f64>())
+                .map(|r| {
+                    c[0] + (0..3)
+                        .map(|i| c[i + 1] * (temps[i][r] - amb[0]))
+                        .sum::<f64>()
+                })
                 .collect()
         })
         .collect();
@@ -81,7 +85,11 @@ fn a_three_node_network_is_recovered_from_its_own_drifts_and_node_temperatures()
         .iter()
         .map(|c| {
             (0..t.len())
-                .map(|r| c[0] + (0..3).map(|i| c[i + 1] * (temps[i][r] - amb[0])).sum::<f64>())
+                .map(|r| {
+                    c[0] + (0..3)
+                        .map(|i| c[i + 1] * (temps[i][r] - amb[0]))
+                        .sum::<f64>()
+                })
                 .collect()
         })
         .collect();
@@ -116,7 +124,10 @@ fn a_three_node_network_is_recovered_from_its_own_drifts_and_node_temperatures()
         (n.heat_w_per_krpm2, truth.heat_w_per_krpm2),
     ];
     for (i, (got, want)) in pairs.iter().enumerate() {
-        assert!(rel(*got, *want) < 1e-6, "parameter {i}: {got} vs {want}; {fit:?}");
+        assert!(
+            rel(*got, *want) < 1e-6,
+            "parameter {i}: {got} vs {want}; {fit:?}"
+        );
     }
     for (g, w) in fit.gains.iter().zip(&gains) {
         for (a, b) in g.iter().zip(w) {
