@@ -333,7 +333,7 @@ fn a_parameter_pushed_out_of_range_is_reported_and_held_at_its_bound() {
     // A drift with no lag asks for an infinitely fast node: its conductance to ambient runs to
     // the upper bound (1e4 W/K) and stays there.
     let dir = TempDir::new("bound");
-    let o = run(&dir, &csv(2, None), &["--nodes", "1"]);
+    let o = run(&dir, &csv(2, None), &["--nodes", "1", "--rrd", "d.rrd"]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.contains("held at a bound"), "{out}");
@@ -342,4 +342,7 @@ fn a_parameter_pushed_out_of_range_is_reported_and_held_at_its_bound() {
     let h0 = frag.thermal.nodes[0].ha_w_per_k;
     assert!(h0 <= 1e4 * (1.0 + 1e-12), "H0 = {h0}");
     assert!(frag.thermal.validate().is_ok());
+    // The recording of the drifts is written (its content is the Rerun SDK's format).
+    let rrd = std::fs::metadata(dir.path().join("d.rrd")).expect("recording written");
+    assert!(rrd.len() > 1000, "{} bytes", rrd.len());
 }

@@ -76,13 +76,11 @@ pub(super) fn check_rows(data: &RcData, rows: Option<&[usize]>) -> Result<(), Rc
             data.time_s[r - 1]
         )));
     }
-    if let Some(row) = data.rpm.iter().position(|v| !(*v >= 0.0)) {
-        if data.rpm[row] < 0.0 {
-            return Err(RcError::NegativeSpeed {
-                row,
-                rpm: data.rpm[row],
-            });
-        }
+    if let Some(row) = data.rpm.iter().position(|v| *v < 0.0) {
+        return Err(RcError::NegativeSpeed {
+            row,
+            rpm: data.rpm[row],
+        });
     }
     let finite = |v: &[f64]| v.iter().all(|x| x.is_finite() && (x * x).is_finite());
     let all_finite = finite(data.time_s)
