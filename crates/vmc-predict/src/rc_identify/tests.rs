@@ -53,34 +53,10 @@ fn a_three_node_network_is_recovered_from_its_own_drifts_and_node_temperatures()
         heat_w_per_krpm: 8.0,
         heat_w_per_krpm2: 2.0,
     };
-    let temps = truth.simulate(&t, &rpm, &amb);
-    let gains = [[0.5, 2.0, -1.0, 0.3], [0.0, -0.7, 3.0, -2.0]];
-    let drifts: Vec<Vec<f64>> = gains
-        .iter()
-        .map(|c| {
-            (0..t.len())
-                .map(|r| {
-                    c[0] + (0..3)
-                        .map(|i| c[i + 1] * (temps[i][r] - amb[0]))
-                        .sum::<f64>()
-                })
-                .collect()
-        })
-        .collect();
-    let node0 = temps[0].clone();
-    let node_temps = [Some(node0.as_slice())];
-    let data = RcData {
-        time_s: &t,
-        rpm: &rpm,
-        ambient_degc: None,
-        drifts: &drifts,
-        node_temps: &node_temps,
-        temps: &[],
-    };
-    // The ambient wave is not given: the fit sees a constant ambient, so the truth is simulated
-    // with the same constant ambient for the recovery.
+    // Constant ambient (no ambient column): the fit sees the rises of the nodes above it.
     let flat = vec![amb[0]; t.len()];
     let temps = truth.simulate(&t, &rpm, &flat);
+    let gains = [[0.5, 2.0, -1.0, 0.3], [0.0, -0.7, 3.0, -2.0]];
     let drifts: Vec<Vec<f64>> = gains
         .iter()
         .map(|c| {
@@ -99,9 +75,12 @@ fn a_three_node_network_is_recovered_from_its_own_drifts_and_node_temperatures()
         Some(temps[2].as_slice()),
     ];
     let data = RcData {
+        time_s: &t,
+        rpm: &rpm,
+        ambient_degc: None,
         drifts: &drifts,
         node_temps: &node_temps,
-        ..data
+        temps: &[],
     };
     let settings = RcSettings {
         nodes: 3,
