@@ -179,6 +179,7 @@ fn with_thermistors_quantised_to_a_sixteenth_of_a_kelvin_the_fit_stays_within_it
         } else {
             0.05
         };
+        eprintln!("{name}: relative error {rel:.4} (bound {bound})");
         assert!(
             rel < bound,
             "{name}: relative error {rel} (bound {bound}); {fit:?}"
