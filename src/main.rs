@@ -35,6 +35,9 @@ fn run(command: Command) -> Result<()> {
         Command::Train(args) => commands::train::train(&args.config()?, out),
         Command::FitThermal(args) => commands::thermal::fit_thermal(&args.config()?, out),
         Command::PredictThermal(args) => commands::thermal::predict_thermal(&args.config(), out),
+        Command::IdentifyThermal(args) => {
+            commands::identify_thermal::identify_thermal(&args.config()?, out)
+        }
         Command::SelectSensors(args) => {
             commands::select_sensors::select_sensors(&args.config()?, out)
         }

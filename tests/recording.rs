@@ -704,3 +704,45 @@ fn the_five_axis_recordings_hold_the_moving_trunnion_the_probing_and_the_error_f
     );
     assert!(printed(&d.join("probe.rrd"), "-vvv").contains("×500"));
 }
+
+#[test]
+fn an_identify_thermal_recording_holds_measured_and_predicted_drift_of_each_channel() {
+    let dir = TempDir::new("idth");
+    let d = dir.path();
+    let csv = repo_file("tests/data/spindle-thermal/train_every60s.csv");
+    let o = vmc(
+        d,
+        &[
+            "identify-thermal",
+            "--data",
+            csv.to_str().expect("UTF-8 path"),
+            "--drifts",
+            "ch1_um,ch5_um",
+            "--nodes",
+            "1",
+            "--no-baseline",
+            "-o",
+            "spindle.toml",
+            "--rrd",
+            "drift.rrd",
+        ],
+    );
+    let out = ok(o, "identify-thermal --rrd");
+    assert!(out.contains("wrote drift.rrd"), "{out}");
+    let file = d.join("drift.rrd");
+    assert_verified(&file);
+    // Measured, grey box fitted on every row (pred0), each cycle held out (pred1).
+    assert_has(
+        &printed(&file, "-vv"),
+        &[
+            "drift/ch1_um/measured",
+            "drift/ch1_um/pred0",
+            "drift/ch1_um/pred1",
+            "drift/ch5_um/measured",
+            "drift/ch5_um/pred0",
+            "drift/ch5_um/pred1",
+        ],
+        &["test_time"],
+        "identify-thermal recording",
+    );
+}

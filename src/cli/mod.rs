@@ -8,6 +8,7 @@ mod chatter;
 mod control;
 mod cut;
 mod fiveaxis;
+mod identify_thermal;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -24,6 +25,7 @@ pub use chatter::ChatterArgs;
 pub use control::{ControlAction, ControlArgs};
 pub use cut::CutArgs;
 pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
+pub use identify_thermal::IdentifyThermalArgs;
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
 /// `vmc-twin`: the whole command line.
@@ -58,6 +60,10 @@ pub enum Command {
     FitThermal(FitThermalArgs),
     /// Predict the drift columns of a CSV file with a model from `fit-thermal`.
     PredictThermal(PredictThermalArgs),
+    /// Identify a small thermal RC network of the spindle (heat from the speed, conductances,
+    /// capacities, drift gains) from measurements (CSV), compare it on held-out cycles with the
+    /// black-box models and write it as a machine-file fragment (TOML).
+    IdentifyThermal(IdentifyThermalArgs),
     /// Choose K temperature sensor locations among every thermal node (read as a sensor would),
     /// print the ranking with its evidence, compare compensation with the selected, default,
     /// random and all locations on held-out runs, and write the sensor set (TOML).

@@ -10,6 +10,7 @@ pub mod check;
 pub mod control;
 pub mod cut;
 pub mod identify;
+pub mod identify_thermal;
 pub mod interpret;
 pub mod lobes;
 pub mod probe_campaign;

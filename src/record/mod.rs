@@ -40,6 +40,7 @@
 pub mod campaign;
 pub mod chatter;
 pub mod check;
+pub mod drift;
 pub mod dynamics;
 pub mod fiveaxis;
 pub mod layout;
