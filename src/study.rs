@@ -39,6 +39,7 @@ pub use summary::{
     SummaryDigest,
 };
 
+pub mod fleet;
 mod report;
 mod summary;
 

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::predict::predictor::ModelKind;
 
+use super::fleet::{write_fleet_summary, Fleet};
 use super::report::{
     headline_of, CampaignReport, Headline, PlannedCycle, RunDigest, RunReport, PREDICTORS,
     WARM_RUN_MIN_THERMAL_UM,
@@ -94,6 +95,8 @@ pub struct SummaryDigest {
     pub states: Vec<String>,
     /// One digest per run, in run order.
     pub runs: Vec<RunDigest>,
+    /// The machines' figures (the fleet section).
+    pub fleet: Fleet,
 }
 
 impl SummaryDigest {
@@ -104,6 +107,7 @@ impl SummaryDigest {
             diagonals: Vec::new(),
             states: Vec::new(),
             runs: Vec::new(),
+            fleet: Fleet::default(),
         }
     }
 
@@ -120,6 +124,7 @@ impl SummaryDigest {
     pub fn push(&mut self, r: &RunReport) {
         let diagonal = intern(&mut self.diagonals, &r.diagonal);
         let state = intern(&mut self.states, &r.thermal_state);
+        self.fleet.push(r);
         self.runs.push(RunDigest {
             diagonal,
             state,
@@ -204,7 +209,7 @@ pub fn write_summary(d: &SummaryDigest, out: &mut dyn Write) -> std::io::Result<
     )?;
     write_aggregate(d, out, &states, |r, g| Some(r.state) == g)?;
     writeln!(out, "(reduction = 1 − RMS|E'|/RMS|E| of a run, E' compensated; residual share = RMS|E'| / RMS of the error's thermal part, on warm runs (thermal part ≥ {WARM_RUN_MIN_THERMAL_UM} µm RMS); every run: --runs, or report.json)")?;
-    Ok(())
+    write_fleet_summary(&d.fleet, out)
 }
 
 /// One table: a row per group, a column per predictor, each cell `median red % / max |E'| µm`
