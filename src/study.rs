@@ -40,6 +40,7 @@ pub use summary::{
 };
 
 pub mod fleet;
+pub mod fleet_png;
 mod report;
 mod summary;
 

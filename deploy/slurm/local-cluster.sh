@@ -7,6 +7,7 @@
 #                                        wait until the node is idle
 #   deploy/slurm/local-cluster.sh down   stop the daemons it started, by their process ids
 #   deploy/slurm/local-cluster.sh env    print the line that points Slurm's commands at it
+#   deploy/slurm/local-cluster.sh install   only install the packages if missing
 #
 # Everything lives under $VMC_SLURM_DIR (default /tmp/vmc-slurm): slurm.conf, logs, state, the
 # pid files. Slurm's commands find the cluster through SLURM_CONF=$VMC_SLURM_DIR/slurm.conf
@@ -144,5 +145,6 @@ case "${1:-}" in
   up) up ;;
   down) down ;;
   env) echo "export SLURM_CONF=$CONF" ;;
-  *) echo "usage: $0 up|down|env" >&2; exit 1 ;;
+  install) install_if_missing ;;
+  *) echo "usage: $0 up|down|env|install" >&2; exit 1 ;;
 esac

@@ -141,6 +141,13 @@ pub struct MergeArgs {
     /// Also print the full table, one row per run (campaign).
     #[arg(long)]
     pub runs: bool,
+    /// Write a Rerun recording of the fleet: a histogram across machines of each fleet figure,
+    /// and the summary.
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rrd: Option<PathBuf>,
+    /// Write the fleet's histograms as a PNG picture.
+    #[arg(long, value_name = "FILE.png")]
+    pub png: Option<PathBuf>,
 }
 
 impl MergeArgs {
@@ -151,6 +158,8 @@ impl MergeArgs {
             out_dir: self.out,
             force: self.force.force,
             print_runs: self.runs,
+            rrd: self.rrd,
+            png: self.png,
         }
     }
 }

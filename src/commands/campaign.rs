@@ -243,6 +243,7 @@ fn write_recording(
         record::layout::campaign_blueprint(rrd.settings.magnify, &pick.title()),
     )?;
     record::campaign::record_campaign(&file, &cfg.machine, rep, models, rrd.settings)?;
+    record::fleet::log_fleet(&file, &study::fleet::Fleet::of(&rep.runs))?;
     let bytes = file.finish()?;
     wrote_recording(
         out,

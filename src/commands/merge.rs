@@ -14,6 +14,7 @@ use serde::{Serialize, Serializer};
 
 use super::campaign::{model_file_names, SEED_RESULTS_FILE};
 use crate::files;
+use crate::record;
 use crate::shard::{check_set, ShardManifest, MANIFEST_FILE};
 use crate::study::{self, ReportHeader, SeedResults, SummaryDigest};
 
@@ -27,6 +28,10 @@ pub struct MergeConfig {
     pub force: bool,
     /// Print the per-run table too (campaign).
     pub print_runs: bool,
+    /// A Rerun recording of the fleet's histograms and the summary.
+    pub rrd: Option<PathBuf>,
+    /// A PNG picture of the fleet's histograms.
+    pub png: Option<PathBuf>,
 }
 
 /// Reads and checks the shards, then merges them with the command that wrote them.
@@ -86,6 +91,12 @@ fn merge_campaign(
     let mut names = vec!["report.json".to_string()];
     names.extend(model_file_names(seeds));
     files::prepare_output_folder(&cfg.out_dir, &names, cfg.force)?;
+    if let Some(rrd) = &cfg.rrd {
+        record::check_rrd_path(rrd, cfg.force)?;
+    }
+    if let Some(png) = &cfg.png {
+        files::check_writable(png, cfg.force)?;
+    }
     let results = SeedFiles {
         files: dirs.iter().map(|d| d.join(SEED_RESULTS_FILE)).collect(),
         seeds: seeds.to_vec(),
@@ -117,7 +128,9 @@ fn merge_campaign(
         }
     }
     let digest = digest.into_inner();
-    study::write_summary(&digest, out)?;
+    let mut summary = Vec::new();
+    study::write_summary(&digest, &mut summary)?;
+    out.write_all(&summary)?;
     if cfg.print_runs {
         study::write_run_table_head(out)?;
         results.for_each(
@@ -132,6 +145,20 @@ fn merge_campaign(
         study::write_run_table_foot(out)?;
     }
     writeln!(out, "wrote {} and the trained models", path.display())?;
+    if let Some(png) = &cfg.png {
+        write_png(png, &digest.fleet, cfg.force, out)?;
+    }
+    if let Some(rrd) = &cfg.rrd {
+        let seeds: Vec<String> = seeds.iter().map(u64::to_string).collect();
+        let title = format!(
+            "vmc-twin fleet of {} on seeds {}",
+            header.machine,
+            seeds.join(",")
+        );
+        let text = String::from_utf8_lossy(&summary);
+        let bytes = record::fleet::record_fleet(rrd, cfg.force, &title, &digest.fleet, &text)?;
+        super::wrote_recording(out, rrd, bytes, "; the fleet's histograms")?;
+    }
     Ok(())
 }
 
@@ -226,4 +253,37 @@ impl Serialize for RunStream<'_> {
         )?;
         seq.end()
     }
+}
+
+/// Writes the fleet's histograms as a PNG picture and says what each panel spans.
+fn write_png(
+    path: &Path,
+    fleet: &study::fleet::Fleet,
+    force: bool,
+    out: &mut dyn Write,
+) -> Result<()> {
+    let panels = study::fleet_png::panels(fleet, record::fleet::BINS);
+    let bytes = study::fleet_png::encode_png(&study::fleet_png::raster(&panels))?;
+    files::write_atomic(path, &bytes, force)?;
+    writeln!(
+        out,
+        "wrote {} (histograms across machines, {} bins; red line: the goal):",
+        path.display(),
+        record::fleet::BINS
+    )?;
+    for (pos, (name, (hist, _))) in ["top left", "top right", "bottom left", "bottom right"]
+        .iter()
+        .zip(&panels)
+    {
+        if let Some(h) = hist {
+            let top = h.counts.iter().max().copied().unwrap_or(0);
+            writeln!(
+                out,
+                "  {pos:<12} {name}: {:.2} to {:.2}, tallest bar {top} machines",
+                h.lo,
+                h.lo + h.width * h.counts.len() as f64
+            )?;
+        }
+    }
+    Ok(())
 }

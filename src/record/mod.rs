@@ -41,6 +41,7 @@ pub mod campaign;
 pub mod chatter;
 pub mod check;
 pub mod dynamics;
+pub mod fleet;
 pub mod layout;
 mod recorder;
 pub mod scene;

@@ -346,3 +346,61 @@ mod tests {
         assert!(text.contains("(mostly Ey)"), "{text}");
     }
 }
+
+/// A histogram: `counts[k]` values in `[lo + k·width, lo + (k+1)·width)` (the last bin closed).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Histogram {
+    /// Lower edge of the first bin.
+    pub lo: f64,
+    /// Bin width (1 when every value is the same).
+    pub width: f64,
+    /// Values per bin.
+    pub counts: Vec<u64>,
+}
+
+impl Histogram {
+    /// `bins` equal bins from the smallest to the largest finite value of `v`; None without
+    /// one or with no bin.
+    pub fn of(v: &[f64], bins: usize) -> Option<Self> {
+        let finite: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+        let lo = finite.iter().copied().reduce(f64::min)?;
+        let hi = finite.iter().copied().reduce(f64::max)?;
+        if bins == 0 {
+            return None;
+        }
+        let width = if hi > lo {
+            (hi - lo) / bins as f64
+        } else {
+            1.0
+        };
+        let mut counts = vec![0u64; bins];
+        for x in finite {
+            let k = (((x - lo) / width) as usize).min(bins - 1);
+            counts[k] += 1;
+        }
+        Some(Self { lo, width, counts })
+    }
+
+    /// The bins' centres.
+    pub fn centres(&self) -> Vec<f64> {
+        (0..self.counts.len())
+            .map(|k| self.lo + (k as f64 + 0.5) * self.width)
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod histogram_tests {
+    use super::*;
+
+    #[test]
+    fn every_value_falls_in_one_bin_and_the_largest_in_the_last() {
+        let h = Histogram::of(&[0.0, 1.0, 2.0, 3.0, 4.0, f64::NAN], 4).unwrap();
+        assert_eq!(h.lo, 0.0);
+        assert_eq!(h.width, 1.0);
+        assert_eq!(h.counts, vec![1, 1, 1, 2]);
+        assert_eq!(h.centres(), vec![0.5, 1.5, 2.5, 3.5]);
+        assert_eq!(Histogram::of(&[2.0, 2.0], 3).unwrap().counts, vec![2, 0, 0]);
+        assert_eq!(Histogram::of(&[], 3), None);
+    }
+}
