@@ -41,7 +41,7 @@ fn queued(id: &str, conf: &Path) -> bool {
 #[test]
 fn a_four_task_array_and_its_merge_job_give_the_unsharded_campaign_bit_for_bit() {
     let uid = Command::new("id").arg("-u").output().map(|o| o.stdout);
-    if uid.as_deref().map(|u| u.trim_ascii()) != Ok(b"0".as_slice()) {
+    if !uid.is_ok_and(|u| u.trim_ascii() == b"0") {
         eprintln!("skipped: starting the Slurm daemons of the local cluster needs root");
         return;
     }
@@ -61,13 +61,13 @@ fn a_four_task_array_and_its_merge_job_give_the_unsharded_campaign_bit_for_bit()
     let whole = String::from_utf8(whole.stdout).unwrap();
     let out = dir.join("pipeline");
     let out_s = out.to_str().unwrap();
-    let (ok, ids, err) = script(
-        "submit.sh",
-        &[out_s, "4", "1", "--seeds", "1..2"],
-        &conf,
-    );
+    let (ok, ids, err) = script("submit.sh", &[out_s, "4", "1", "--seeds", "1..2"], &conf);
     assert!(ok, "submit: {err}");
-    let merge_job = ids.split_whitespace().nth(1).expect("two job ids").to_string();
+    let merge_job = ids
+        .split_whitespace()
+        .nth(1)
+        .expect("two job ids")
+        .to_string();
     let start = Instant::now();
     while queued(&merge_job, &conf) {
         assert!(

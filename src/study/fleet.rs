@@ -319,14 +319,15 @@ mod tests {
 
     #[test]
     fn machines_meet_the_goals_on_their_worst_run_and_the_worst_come_first() {
-        let mut runs = Vec::new();
         // Machine 1: fine. Machine 2: one run at 79 %. Machine 3: one residual of 2.5 µm.
-        runs.push(run(1, 0.95, 1.0, "XY"));
-        runs.push(run(1, 0.90, 1.5, "PPP"));
-        runs.push(run(2, 0.79, 1.0, "XY"));
-        runs.push(run(2, 0.99, 1.2, "PPP"));
-        runs.push(run(3, 0.97, 2.5, "YZ"));
-        runs.push(run(3, 0.98, 1.0, "PPP"));
+        let mut runs = vec![
+            run(1, 0.95, 1.0, "XY"),
+            run(1, 0.90, 1.5, "PPP"),
+            run(2, 0.79, 1.0, "XY"),
+            run(2, 0.99, 1.2, "PPP"),
+            run(3, 0.97, 2.5, "YZ"),
+            run(3, 0.98, 1.0, "PPP"),
+        ];
         let mut other = run(3, 0.1, 50.0, "XZ");
         other.predictor = ModelKind::Linear;
         runs.push(other);

@@ -52,7 +52,13 @@ pub fn raster(panels: &[(String, Panel)]) -> Vec<u8> {
         let bar_w = (r - l) / n;
         for (i, &c) in hist.counts.iter().enumerate() {
             let top = b - ((b - t) as f64 * c as f64 / tallest as f64).round() as usize;
-            fill(l + i * bar_w + 1, top, l + (i + 1) * bar_w - 1, b, [70, 110, 180]);
+            fill(
+                l + i * bar_w + 1,
+                top,
+                l + (i + 1) * bar_w - 1,
+                b,
+                [70, 110, 180],
+            );
         }
         if let Some(g) = goal {
             let span = hist.width * n as f64;
