@@ -90,7 +90,7 @@ impl CampaignArgs {
 ///
 /// # Errors
 /// An item that is neither, a range backwards or open, no seed at all, more than
-/// [`MAX_SEEDS`], a seed given twice.
+/// `MAX_SEEDS` (1,000,000), a seed given twice.
 pub fn parse_seeds(option: &str, items: &[String]) -> Result<Vec<u64>> {
     let mut seeds = Vec::new();
     for item in items {
