@@ -126,6 +126,16 @@ pub fn check_writable(path: &Path, force: bool) -> Result<(), OutputError> {
 /// Writes `contents` to `path` atomically (temporary file + rename). Refuses to replace an
 /// existing file unless `force`.
 pub fn write_atomic(path: &Path, contents: &[u8], force: bool) -> Result<(), OutputError> {
+    write_atomic_with(path, force, |w| w.write_all(contents))
+}
+
+/// Writes `path` atomically with what `write` writes to it, through a buffer (for contents
+/// produced piece by piece). Refuses to replace an existing file unless `force`.
+pub fn write_atomic_with(
+    path: &Path,
+    force: bool,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), OutputError> {
     check_writable(path, force)?;
     let io = |err| OutputError::Io {
         path: path.to_path_buf(),
@@ -141,8 +151,9 @@ pub fn write_atomic(path: &Path, contents: &[u8], force: bool) -> Result<(), Out
         .unwrap_or_default();
     let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(contents)?;
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        write(&mut f)?;
+        let f = f.into_inner().map_err(|e| e.into_error())?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();

@@ -34,6 +34,7 @@ pub mod progress;
 pub mod record;
 pub mod report;
 pub mod sensors;
+pub mod shard;
 pub mod sim;
 pub mod study;
 pub mod thermal;

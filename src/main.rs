@@ -32,6 +32,7 @@ fn run(command: Command) -> Result<()> {
         Command::Run(args) => commands::run::run_target(&args.config()?, out),
         Command::Calibrate(args) => commands::calibrate::calibrate(&args.config()?, out),
         Command::Campaign(args) => commands::campaign::campaign(&args.config()?, out),
+        Command::Merge(args) => commands::merge::merge(&args.config(), out),
         Command::Train(args) => commands::train::train(&args.config()?, out),
         Command::FitThermal(args) => commands::thermal::fit_thermal(&args.config()?, out),
         Command::PredictThermal(args) => commands::thermal::predict_thermal(&args.config(), out),

@@ -30,11 +30,19 @@ use crate::twin::{sub_seed, Twin, TwinError};
 
 pub use crate::program::DIAGONALS;
 pub use report::{
-    headline, median, run_report, write_campaign_summary, write_run_table, CampaignReport,
-    Headline, PlannedCycle, RunReport, PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
+    headline, headline_of, median, run_report, write_run_row, write_run_table,
+    write_run_table_foot, write_run_table_head, CampaignReport, Headline, PlannedCycle, RunDigest,
+    RunReport, PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
+};
+pub use summary::{
+    write_campaign_summary, write_report_json, write_summary, ReportHeader, SeedResults,
+    SummaryDigest,
 };
 
+pub mod fleet;
+pub mod fleet_png;
 mod report;
+mod summary;
 
 /// A campaign that could not run.
 #[derive(Debug, Error)]
@@ -400,21 +408,15 @@ pub fn run_campaign_with_cycles(
     progress.add_total(
         seeds.len() as u64 * (units::CALIBRATION + 3 * units::TRAINING + 3 * n_runs * units::RUN),
     );
+    let header = campaign_header(spec, seeds, settings, &cal_cycles);
     let mut report = CampaignReport {
-        machine: spec.machine.name.clone(),
-        calibration_cycles: cal_cycles.iter().map(|c| c.name.clone()).collect(),
-        calibration_plan: cal_cycles
-            .iter()
-            .map(|c| PlannedCycle {
-                name: c.name.clone(),
-                hours: c.duration_s() / 3600.0,
-                purpose: c.purpose.clone(),
-            })
-            .collect(),
-        evaluation_states: Vec::new(),
+        machine: header.machine,
+        calibration_cycles: header.calibration_cycles,
+        calibration_plan: header.calibration_plan,
+        evaluation_states: header.evaluation_states,
         training: Vec::new(),
         runs: Vec::new(),
-        hybrid_uses_spindle_speed: settings.uses_spindle_speed(),
+        hybrid_uses_spindle_speed: header.hybrid_uses_spindle_speed,
     };
     // Seeds are independent: run them in parallel, collect in seed order.
     let per_seed: Vec<Result<SeedResult, EvalError>> = seeds
@@ -428,16 +430,39 @@ pub fn run_campaign_with_cycles(
         report.runs.extend(r.runs);
         models.push(r.models);
     }
-    report.evaluation_states = seeds
-        .first()
-        .map(|&s| {
-            calibration::evaluation_states(spec, s)
-                .iter()
-                .map(|s| s.name.clone())
-                .collect()
-        })
-        .unwrap_or_default();
     Ok((report, models))
+}
+
+/// The header of the report of a campaign over `seeds` (the held-out states are named after
+/// the first seed's), whichever part of the seeds is run.
+pub fn campaign_header(
+    spec: &MachineSpec,
+    seeds: &[u64],
+    settings: &Settings,
+    cal_cycles: &[ThermalCycle],
+) -> ReportHeader {
+    ReportHeader {
+        machine: spec.machine.name.clone(),
+        calibration_cycles: cal_cycles.iter().map(|c| c.name.clone()).collect(),
+        calibration_plan: cal_cycles
+            .iter()
+            .map(|c| PlannedCycle {
+                name: c.name.clone(),
+                hours: c.duration_s() / 3600.0,
+                purpose: c.purpose.clone(),
+            })
+            .collect(),
+        evaluation_states: seeds
+            .first()
+            .map(|&s| {
+                calibration::evaluation_states(spec, s)
+                    .iter()
+                    .map(|s| s.name.clone())
+                    .collect()
+            })
+            .unwrap_or_default(),
+        hybrid_uses_spindle_speed: settings.uses_spindle_speed(),
+    }
 }
 
 /// The three predictors trained for one seed.

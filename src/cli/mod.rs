@@ -4,6 +4,7 @@
 //! Options that several commands share are one flattened group each ([`MachineArg`],
 //! [`SensorsArg`], [`ForceArg`], [`RrdArgs`]), so a flag means the same everywhere.
 
+mod campaign;
 mod chatter;
 mod control;
 mod cut;
@@ -21,6 +22,7 @@ use crate::predict::predictor::ModelKind;
 use crate::record;
 use crate::sim::{SimConfig, SimConfigError};
 
+pub use campaign::{parse_seeds, CampaignArgs, MergeArgs};
 pub use chatter::ChatterArgs;
 pub use control::{ControlAction, ControlArgs};
 pub use cut::CutArgs;
@@ -53,6 +55,9 @@ pub enum Command {
     /// baselines, every face and body diagonal under held-out thermal states without and with
     /// compensation, and the report.
     Campaign(CampaignArgs),
+    /// Combine the results of the shards of a sharded command (`campaign --shard I/N`) into
+    /// what the unsharded command writes and prints; refuses shards that do not belong together.
+    Merge(MergeArgs),
     /// Train a predictor on a calibration dataset (CSV) and write the model (JSON).
     Train(TrainArgs),
     /// Fit a thermal-drift model (linear + MLP on filtered temperatures) on measured data (CSV),
@@ -355,57 +360,6 @@ impl CalibrateArgs {
             out: self.out,
             force: self.force.force,
             measure_every_s: self.measure_every_min * 60.0,
-        })
-    }
-}
-
-/// Arguments of `campaign`.
-#[derive(clap::Args)]
-pub struct CampaignArgs {
-    #[command(flatten)]
-    pub machine: MachineArg,
-    #[command(flatten)]
-    pub sensors: SensorsArg,
-    /// Machine realisations to calibrate and evaluate (comma-separated).
-    #[arg(long, value_delimiter = ',', default_values_t = [1u64, 2, 3])]
-    pub seeds: Vec<u64>,
-    /// Folder for report.json and the trained models (created if missing).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    #[command(flatten)]
-    pub force: ForceArg,
-    /// Opt-in: the hybrid's spindle part also takes the commanded spindle speed as heat input
-    /// (see docs/decisions on the spindle-speed input).
-    #[arg(long)]
-    pub spindle_speed: bool,
-    /// Also print the full table, one row per run (it is always in report.json).
-    #[arg(long)]
-    pub runs: bool,
-    #[command(flatten)]
-    pub rrd: RrdArgs,
-}
-
-impl CampaignArgs {
-    /// The validated config.
-    ///
-    /// # Errors
-    /// An unreadable or invalid machine or sensor set, no seed or a seed given twice, a bad
-    /// recording path or magnification.
-    pub fn config(self) -> Result<commands::campaign::CampaignConfig> {
-        let machine = self.machine.load(Some(&self.sensors))?;
-        if self.seeds.is_empty() {
-            anyhow::bail!("--seeds needs at least one seed");
-        }
-        commands::check_distinct_seeds("--seeds", &self.seeds)?;
-        let force = self.force.force;
-        Ok(commands::campaign::CampaignConfig {
-            machine,
-            seeds: self.seeds,
-            out_dir: self.out,
-            force,
-            spindle_speed: self.spindle_speed,
-            print_runs: self.runs,
-            rrd: self.rrd.checked()?,
         })
     }
 }

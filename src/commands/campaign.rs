@@ -6,13 +6,19 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use super::{wrote_recording, RrdOutput};
+use super::{wrote_recording, RrdOutput, VERSION};
+use crate::calibration::ThermalCycle;
 use crate::files;
 use crate::machine::MachineSpec;
 use crate::predict::predictor::Settings;
 use crate::progress::Progress;
 use crate::record;
-use crate::study::{self, CampaignReport, ForMachine, TrainedModels, PREDICTORS};
+use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
+use crate::study::{self, CampaignReport, ForMachine, TrainedModels, DIAGONALS, PREDICTORS};
+
+/// Name of a campaign shard's per-seed results (one JSON object per line,
+/// [`study::SeedResults`]).
+pub const SEED_RESULTS_FILE: &str = "seeds.jsonl";
 
 /// What to run, validated.
 pub struct CampaignConfig {
@@ -30,6 +36,23 @@ pub struct CampaignConfig {
     pub print_runs: bool,
     /// A Rerun recording of a representative run.
     pub rrd: Option<RrdOutput>,
+    /// Run only this shard of the seeds and write its results for `merge` (needs `out_dir`).
+    pub shard: Option<Shard>,
+    /// Fingerprints of the input files (machine, sensor set), for a shard's manifest.
+    pub inputs: Vec<InputFingerprint>,
+    /// The command line, for a shard's manifest.
+    pub command_line: Vec<String>,
+}
+
+/// The file names of the trained models of `seeds`.
+pub fn model_file_names(seeds: &[u64]) -> Vec<String> {
+    let mut names = Vec::new();
+    for s in seeds {
+        for k in PREDICTORS {
+            names.push(format!("model_{}_seed{s}.json", k.name()));
+        }
+    }
+    names
 }
 
 /// Runs the campaign, prints the summary (and the runs if asked), writes the files.
@@ -37,14 +60,13 @@ pub struct CampaignConfig {
 /// # Errors
 /// Outputs that may not be written, simulation or training errors.
 pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
+    if let Some(shard) = cfg.shard {
+        return campaign_shard(cfg, shard, out);
+    }
     let out_dir = match &cfg.out_dir {
         Some(dir) => {
             let mut names = vec!["report.json".to_string()];
-            for s in &cfg.seeds {
-                for k in PREDICTORS {
-                    names.push(format!("model_{}_seed{s}.json", k.name()));
-                }
-            }
+            names.extend(model_file_names(&cfg.seeds));
             files::prepare_output_folder(dir, &names, cfg.force)?;
             Some(dir.clone())
         }
@@ -53,10 +75,7 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(rrd) = &cfg.rrd {
         record::check_rrd_path(&rrd.path, cfg.force)?;
     }
-    let mut settings = Settings::for_machine(&cfg.machine);
-    if cfg.spindle_speed {
-        settings = settings.with_spindle_speed_input();
-    }
+    let settings = settings_of(cfg);
     let progress = Progress::new(0, "units");
     let (rep, models) =
         study::run_campaign_with_progress(&cfg.machine, &cfg.seeds, &settings, &progress)?;
@@ -70,30 +89,135 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
     }
     if let Some(dir) = out_dir {
         let path = dir.join("report.json");
-        let json = serde_json::to_string_pretty(&rep)?;
-        files::write_atomic(&path, json.as_bytes(), cfg.force)?;
-        for m in &models {
-            for (k, text) in [
-                (
-                    PREDICTORS[0],
-                    m.hybrid.to_json_string_with(Some(&m.trained_on[0]))?,
-                ),
-                (
-                    PREDICTORS[1],
-                    m.volumetric.to_json_string_with(Some(&m.trained_on[1]))?,
-                ),
-                (
-                    PREDICTORS[2],
-                    m.linear.to_json_string_with(Some(&m.trained_on[2]))?,
-                ),
-            ] {
-                let file = dir.join(format!("model_{}_seed{}.json", k.name(), m.seed));
-                files::write_atomic(&file, text.as_bytes(), cfg.force)?;
-            }
-        }
+        files::write_atomic_with(&path, cfg.force, |w| {
+            study::write_report_json(&rep.header(), &rep.training, &rep.runs, w)
+                .map_err(std::io::Error::other)
+        })?;
+        write_models(&dir, &models, cfg.force)?;
         writeln!(out, "wrote {} and the trained models", path.display())?;
     }
     Ok(())
+}
+
+/// The predictor settings of the campaign.
+fn settings_of(cfg: &CampaignConfig) -> Settings {
+    let settings = Settings::for_machine(&cfg.machine);
+    if cfg.spindle_speed {
+        settings.with_spindle_speed_input()
+    } else {
+        settings
+    }
+}
+
+/// Writes each seed's three trained models in `dir`.
+fn write_models(dir: &std::path::Path, models: &[TrainedModels], force: bool) -> Result<()> {
+    for m in models {
+        for (k, text) in [
+            (
+                PREDICTORS[0],
+                m.hybrid.to_json_string_with(Some(&m.trained_on[0]))?,
+            ),
+            (
+                PREDICTORS[1],
+                m.volumetric.to_json_string_with(Some(&m.trained_on[1]))?,
+            ),
+            (
+                PREDICTORS[2],
+                m.linear.to_json_string_with(Some(&m.trained_on[2]))?,
+            ),
+        ] {
+            let file = dir.join(format!("model_{}_seed{}.json", k.name(), m.seed));
+            files::write_atomic(&file, text.as_bytes(), force)?;
+        }
+    }
+    Ok(())
+}
+
+/// One shard of the campaign: its block of the seeds, calibrated, trained and evaluated, written
+/// as `seeds.jsonl` (one line per seed), the trained models and `shard.json`. A shard with no
+/// seed writes its manifest and an empty result file.
+fn campaign_shard(cfg: &CampaignConfig, shard: Shard, out: &mut dyn Write) -> Result<()> {
+    let dir = cfg
+        .out_dir
+        .as_ref()
+        .context("--shard needs --out DIR for the shard's results")?;
+    let seeds = &cfg.seeds[shard.block(cfg.seeds.len())];
+    let mut names = vec![MANIFEST_FILE.to_string(), SEED_RESULTS_FILE.to_string()];
+    names.extend(model_file_names(seeds));
+    files::prepare_output_folder(dir, &names, cfg.force)?;
+    let settings = settings_of(cfg);
+    let cal_cycles = ThermalCycle::calibration_plan(&cfg.machine);
+    let header = study::campaign_header(&cfg.machine, &cfg.seeds, &settings, &cal_cycles);
+    let manifest = ShardManifest {
+        format: MANIFEST_FORMAT,
+        command: "campaign".into(),
+        shard,
+        work_ids: seeds.iter().map(|s| format!("seed {s}")).collect(),
+        work_total: cfg.seeds.len(),
+        command_line: cfg.command_line.clone(),
+        version: VERSION.into(),
+        inputs: campaign_inputs(cfg, &settings)?,
+        header: serde_json::to_value(&header)?,
+    };
+    let progress = Progress::new(0, "units");
+    let (rep, models) =
+        study::run_campaign_with_progress(&cfg.machine, seeds, &settings, &progress)?;
+    progress.finish();
+    files::write_atomic_with(&dir.join(SEED_RESULTS_FILE), cfg.force, |w| {
+        for r in rep.by_seed(seeds) {
+            serde_json::to_writer(&mut *w, &r)?;
+            w.write_all(b"\n")?;
+        }
+        Ok(())
+    })?;
+    write_models(dir, &models, cfg.force)?;
+    let path = dir.join(MANIFEST_FILE);
+    let json = serde_json::to_string_pretty(&manifest)?;
+    files::write_atomic(&path, json.as_bytes(), cfg.force)?;
+    let list: Vec<String> = seeds.iter().map(|s| s.to_string()).collect();
+    writeln!(
+        out,
+        "campaign shard {shard}: {} of {} machines (seeds {}); wrote {}, {SEED_RESULTS_FILE} and the trained models",
+        seeds.len(),
+        cfg.seeds.len(),
+        if list.is_empty() { "none".to_string() } else { list.join(", ") },
+        path.display()
+    )?;
+    Ok(())
+}
+
+/// The fingerprints of everything the campaign's results depend on: the input files, the
+/// diagonal programs, the predictor settings, the calibration plan and the seed list.
+fn campaign_inputs(cfg: &CampaignConfig, settings: &Settings) -> Result<Vec<InputFingerprint>> {
+    let mut inputs = cfg.inputs.clone();
+    for (name, text) in DIAGONALS {
+        inputs.push(InputFingerprint::of(
+            &format!("program diag_{}.ngc", name.to_lowercase()),
+            "embedded",
+            text.as_bytes(),
+        ));
+    }
+    inputs.push(InputFingerprint::of(
+        "settings",
+        "arguments",
+        &serde_json::to_vec(settings)?,
+    ));
+    let plan: Vec<String> = ThermalCycle::calibration_plan(&cfg.machine)
+        .iter()
+        .map(|c| format!("{} {} {}", c.name, c.duration_s(), c.purpose))
+        .collect();
+    inputs.push(InputFingerprint::of(
+        "calibration plan",
+        "embedded",
+        plan.join("\n").as_bytes(),
+    ));
+    let seeds: Vec<String> = cfg.seeds.iter().map(|s| s.to_string()).collect();
+    inputs.push(InputFingerprint::of(
+        "seeds",
+        "arguments",
+        seeds.join(",").as_bytes(),
+    ));
+    Ok(inputs)
 }
 
 /// The recording of the campaign's representative hybrid run.
@@ -119,6 +243,7 @@ fn write_recording(
         record::layout::campaign_blueprint(rrd.settings.magnify, &pick.title()),
     )?;
     record::campaign::record_campaign(&file, &cfg.machine, rep, models, rrd.settings)?;
+    record::fleet::log_fleet(&file, &study::fleet::Fleet::of(&rep.runs))?;
     let bytes = file.finish()?;
     wrote_recording(
         out,

@@ -13,6 +13,7 @@ pub mod identify;
 pub mod identify_thermal;
 pub mod interpret;
 pub mod lobes;
+pub mod merge;
 pub mod probe_campaign;
 pub mod run;
 pub mod run_fiveaxis;
@@ -28,6 +29,41 @@ use anyhow::{Context, Result};
 use crate::files;
 use crate::machine::MachineSpec;
 use crate::placement;
+use crate::shard::InputFingerprint;
+
+/// The program version written in shard manifests.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// Fingerprints of a command's input files: the machine description (the embedded reference
+/// without one) and the sensor set if one is given.
+///
+/// # Errors
+/// A file that cannot be read.
+pub fn input_fingerprints(
+    machine: Option<&Path>,
+    sensors: Option<&Path>,
+) -> Result<Vec<InputFingerprint>> {
+    let mut v = vec![match machine {
+        Some(p) => InputFingerprint::of(
+            "machine",
+            &p.display().to_string(),
+            &std::fs::read(p).with_context(|| format!("{}: cannot read", p.display()))?,
+        ),
+        None => InputFingerprint::of(
+            "machine",
+            "embedded",
+            crate::machine::REFERENCE_TOML.as_bytes(),
+        ),
+    }];
+    if let Some(p) = sensors {
+        v.push(InputFingerprint::of(
+            "sensor set",
+            &p.display().to_string(),
+            &std::fs::read(p).with_context(|| format!("{}: cannot read", p.display()))?,
+        ));
+    }
+    Ok(v)
+}
 use crate::record::RecordSettings;
 
 /// A Rerun recording to write: where, and how to draw.

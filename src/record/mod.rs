@@ -43,6 +43,7 @@ pub mod check;
 pub mod drift;
 pub mod dynamics;
 pub mod fiveaxis;
+pub mod fleet;
 pub mod layout;
 mod recorder;
 pub mod scene;

@@ -1,10 +1,9 @@
 //! The campaign's report: one [`RunReport`] per run, the whole [`CampaignReport`] (written as
-//! `report.json`), headline figures and the terminal tables — the summary and aggregates first,
-//! the per-run table on request.
+//! `report.json`), headline figures and the per-run table (the summary is in `summary`).
 
 use std::io::Write;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::predict::metrics::Metrics;
 use crate::predict::predictor::{ModelKind, TrainSummary};
@@ -16,7 +15,7 @@ pub const PREDICTORS: [ModelKind; 3] =
     [ModelKind::Hybrid, ModelKind::Volumetric, ModelKind::Linear];
 
 /// One evaluated run: one predictor, one diagonal, one thermal state, one seed.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RunReport {
     /// The predictor's model class (`hybrid`, `volumetric` or `linear` in the file).
     pub predictor: ModelKind,
@@ -69,7 +68,7 @@ pub struct RunReport {
 }
 
 /// One cycle of the calibration plan.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PlannedCycle {
     /// Cycle name.
     pub name: String,
@@ -194,7 +193,18 @@ pub struct Headline {
 impl Headline {
     /// The figures of `runs`; None if there are none.
     pub fn of<'a>(runs: impl IntoIterator<Item = &'a RunReport>) -> Option<Self> {
-        let r: Vec<&RunReport> = runs.into_iter().collect();
+        Self::of_digests(
+            runs.into_iter()
+                .map(RunDigest::of)
+                .collect::<Vec<_>>()
+                .iter(),
+        )
+    }
+
+    /// The figures of the digested `runs`; None if there are none. Gives what [`Self::of`]
+    /// gives for the runs themselves, bit for bit.
+    pub fn of_digests<'a>(runs: impl IntoIterator<Item = &'a RunDigest>) -> Option<Self> {
+        let r: Vec<&RunDigest> = runs.into_iter().collect();
         if r.is_empty() {
             return None;
         }
@@ -214,106 +224,52 @@ impl Headline {
     }
 }
 
+/// What the summary tables need of one run (a few numbers instead of the whole
+/// [`RunReport`]), so that a summary over many runs holds little per run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunDigest {
+    /// The predictor.
+    pub predictor: ModelKind,
+    /// Machine seed.
+    pub seed: u64,
+    /// 1 − RMS after / RMS before, of |E| (fraction).
+    pub reduction: f64,
+    /// Max |E| with compensation, µm.
+    pub max_after_um: f64,
+    /// Prediction RMSE, µm.
+    pub rmse_um: f64,
+    /// Residual share of the thermal part on a warm run (fraction).
+    pub residual_share_of_thermal: Option<f64>,
+    /// Position of the run's diagonal in its summary's list of diagonals.
+    pub diagonal: u16,
+    /// Position of the run's thermal state in its summary's list of states.
+    pub state: u16,
+}
+
+impl RunDigest {
+    /// The digest of `r` (group positions 0: see [`super::summary::SummaryDigest`]).
+    pub fn of(r: &RunReport) -> Self {
+        Self {
+            predictor: r.predictor,
+            seed: r.seed,
+            reduction: r.reduction,
+            max_after_um: r.max_after_um,
+            rmse_um: r.rmse_um,
+            residual_share_of_thermal: r.residual_share_of_thermal,
+            diagonal: 0,
+            state: 0,
+        }
+    }
+}
+
+/// The headline figures of one predictor over the digested runs.
+pub fn headline_of(runs: &[RunDigest], predictor: ModelKind) -> Option<Headline> {
+    Headline::of_digests(runs.iter().filter(|r| r.predictor == predictor))
+}
+
 /// The headline figures of one predictor over all runs.
 pub fn headline(runs: &[RunReport], predictor: ModelKind) -> Option<Headline> {
     Headline::of(runs.iter().filter(|r| r.predictor == predictor))
-}
-
-/// Writes what a person reads first: the campaign's set-up, the headline figures per predictor,
-/// then median reduction and max residual per predictor × diagonal and per predictor × thermal
-/// state.
-///
-/// # Errors
-/// The writer's.
-pub fn write_campaign_summary(rep: &CampaignReport, out: &mut dyn Write) -> std::io::Result<()> {
-    let hours: f64 = rep.calibration_plan.iter().map(|c| c.hours).sum();
-    writeln!(
-        out,
-        "vmc-twin campaign on {}: calibration plan of {} cycles, {hours:.0} machine hours per machine:",
-        rep.machine,
-        rep.calibration_plan.len(),
-    )?;
-    for c in &rep.calibration_plan {
-        writeln!(out, "  {:<20} {:>4.1} h  {}", c.name, c.hours, c.purpose)?;
-    }
-    writeln!(
-        out,
-        "evaluated on held-out states {}",
-        rep.evaluation_states.join(", ")
-    )?;
-    if rep.hybrid_uses_spindle_speed {
-        writeln!(
-            out,
-            "hybrid: with the commanded spindle speed as heat input (--spindle-speed, opt-in)"
-        )?;
-    }
-    writeln!(out, "summary over all diagonals, states and seeds:")?;
-    for p in PREDICTORS {
-        if let Some(h) = headline(&rep.runs, p) {
-            writeln!(out, "  {:<10} runs {:>4}  median reduction {:>5.1} %  worst run {:>5.1} %  max residual |E| {:>5.2} µm  worst residual/thermal part {:>5.1} %  mean prediction RMSE {:>5.2} µm",
-                p.name(), h.runs, h.median_reduction * 100.0, h.worst_reduction * 100.0, h.max_after_um,
-                h.worst_residual_share.unwrap_or(f64::NAN) * 100.0, h.mean_rmse_um)?;
-        }
-    }
-    let mut diagonals: Vec<&str> = Vec::new();
-    for r in &rep.runs {
-        if !diagonals.contains(&r.diagonal.as_str()) {
-            diagonals.push(&r.diagonal);
-        }
-    }
-    let states: Vec<&str> = rep.evaluation_states.iter().map(String::as_str).collect();
-    writeln!(out, "by diagonal: median reduction % / max residual |E| µm")?;
-    write_aggregate(rep, out, &diagonals, |r, d| r.diagonal == d)?;
-    writeln!(
-        out,
-        "by thermal state: median reduction % / max residual |E| µm / worst residual share of the thermal part %"
-    )?;
-    write_aggregate(rep, out, &states, |r, s| r.thermal_state == s)?;
-    writeln!(out, "(reduction = 1 − RMS|E'|/RMS|E| of a run, E' compensated; residual share = RMS|E'| / RMS of the error's thermal part, on warm runs (thermal part ≥ {WARM_RUN_MIN_THERMAL_UM} µm RMS); every run: --runs, or report.json)")?;
-    Ok(())
-}
-
-/// One table: a row per group, a column per predictor, each cell `median red % / max |E'| µm`
-/// over the runs of the group.
-fn write_aggregate(
-    rep: &CampaignReport,
-    out: &mut dyn Write,
-    groups: &[&str],
-    in_group: impl Fn(&RunReport, &str) -> bool,
-) -> std::io::Result<()> {
-    let label = groups.iter().map(|g| g.len()).max().unwrap_or(0);
-    let predictors: Vec<ModelKind> = PREDICTORS
-        .into_iter()
-        .filter(|p| rep.runs.iter().any(|r| r.predictor == *p))
-        .collect();
-    write!(out, "  {:<label$}", "")?;
-    for p in &predictors {
-        write!(out, " {:>19}", p.name())?;
-    }
-    writeln!(out)?;
-    for g in groups {
-        write!(out, "  {g:<label$}")?;
-        for p in &predictors {
-            let cell = Headline::of(
-                rep.runs
-                    .iter()
-                    .filter(|r| r.predictor == *p && in_group(r, g)),
-            )
-            .map(|h| match h.worst_residual_share {
-                Some(s) => format!(
-                    "{:.1} / {:.2} / {:.0}",
-                    h.median_reduction * 100.0,
-                    h.max_after_um,
-                    s * 100.0
-                ),
-                None => format!("{:.1} / {:.2}", h.median_reduction * 100.0, h.max_after_um),
-            })
-            .unwrap_or_else(|| "-".into());
-            write!(out, " {cell:>19}")?;
-        }
-        writeln!(out)?;
-    }
-    Ok(())
 }
 
 /// Writes every run as one row: errors before and after compensation, reduction and prediction
@@ -322,17 +278,42 @@ fn write_aggregate(
 /// # Errors
 /// The writer's.
 pub fn write_run_table(rep: &CampaignReport, out: &mut dyn Write) -> std::io::Result<()> {
+    write_run_table_head(out)?;
+    for r in &rep.runs {
+        write_run_row(r, out)?;
+    }
+    write_run_table_foot(out)
+}
+
+/// The run table's column heads.
+///
+/// # Errors
+/// The writer's.
+pub fn write_run_table_head(out: &mut dyn Write) -> std::io::Result<()> {
     writeln!(out, "{:<10} {:<5} {:<24} {:>4} | {:>7} {:>7} {:>7} {:>7} | {:>7} {:>7} {:>7} {:>7} | {:>6} | {:>6} {:>7} | {:>6} {:>6} {:>6} {:>6}",
         "predictor", "diag", "thermal state", "seed",
         "rmsEx", "rmsEy", "rmsEz", "rms|E|", "rmsEx'", "rmsEy'", "rmsEz'", "rms|E'|", "red%", "rmsTh", "res/th%", "MAD", "MAPE%", "RMSE", "R2")?;
-    for r in &rep.runs {
-        writeln!(out, "{:<10} {:<5} {:<24} {:>4} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>6.1} | {:>6.2} {:>7.1} | {:>6.2} {:>6.1} {:>6.2} {:>6.3}",
+    Ok(())
+}
+
+/// One row of the run table.
+///
+/// # Errors
+/// The writer's.
+pub fn write_run_row(r: &RunReport, out: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(out, "{:<10} {:<5} {:<24} {:>4} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>7.2} {:>7.2} {:>7.2} {:>7.2} | {:>6.1} | {:>6.2} {:>7.1} | {:>6.2} {:>6.1} {:>6.2} {:>6.3}",
             r.predictor.name(), r.diagonal, r.thermal_state, r.seed,
             r.rms_before_xyz_um[0], r.rms_before_xyz_um[1], r.rms_before_xyz_um[2], r.rms_before_um,
             r.rms_after_xyz_um[0], r.rms_after_xyz_um[1], r.rms_after_xyz_um[2], r.rms_after_um,
             r.reduction * 100.0, r.rms_thermal_um.unwrap_or(f64::NAN),
-            r.residual_share_of_thermal.unwrap_or(f64::NAN) * 100.0, r.mad_um, r.mape.unwrap_or(f64::NAN) * 100.0, r.rmse_um, r.r2.unwrap_or(f64::NAN))?;
-    }
+            r.residual_share_of_thermal.unwrap_or(f64::NAN) * 100.0, r.mad_um, r.mape.unwrap_or(f64::NAN) * 100.0, r.rmse_um, r.r2.unwrap_or(f64::NAN))
+}
+
+/// The run table's legend.
+///
+/// # Errors
+/// The writer's.
+pub fn write_run_table_foot(out: &mut dyn Write) -> std::io::Result<()> {
     writeln!(out, "(µm; primed = compensated; red% = 1 − RMS|E'|/RMS|E|; rmsTh = RMS of the error's thermal part; res/th% = RMS|E'|/rmsTh on warm runs; MAD/MAPE/RMSE/R2 of the predicted vs true error, components pooled; MAPE = mean|e|/mean|y|)")?;
     Ok(())
 }

@@ -1,0 +1,289 @@
+//! `vmc-twin merge`: combines the shard results of a sharded command into what the unsharded
+//! command writes and prints. The shard folders are checked as a set first
+//! ([`crate::shard::check_set`]); the per-seed results are then streamed from the files, twice
+//! (training summaries, then runs, the order of `report.json`), so the merge holds one seed's
+//! results at a time plus a few numbers per run for the summary's medians.
+
+use std::cell::RefCell;
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use serde::ser::{Error as _, SerializeSeq};
+use serde::{Serialize, Serializer};
+
+use super::campaign::{model_file_names, SEED_RESULTS_FILE};
+use crate::files;
+use crate::record;
+use crate::shard::{check_set, ShardManifest, MANIFEST_FILE};
+use crate::study::{self, ReportHeader, SeedResults, SummaryDigest};
+
+/// What to merge, validated.
+pub struct MergeConfig {
+    /// The shard folders (each with its `shard.json`), in any order.
+    pub shard_dirs: Vec<PathBuf>,
+    /// Folder for the merged results.
+    pub out_dir: PathBuf,
+    /// Overwrite existing output files.
+    pub force: bool,
+    /// Print the per-run table too (campaign).
+    pub print_runs: bool,
+    /// A Rerun recording of the fleet's histograms and the summary.
+    pub rrd: Option<PathBuf>,
+    /// A PNG picture of the fleet's histograms.
+    pub png: Option<PathBuf>,
+}
+
+/// Reads and checks the shards, then merges them with the command that wrote them.
+///
+/// # Errors
+/// A folder without a readable manifest, a set of shards that does not belong together (see
+/// [`check_set`]), unreadable results, outputs that may not be written.
+pub fn merge(cfg: &MergeConfig, out: &mut dyn Write) -> Result<()> {
+    let mut shards = Vec::new();
+    for dir in &cfg.shard_dirs {
+        let path = dir.join(MANIFEST_FILE);
+        if !path.is_file() {
+            bail!(
+                "{}: not a shard folder (no {MANIFEST_FILE}; a shard writes it with --shard I/N --out DIR)",
+                dir.display()
+            );
+        }
+        let text = files::read_named(&path, "shard manifest")?;
+        let m: ShardManifest = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a shard manifest", path.display()))?;
+        shards.push((dir.display().to_string(), m));
+    }
+    let order = check_set(&shards)?;
+    let dirs: Vec<&Path> = order.iter().map(|&k| cfg.shard_dirs[k].as_path()).collect();
+    let first = &shards[order[0]].1;
+    match first.command.as_str() {
+        "campaign" => {
+            let header: ReportHeader = serde_json::from_value(first.header.clone())
+                .context("the shards' report header")?;
+            let seeds = order
+                .iter()
+                .flat_map(|&k| shards[k].1.work_ids.iter())
+                .map(|id| parse_seed_id(id))
+                .collect::<Result<Vec<u64>>>()?;
+            merge_campaign(cfg, header, &dirs, &seeds, out)
+        }
+        other => bail!("shards of `{other}` cannot be merged by this version"),
+    }
+}
+
+/// `seed 17` → 17.
+fn parse_seed_id(id: &str) -> Result<u64> {
+    id.strip_prefix("seed ")
+        .and_then(|s| s.parse().ok())
+        .with_context(|| format!("work id `{id}` is not `seed N`"))
+}
+
+/// Merges campaign shards (in shard order) covering `seeds`: `report.json`, the trained models
+/// and the printed summary, as `campaign` over the same seeds writes and prints them.
+fn merge_campaign(
+    cfg: &MergeConfig,
+    header: ReportHeader,
+    dirs: &[&Path],
+    seeds: &[u64],
+    out: &mut dyn Write,
+) -> Result<()> {
+    let mut names = vec!["report.json".to_string()];
+    names.extend(model_file_names(seeds));
+    files::prepare_output_folder(&cfg.out_dir, &names, cfg.force)?;
+    if let Some(rrd) = &cfg.rrd {
+        record::check_rrd_path(rrd, cfg.force)?;
+    }
+    if let Some(png) = &cfg.png {
+        files::check_writable(png, cfg.force)?;
+    }
+    let results = SeedFiles {
+        files: dirs.iter().map(|d| d.join(SEED_RESULTS_FILE)).collect(),
+        seeds: seeds.to_vec(),
+    };
+    let digest = RefCell::new(SummaryDigest::new(header.clone()));
+    let path = cfg.out_dir.join("report.json");
+    files::write_atomic_with(&path, cfg.force, |w| {
+        let training = TrainingStream(&results);
+        let runs = RunStream {
+            files: &results,
+            digest: &digest,
+        };
+        study::write_report_json(&header, training, runs, w).map_err(std::io::Error::other)
+    })?;
+    for (dir, name) in dirs
+        .iter()
+        .flat_map(|d| std::iter::repeat(*d).zip(std::fs::read_dir(d).into_iter().flatten()))
+        .filter_map(|(d, e)| Some((d, e.ok()?.file_name().to_string_lossy().to_string())))
+        .filter(|(_, n)| names[1..].contains(n))
+    {
+        let to = cfg.out_dir.join(&name);
+        let text = std::fs::read(dir.join(&name))
+            .with_context(|| format!("{}: cannot read", dir.join(&name).display()))?;
+        files::write_atomic(&to, &text, cfg.force)?;
+    }
+    for name in &names[1..] {
+        if !cfg.out_dir.join(name).is_file() {
+            bail!("no shard holds the trained model {name}");
+        }
+    }
+    let digest = digest.into_inner();
+    let mut summary = Vec::new();
+    study::write_summary(&digest, &mut summary)?;
+    out.write_all(&summary)?;
+    if cfg.print_runs {
+        study::write_run_table_head(out)?;
+        results.for_each(
+            |r| {
+                r.runs
+                    .iter()
+                    .try_for_each(|run| study::write_run_row(run, out))
+                    .map_err(anyhow::Error::from)
+            },
+            |e| e,
+        )?;
+        study::write_run_table_foot(out)?;
+    }
+    writeln!(out, "wrote {} and the trained models", path.display())?;
+    if let Some(png) = &cfg.png {
+        write_png(png, &digest.fleet, cfg.force, out)?;
+    }
+    if let Some(rrd) = &cfg.rrd {
+        let seeds: Vec<String> = seeds.iter().map(u64::to_string).collect();
+        let title = format!(
+            "vmc-twin fleet of {} on seeds {}",
+            header.machine,
+            seeds.join(",")
+        );
+        let text = String::from_utf8_lossy(&summary);
+        let bytes = record::fleet::record_fleet(rrd, cfg.force, &title, &digest.fleet, &text)?;
+        super::wrote_recording(out, rrd, bytes, "; the fleet's histograms")?;
+    }
+    Ok(())
+}
+
+/// The shards' per-seed result files, in shard order, and the seeds they must hold in order.
+struct SeedFiles {
+    files: Vec<PathBuf>,
+    seeds: Vec<u64>,
+}
+
+impl SeedFiles {
+    /// Calls `f` with each seed's results in order, one at a time; checks that the files hold
+    /// exactly the expected seeds (a problem there becomes an `E` through `wrap`).
+    fn for_each<E>(
+        &self,
+        mut f: impl FnMut(&SeedResults) -> Result<(), E>,
+        wrap: impl Fn(anyhow::Error) -> E,
+    ) -> Result<(), E> {
+        let mut expected = self.seeds.iter();
+        for file in &self.files {
+            let reader = BufReader::new(
+                std::fs::File::open(file)
+                    .with_context(|| format!("{}: cannot read shard results", file.display()))
+                    .map_err(&wrap)?,
+            );
+            for (k, line) in reader.lines().enumerate() {
+                let at = || format!("{} line {}", file.display(), k + 1);
+                let line = line.with_context(at).map_err(&wrap)?;
+                let r: SeedResults = serde_json::from_str(&line)
+                    .with_context(at)
+                    .map_err(&wrap)?;
+                match expected.next() {
+                    Some(&s) if s == r.seed => {}
+                    Some(&s) => {
+                        return Err(wrap(anyhow::anyhow!(
+                            "{}: seed {}, expected seed {s}",
+                            at(),
+                            r.seed
+                        )))
+                    }
+                    None => {
+                        return Err(wrap(anyhow::anyhow!(
+                            "{}: seed {} beyond the shard's work list",
+                            at(),
+                            r.seed
+                        )))
+                    }
+                }
+                f(&r)?;
+            }
+        }
+        match expected.next() {
+            Some(s) => Err(wrap(anyhow::anyhow!(
+                "the shard results hold no results for seed {s}"
+            ))),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The training summaries of every seed, serialised as one sequence while the files are read.
+struct TrainingStream<'a>(&'a SeedFiles);
+
+impl Serialize for TrainingStream<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut seq = serializer.serialize_seq(None)?;
+        self.0.for_each(
+            |r| r.training.iter().try_for_each(|t| seq.serialize_element(t)),
+            |e| S::Error::custom(format!("{e:#}")),
+        )?;
+        seq.end()
+    }
+}
+
+/// The runs of every seed, serialised as one sequence while the files are read; each run also
+/// goes into the summary's digest.
+struct RunStream<'a> {
+    files: &'a SeedFiles,
+    digest: &'a RefCell<SummaryDigest>,
+}
+
+impl Serialize for RunStream<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut seq = serializer.serialize_seq(None)?;
+        self.files.for_each(
+            |r| {
+                r.runs.iter().try_for_each(|run| {
+                    self.digest.borrow_mut().push(run);
+                    seq.serialize_element(run)
+                })
+            },
+            |e| S::Error::custom(format!("{e:#}")),
+        )?;
+        seq.end()
+    }
+}
+
+/// Writes the fleet's histograms as a PNG picture and says what each panel spans.
+fn write_png(
+    path: &Path,
+    fleet: &study::fleet::Fleet,
+    force: bool,
+    out: &mut dyn Write,
+) -> Result<()> {
+    let panels = study::fleet_png::panels(fleet, record::fleet::BINS);
+    let bytes = study::fleet_png::encode_png(&study::fleet_png::raster(&panels))?;
+    files::write_atomic(path, &bytes, force)?;
+    writeln!(
+        out,
+        "wrote {} (histograms across machines, {} bins; red line: the goal):",
+        path.display(),
+        record::fleet::BINS
+    )?;
+    for (pos, (name, (hist, _))) in ["top left", "top right", "bottom left", "bottom right"]
+        .iter()
+        .zip(&panels)
+    {
+        if let Some(h) = hist {
+            let top = h.counts.iter().max().copied().unwrap_or(0);
+            writeln!(
+                out,
+                "  {pos:<12} {name}: {:.2} to {:.2}, tallest bar {top} machines",
+                h.lo,
+                h.lo + h.width * h.counts.len() as f64
+            )?;
+        }
+    }
+    Ok(())
+}
