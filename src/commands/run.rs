@@ -74,6 +74,27 @@ pub fn run_target(target: &RunTarget, out: &mut dyn Write) -> Result<()> {
 /// ranges.
 type RunController = Guarded<Compensator<AnyPredictor>>;
 
+/// Checks the outputs of a run before any work: the output folder's `samples.csv` and
+/// `summary.json` (their paths), and the recording's path.
+pub(super) fn prepare_outputs(
+    out_dir: Option<&Path>,
+    rrd: Option<&RrdOutput>,
+    force: bool,
+) -> Result<Option<(PathBuf, PathBuf)>> {
+    let out_files = match out_dir {
+        Some(dir) => {
+            let names = ["samples.csv", "summary.json"].map(String::from);
+            let files = files::prepare_output_folder(dir, &names, force)?;
+            Some((files[0].clone(), files[1].clone()))
+        }
+        None => None,
+    };
+    if let Some(rrd) = rrd {
+        record::check_rrd_path(&rrd.path, force)?;
+    }
+    Ok(out_files)
+}
+
 /// Runs the program and prints the report to `out`.
 ///
 /// # Errors
@@ -83,17 +104,7 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     let machine = &cfg.machine;
     // Check everything the user gave before minutes of simulation: programs and outputs.
     let (warmups, plan) = load_plans(cfg)?;
-    let out_files = match &cfg.out_dir {
-        Some(dir) => {
-            let names = ["samples.csv", "summary.json"].map(String::from);
-            let files = files::prepare_output_folder(dir, &names, cfg.force)?;
-            Some((files[0].clone(), files[1].clone()))
-        }
-        None => None,
-    };
-    if let Some(rrd) = &cfg.rrd {
-        record::check_rrd_path(&rrd.path, cfg.force)?;
-    }
+    let out_files = prepare_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let mut controller = match &cfg.model {
         Some(path) => Some(compensator(cfg, path, out)?),
         None => None,

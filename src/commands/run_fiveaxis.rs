@@ -51,17 +51,8 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
         // No thermal steps on this machine: only the number of samples is limited.
         crate::program::check_run_size(&name, 0.0, 1.0, plan.duration_s(), Some(dt_s))?;
     }
-    let out_files = match &cfg.out_dir {
-        Some(dir) => {
-            let names = ["samples.csv", "summary.json"].map(String::from);
-            let files = files::prepare_output_folder(dir, &names, cfg.force)?;
-            Some((files[0].clone(), files[1].clone()))
-        }
-        None => None,
-    };
-    if let Some(rrd) = &cfg.rrd {
-        record::check_rrd_path(&rrd.path, cfg.force)?;
-    }
+    let out_files =
+        super::run::prepare_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let geom = spec.geometry();
     let model = match &cfg.identified {
         Some(path) => {
