@@ -4,14 +4,12 @@
 //! 1e-4 mm, one core. The augmented system has 24 states (9 blade + actuator, 13 controller,
 //! 2 Padé).
 //!
-//! Figures: on the 2-core machine shared with other builds (load average 12–13), the
-//! criterion run (`taskset -c 0 cargo bench -p vmc-dynamics --bench control`) measured
-//! `closed_loop_lobes_200_m40` at 13.7–21.4 s wall per iteration, which says more about the load
-//! than the code: the same work through the command line
-//! (`vmc-twin lobes --controller lqg.json --steps 40`, open and closed loop, 400 traced speeds)
-//! took 3.4 s of CPU time (7.8 s wall). `closed_loop_lobes_200_m160` was not run to the end
-//! under that load (estimated 1 300 s for 10 samples); through the command line (default 160
-//! steps) the same work took 23.1 s of CPU time (60 s wall).
+//! Figures (`taskset -c 0 cargo bench -p vmc-dynamics --bench control`), on the 2-core machine
+//! shared with other builds (load average 14), so wall times say more about the load than the
+//! code: `closed_loop_lobes_200_m40` 2.94 s, `closed_loop_lobes_200_m160` 11.0 s per iteration.
+//! Through the command line (`vmc-twin lobes --controller lqg.json`, open and closed loop, 160
+//! steps, `taskset -c 1`) under a load average of 9: 4.2–5.2 s of CPU time (23.1 s with the full
+//! monodromy product and bisection).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use vmc_dynamics::control::blade::{Actuator, Blade};
