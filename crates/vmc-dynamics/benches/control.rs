@@ -8,8 +8,8 @@
 //! shared with other builds (load average 14), so wall times say more about the load than the
 //! code: `closed_loop_lobes_200_m40` 2.94 s, `closed_loop_lobes_200_m160` 11.0 s per iteration.
 //! Through the command line (`vmc-twin lobes --controller lqg.json`, open and closed loop, 160
-//! steps, `taskset -c 1`) under a load average of 9: 4.2–5.2 s of CPU time (23.1 s with the full
-//! monodromy product and bisection).
+//! steps, `taskset -c 1`): 3.8 s of CPU time on the idle machine, 4.2–5.2 s under a load average
+//! of 9 (23.1 s with the full monodromy product and bisection).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use vmc_dynamics::control::blade::{Actuator, Blade};
