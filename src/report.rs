@@ -151,11 +151,7 @@ impl RunLog {
             "therm_um"
         )?;
         if comp {
-            write!(
-                out,
-                " | {:>8} {:>8} {:>8} {:>8}",
-                "ex'_um", "ey'_um", "ez'_um", "|e'|_um"
-            )?;
+            write_compensated_header(out)?;
         }
         writeln!(out)?;
         for p in &self.points {
@@ -177,14 +173,7 @@ impl RunLog {
                 norm(t),
             )?;
             if let Some(a) = p.error_after_um {
-                write!(
-                    out,
-                    " | {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
-                    a[0],
-                    a[1],
-                    a[2],
-                    norm(a)
-                )?;
+                write_compensated_cells(out, a)?;
             }
             writeln!(out)?;
         }
@@ -301,6 +290,33 @@ pub fn write_summary(s: &RunSummary, out: &mut dyn Write) -> std::io::Result<()>
         }
     }
     Ok(())
+}
+
+/// The compensated columns' header of a run's terminal table (`ex'_um` … `|e'|_um`).
+///
+/// # Errors
+/// The writer's.
+pub fn write_compensated_header(out: &mut dyn Write) -> std::io::Result<()> {
+    write!(
+        out,
+        " | {:>8} {:>8} {:>8} {:>8}",
+        "ex'_um", "ey'_um", "ez'_um", "|e'|_um"
+    )
+}
+
+/// The compensated error's cells of one row of a run's terminal table, in µm.
+///
+/// # Errors
+/// The writer's.
+pub fn write_compensated_cells(out: &mut dyn Write, a: [f64; 3]) -> std::io::Result<()> {
+    write!(
+        out,
+        " | {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+        a[0],
+        a[1],
+        a[2],
+        norm(a)
+    )
 }
 
 #[cfg(test)]

@@ -380,11 +380,7 @@ pub fn write_table(
         "ex_um", "ey_um", "ez_um", "|e|_um"
     )?;
     if comp {
-        write!(
-            out,
-            " | {:>8} {:>8} {:>8} {:>8}",
-            "ex'_um", "ey'_um", "ez'_um", "|e'|_um"
-        )?;
+        crate::report::write_compensated_header(out)?;
     }
     writeln!(out)?;
     for (k, p) in points.iter().enumerate() {
@@ -406,14 +402,7 @@ pub fn write_table(
             crate::report::norm(e)
         )?;
         if let Some(a) = p.error_after_um {
-            write!(
-                out,
-                " | {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
-                a[0],
-                a[1],
-                a[2],
-                crate::report::norm(a)
-            )?;
+            crate::report::write_compensated_cells(out, a)?;
         }
         writeln!(out)?;
     }
