@@ -15,58 +15,9 @@ use vmc_twin::predict::predictor::{self, ModelKind, Settings};
 use vmc_twin::study::ForMachine;
 use vmc_twin::study::{self, diagonal_plans};
 
-/// Selection-only stress states (never the held-out ones): Z strokes at another feed and
-/// length, a high speed below the maximum, a shop at 24.5 °C.
-fn dev_stress_states() -> Vec<calibration::EvalState> {
-    use vmc_twin::calibration::Phase;
-    use vmc_twin::thermal::AmbientProfile;
-    let ph = |h: f64, rpm: f64, f: [f64; 3]| Phase {
-        duration_s: h * 3600.0,
-        spindle_rpm: rpm,
-        axis_speed_mm_per_min: f,
-    };
-    let cyc = |name: &str, t: f64, soak: Option<f64>, phases| ThermalCycle {
-        name: name.into(),
-        purpose: String::new(),
-        ambient: AmbientProfile::Constant { temp_degc: t },
-        soak_degc: soak,
-        phases,
-    };
-    let st = |c: ThermalCycle, h: f64| calibration::EvalState {
-        name: format!("{}@{h}h", c.name),
-        cycle: c,
-        at_s: h * 3600.0,
-    };
-    vec![
-        st(
-            cyc(
-                "dev_z_strokes",
-                20.0,
-                None,
-                vec![ph(2.5, 0.0, [800.0, 200.0, 5000.0])],
-            ),
-            2.5,
-        ),
-        st(
-            cyc(
-                "dev_high_speed",
-                20.0,
-                None,
-                vec![ph(5.0, 11000.0, [2000.0, 2500.0, 1500.0])],
-            ),
-            4.0,
-        ),
-        st(
-            cyc(
-                "dev_warm_shop",
-                24.5,
-                Some(24.5),
-                vec![ph(3.0, 5000.0, [2500.0, 2500.0, 1000.0])],
-            ),
-            2.0,
-        ),
-    ]
-}
+#[path = "shared/dev_states.rs"]
+mod dev_states;
+use dev_states::dev_stress_states;
 
 fn main() {
     let spec = MachineSpec::reference();
@@ -120,6 +71,7 @@ fn main() {
             "rpmtaus" => settings.spindle_speed_taus_s = list(),
             "feedtaus" => settings.axis_feed_taus_s = list(),
             "feedown" => settings.axis_feed_own_axis = v == "1",
+            "rpm" if v == "1" => settings = settings.clone().with_spindle_speed_input(),
             "plan" => plan = v.to_string(),
             "val" => settings.val_cycles = v.split(',').map(String::from).collect(),
             _ => panic!("unknown {k}"),
@@ -162,7 +114,7 @@ fn main() {
         let mut hs = Vec::new();
         let mut sum = None;
         for m in 0..members {
-            let s = study::with_plan_validation(
+            let s = study::fit_to_data(
                 Settings {
                     seed: seed + seed_off + 100 * m,
                     ..settings.clone()
@@ -259,6 +211,11 @@ impl predictor::ErrorPredictor for Ensemble {
     fn observe_spindle_speed(&mut self, t: f64, rpm: f64) {
         for p in &mut self.0 {
             p.observe_spindle_speed(t, rpm);
+        }
+    }
+    fn observe_axis_feeds(&mut self, t: f64, feeds: [f64; 3]) {
+        for p in &mut self.0 {
+            p.observe_axis_feeds(t, feeds);
         }
     }
 }

@@ -21,6 +21,9 @@ use vmc_twin::study::follow_to_state;
 use vmc_twin::study::ForMachine;
 use vmc_twin::twin::{sub_seed, Twin};
 
+#[path = "shared/dev_states.rs"]
+mod dev_states;
+
 fn main() {
     // `dev` among the arguments: the selection-only states (placement stream 9001) instead of
     // the held-out ones.
@@ -32,6 +35,10 @@ fn main() {
             base.spindle_history_taus_s = v.split(',').map(|x| x.parse().unwrap()).collect();
         } else if let Some(v) = a.strip_prefix("shist=") {
             base.spindle_history_sensors = v.split(',').map(String::from).collect();
+        } else if let Some(v) = a.strip_prefix("feedtaus=") {
+            base.axis_feed_taus_s = v.split(',').map(|x| x.parse().unwrap()).collect();
+        } else if a == "feedown=1" {
+            base.axis_feed_own_axis = true;
         } else if a == "rpm" {
             base = base.with_spindle_speed_input();
         }
@@ -79,7 +86,9 @@ fn main() {
             "|E|-sp"
         );
         let states = if dev {
-            vmc_twin::placement::validation_states(seed)
+            let mut v = vmc_twin::placement::validation_states(seed);
+            v.extend(dev_states::dev_stress_states());
+            v
         } else {
             calibration::evaluation_states(&spec, seed)
         };
@@ -106,6 +115,7 @@ fn main() {
                         let r = twin.sensor_readings();
                         hs.observe_readings(r.time_s, &r.values_degc);
                         hs.observe_spindle_speed(r.time_s, 0.0);
+                        hs.observe_axis_feeds(r.time_s, [0.0; 3]);
                     }
                 }
                 // The predictor holds the readings it last observed: the present ones.

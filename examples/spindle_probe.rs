@@ -42,6 +42,10 @@ impl vmc_twin::sim::Controller for NoseFilter {
         });
         self.last_s = time_s;
     }
+
+    fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+
+    fn on_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
 }
 
 /// One sample: readings, nose rate, speed filters, truth δz (µm), seconds since the last stop.

@@ -54,7 +54,7 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
         &ThermalCycle::calibration_plan(spec),
         &CampaignConfig::new(1),
     )?;
-    let settings = study::with_plan_validation(
+    let settings = study::fit_to_data(
         Settings {
             seed: 1,
             ..Settings::for_machine(spec)

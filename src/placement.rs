@@ -471,7 +471,7 @@ fn evaluate_set(
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
         .collect();
     let set_spec = with_sensors(cand_spec, sensors)?;
-    let settings = study::with_plan_validation(
+    let settings = study::fit_to_data(
         study::with_history_features(
             Settings {
                 seed,

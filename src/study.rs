@@ -261,7 +261,26 @@ impl ForMachine for Settings {
 /// `settings` with both history features of [`ForMachine::for_machine`] for the sensors of `spec`
 /// (restricted to `settings.sensors` when that is not empty).
 pub fn with_history_features(settings: Settings, spec: &MachineSpec) -> Settings {
-    with_spindle_nose_rate(with_ambient_history(settings, spec), spec)
+    with_axis_feeds(with_spindle_nose_rate(with_ambient_history(settings, spec), spec))
+}
+
+/// Time constant of the axes' commanded-feed features, s: the order of a ballscrew's thermal
+/// time constant (a segment's capacity over its losses, about half an hour to an hour).
+/// Chosen on selection-only states: docs/decisions/2026-11-25-commanded-axis-feeds.md.
+pub const AXIS_FEED_TAU_S: f64 = 3600.0;
+
+/// `settings` with the axes' commanded feeds as inputs of every part of the hybrid (one filter,
+/// [`AXIS_FEED_TAU_S`]) unless it names its own filters: no sensor sits on the screws, and
+/// the controller knows what it commanded.
+pub fn with_axis_feeds(settings: Settings) -> Settings {
+    if settings.axis_feed_taus_s.is_empty() {
+        Settings {
+            axis_feed_taus_s: vec![AXIS_FEED_TAU_S],
+            ..settings
+        }
+    } else {
+        settings
+    }
 }
 
 /// The calibration plan's validation cycles: two combined duties, one with a speed change and
@@ -271,19 +290,29 @@ pub fn with_history_features(settings: Settings, spec: &MachineSpec) -> Settings
 /// ones): docs/decisions/2026-11-24-calibration-plan.md.
 pub const PLAN_VALIDATION_CYCLES: [&str; 2] = ["cal_4000_8000rpm", "cal_day_drift"];
 
-/// `settings` with [`PLAN_VALIDATION_CYCLES`] as validation cycles when it names none and
-/// `data` has them all (a dataset of the calibration plan); otherwise unchanged (the automatic
-/// choice of [`Settings::val_fraction`]).
-pub fn with_plan_validation(settings: Settings, data: &Dataset) -> Settings {
+/// `settings` fitted to the dataset `data`:
+/// - [`PLAN_VALIDATION_CYCLES`] as validation cycles when it names none and `data` has them all
+///   (a dataset of the calibration plan); otherwise the automatic choice of
+///   [`Settings::val_fraction`];
+/// - no axis-feed features when a record of `data` lacks the axes' feeds (a dataset logged
+///   without them): the model then does without, see [`uses_axis_feeds`].
+pub fn fit_to_data(settings: Settings, data: &Dataset) -> Settings {
     let has = |name: &str| data.records.iter().any(|r| r.cycle == name);
+    let mut settings = settings;
     if settings.val_cycles.is_empty() && PLAN_VALIDATION_CYCLES.iter().all(|c| has(c)) {
-        Settings {
-            val_cycles: PLAN_VALIDATION_CYCLES.map(String::from).to_vec(),
-            ..settings
-        }
-    } else {
-        settings
+        settings.val_cycles = PLAN_VALIDATION_CYCLES.map(String::from).to_vec();
     }
+    if !uses_axis_feeds(data) {
+        settings.axis_feed_taus_s.clear();
+        settings.axis_feed_own_axis = false;
+    }
+    settings
+}
+
+/// Whether every record of `data` carries the axes' commanded feeds (the dataset's
+/// `x_feed_mm_per_min` … columns), so that a model can learn from them.
+pub fn uses_axis_feeds(data: &Dataset) -> bool {
+    !data.records.is_empty() && data.records.iter().all(|r| r.axis_feed_mm_per_min.is_some())
 }
 
 /// Calibration, training and evaluation for one machine seed.
@@ -304,7 +333,7 @@ fn campaign_for_seed(
     let geometry = spec.geometry();
     progress.advance(0, &format!("seed {seed}: calibration campaign"));
     let data = calibration::calibrate(spec, cal_cycles, &CampaignConfig::new(seed))?;
-    let s = with_plan_validation(
+    let s = fit_to_data(
         Settings {
             seed,
             ..settings.clone()

@@ -25,7 +25,7 @@ fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
         &CampaignConfig::new(seed),
     )
     .expect("campaign runs");
-    let settings = study::with_plan_validation(
+    let settings = study::fit_to_data(
         Settings {
             seed,
             ..Settings::for_machine(spec)
@@ -53,6 +53,13 @@ impl ErrorPredictor for FrozenTemps {
     }
     fn observe_readings(&mut self, time_s: f64, _temps_degc: &[f64]) {
         self.inner.observe_readings(time_s, &self.cold_degc);
+    }
+    // What the controller commanded is not a temperature: it passes unchanged.
+    fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+        self.inner.observe_spindle_speed(time_s, rpm);
+    }
+    fn observe_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        self.inner.observe_axis_feeds(time_s, feeds_mm_per_min);
     }
 }
 

@@ -28,6 +28,8 @@ impl ErrorPredictor for Zero {
         [0.0; 3]
     }
     fn observe_readings(&mut self, _: f64, _: &[f64]) {}
+    fn observe_spindle_speed(&mut self, _: f64, _: f64) {}
+    fn observe_axis_feeds(&mut self, _: f64, _: [f64; 3]) {}
 }
 
 /// The loop controller, recording the direction it infers at each point.
@@ -44,6 +46,15 @@ impl Controller for Recording {
     }
     fn on_commanded_motion(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
         self.inner.on_commanded_motion(start_mm, end_mm);
+    }
+    fn on_readings(&mut self, time_s: f64, values_degc: &[f64]) {
+        self.inner.on_readings(time_s, values_degc);
+    }
+    fn on_spindle_speed(&mut self, time_s: f64, rpm: f64) {
+        self.inner.on_spindle_speed(time_s, rpm);
+    }
+    fn on_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        self.inner.on_axis_feeds(time_s, feeds_mm_per_min);
     }
 }
 

@@ -46,7 +46,14 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
     if cfg.spindle_speed {
         settings = settings.with_spindle_speed_input();
     }
-    let settings = study::with_plan_validation(settings, &data);
+    let settings = study::fit_to_data(settings, &data);
+    if cfg.kind == ModelKind::Hybrid && !study::uses_axis_feeds(&data) {
+        writeln!(
+            out,
+            "note: {name} has no axis-feed columns (x_feed_mm_per_min, y_feed_mm_per_min, \
+             z_feed_mm_per_min on every row): the hybrid learns without the axes' commanded feeds"
+        )?;
+    }
     let geometry = cfg.machine.geometry();
     // The machine the data names, else the one given (realisation unknown).
     let machine = data

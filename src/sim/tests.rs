@@ -68,6 +68,8 @@ struct SpeedLog {
     last_t_s: Option<f64>,
     revolutions_min: f64,
     readings: usize,
+    last_feed_t_s: Option<f64>,
+    distance_mm: [f64; 3],
 }
 
 impl Controller for SpeedLog {
@@ -83,6 +85,44 @@ impl Controller for SpeedLog {
         }
         self.last_t_s = Some(time_s);
     }
+    fn on_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        if let Some(t0) = self.last_feed_t_s {
+            for (d, f) in self.distance_mm.iter_mut().zip(feeds_mm_per_min) {
+                *d += f / 60.0 * (time_s - t0);
+            }
+        }
+        self.last_feed_t_s = Some(time_s);
+    }
+}
+
+#[test]
+fn the_controller_is_told_the_commanded_axis_feeds_at_every_step() {
+    let spec = MachineSpec::reference();
+    let h = spec.axes.home_mm;
+    // Out and back along X (2 × 120 mm), then 80 mm down in Z, at feeds that take many steps.
+    let program = format!(
+        "G21 G90\nG1 X{:.3} F1200\nG1 X{:.3}\nG1 Z{:.3} F600\nM2\n",
+        h[0] - 120.0,
+        h[0],
+        h[2] - 80.0
+    );
+    let plan = crate::program::plan_source(&program, "feeds.ngc", &spec, h).unwrap();
+    let mut twin = Twin::new(&spec, 1).unwrap();
+    let mut log = SpeedLog::default();
+    let mut points = CountPoints::default();
+    execute(
+        &mut twin,
+        &plan,
+        &SimConfig::default(),
+        Some(&mut log),
+        &mut points,
+    )
+    .unwrap();
+    // The mean |speed| of each step times its length adds up to the distance commanded.
+    let d = log.distance_mm;
+    assert!((d[0] - 240.0).abs() < 1e-6, "{d:?}");
+    assert!(d[1].abs() < 1e-9, "{d:?}");
+    assert!((d[2] - 80.0).abs() < 1e-6, "{d:?}");
 }
 
 #[test]
@@ -120,6 +160,9 @@ fn the_controller_is_told_the_commanded_spindle_speed_at_every_step() {
 struct Shift(f64);
 
 impl Controller for Shift {
+    fn on_readings(&mut self, _time_s: f64, _values_degc: &[f64]) {}
+    fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+    fn on_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
     fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
         [p_mm[0] + self.0, p_mm[1], p_mm[2]]
     }

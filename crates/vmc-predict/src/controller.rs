@@ -61,20 +61,21 @@ pub trait Controller {
     /// `time_s` (s): at every sensor sample, also between compensated points and while nothing is
     /// compensated (a warm-up, the thermal history before a test), as a controller logging its
     /// sensors sees them. They hold until the next call: every [`Self::axis_command_mm`] after
-    /// this call is computed under these readings. Default: ignored.
-    fn on_readings(&mut self, _time_s: f64, _values_degc: &[f64]) {}
+    /// this call is computed under these readings. Required of every controller (no default),
+    /// like the two calls after it: a wrapper around a controller cannot lose a signal by
+    /// forgetting to pass it on.
+    fn on_readings(&mut self, time_s: f64, values_degc: &[f64]);
 
     /// The spindle ran at the commanded speed `rpm` since the previous call, up to time `time_s`
     /// (s, the clock of [`Self::on_readings`]): what the controller commanded (S, M3/M5), never
-    /// the spindle's state. Called at every sensor sample, after [`Self::on_readings`]. Default:
-    /// ignored.
-    fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+    /// the spindle's state. Called at every sensor sample, after [`Self::on_readings`].
+    fn on_spindle_speed(&mut self, time_s: f64, rpm: f64);
 
     /// The axes ran at the commanded mean speeds `feeds_mm_per_min` (|v| of X, Y, Z, mm/min)
     /// since the previous call, up to `time_s`: what the controller commanded, the heat its
     /// screws and motors take in. Called at every sensor sample, after
-    /// [`Self::on_spindle_speed`]. Default: ignored.
-    fn on_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
+    /// [`Self::on_spindle_speed`].
+    fn on_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]);
 
     /// The commanded tool path ran one motion segment from `start_mm` to `end_mm` (mm), in
     /// program order, after any points taken on it. Lets a controller follow the commanded
@@ -306,6 +307,8 @@ mod tests {
     }
 
     impl ErrorPredictor for Analytic {
+        fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+        fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
         fn sensor_names(&self) -> &[String] {
             &self.sensors
         }
@@ -354,6 +357,8 @@ mod tests {
         /// A field too steep to converge: E = 0.9·q (a contraction with factor 0.9).
         struct Steep(Vec<String>);
         impl ErrorPredictor for Steep {
+            fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+            fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
             fn sensor_names(&self) -> &[String] {
                 &self.0
             }
@@ -375,6 +380,8 @@ mod tests {
     /// Zero error except a reversal: E_k shifts by `shift[k]` after a negative approach of k.
     struct ReversalOnly(Vec<String>, [f64; 3]);
     impl ErrorPredictor for ReversalOnly {
+        fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+        fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
         fn sensor_names(&self) -> &[String] {
             &self.0
         }
@@ -427,6 +434,8 @@ mod tests {
     fn zero_error_commands_the_nominal_position_in_one_evaluation() {
         struct Zero(Vec<String>);
         impl ErrorPredictor for Zero {
+            fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+            fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
             fn sensor_names(&self) -> &[String] {
                 &self.0
             }

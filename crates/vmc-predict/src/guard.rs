@@ -105,6 +105,9 @@ mod tests {
 
     struct Null;
     impl Controller for Null {
+        fn on_readings(&mut self, _time_s: f64, _values_degc: &[f64]) {}
+        fn on_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+        fn on_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
         fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
             p_mm
         }

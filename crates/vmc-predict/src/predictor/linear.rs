@@ -161,6 +161,12 @@ impl ErrorPredictor for LinearPredictor {
         self.readings.copy_from_slice(temps_degc);
     }
 
+    /// A baseline of the readings only: the commanded spindle speed is not one of its inputs.
+    fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+
+    /// A baseline of the readings only: the axes' commanded feeds are not among its inputs.
+    fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
+
     fn change_tool(&mut self, tool_offset_mm: [f64; 3]) -> Result<(), PredictError> {
         super::same_tool_only(&self.geometry, tool_offset_mm)
     }

@@ -105,13 +105,16 @@ pub trait ErrorPredictor {
 
     /// The spindle ran at the commanded speed `rpm` since the previous call, up to `time_s`
     /// (the same clock as [`Self::observe_readings`]). A model with spindle-speed features
-    /// ([`Settings::spindle_speed_exponents`]) filters it; the default ignores it.
-    fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+    /// ([`Settings::spindle_speed_exponents`]) filters it; a model without such an input
+    /// ignores it. Required of every model (no default), so that a wrapper around a model
+    /// cannot drop the signal by forgetting to pass it on.
+    fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64);
 
     /// The axes ran at the commanded mean speeds `feeds_mm_per_min` (|v| of X, Y, Z, mm/min)
     /// since the previous call, up to `time_s`. A model with axis-feed features
-    /// ([`Settings::axis_feed_taus_s`]) filters them; the default ignores them.
-    fn observe_axis_feeds(&mut self, _time_s: f64, _feeds_mm_per_min: [f64; 3]) {}
+    /// ([`Settings::axis_feed_taus_s`]) filters them; a model without such inputs ignores
+    /// them. Required of every model, as [`Self::observe_spindle_speed`].
+    fn observe_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]);
 
     /// The spindle now holds a tool whose tip sits at `tool_offset_mm` (mm) from the gauge
     /// point: the controller commanded the change (M6) and knows its tool table. A model that
