@@ -67,7 +67,9 @@ fn is_warm(r: &RunReport) -> bool {
     r.thermal_state != "cold"
 }
 
-/// The stress state whose residual share of the thermal part is not within 25 %.
+/// The stress state whose residual share of the thermal part is not within 25 %: its thermal part
+/// is 1.2–2.5 µm RMS, and the non-repeatability alone leaves about 0.46 µm RMS (measured:
+/// 38–49 % at worst; docs/results.md).
 const Z_STROKES: &str = "stress_z_strokes@3h";
 
 #[test]
@@ -129,18 +131,18 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
     // Every warm state but the cold one has thermal parts well above the 1 µm threshold.
     assert!(shares.len() >= 7 * 10 * SEEDS.len());
     for (s, at) in &shares {
-        let limit = if at.contains(Z_STROKES) { 1.35 } else { 0.25 };
+        let limit = if at.contains(Z_STROKES) { 0.55 } else { 0.25 };
         assert!(
             *s <= limit,
             "{at}: residual {:.0} % of the thermal part",
             s * 100.0
         );
     }
-    // Regression guards on the largest compensated error: measured 2.35 µm on the atypical
-    // states (2.48 µm with the earlier seven-cycle plan; the aim of 2 µm is not reached) and
-    // 3.74 µm on the stress states (docs/results.md). The runs are deterministic (same seeds,
-    // same bits), so the guards only stop the figures from sliding back.
-    for (stress, guard) in [(false, 2.4), (true, 3.8)] {
+    // Regression guards on the largest compensated error: measured 2.08 µm on the atypical
+    // states (the aim of 2 µm is not reached) and 3.08 µm on the stress states
+    // (docs/results.md). The runs are deterministic (same seeds, same bits), so the guards only
+    // stop the figures from sliding back.
+    for (stress, guard) in [(false, 2.15), (true, 3.15)] {
         let (max_after, at) = runs
             .iter()
             .filter(|r| r.thermal_state.starts_with("stress_") == stress)
