@@ -99,10 +99,12 @@ impl Controller for SpeedLog {
 fn the_controller_is_told_the_commanded_axis_feeds_at_every_step() {
     let spec = MachineSpec::reference();
     let h = spec.axes.home_mm;
-    // Out and back along X (2 × 120 mm), then 80 mm down in Z, at feeds that take many steps.
+    // Out and back along X (2 × 120 mm), then 80 mm down in Z, at feeds that take many steps;
+    // the closing dwell puts the plan's last partial thermal step (which advances the twin but
+    // brings no new sample) after the motion.
     let program = format!(
-        "G21 G90\nG1 X{:.3} F1200\nG1 X{:.3}\nG1 Z{:.3} F600\nM2\n",
-        h[0] - 120.0,
+        "G21 G90\nG1 X{:.3} F1200\nG1 X{:.3}\nG1 Z{:.3} F600\nG4 P2\nM2\n",
+        h[0] + 120.0,
         h[0],
         h[2] - 80.0
     );
