@@ -259,9 +259,13 @@ impl ForMachine for Settings {
 }
 
 /// `settings` with both history features of [`ForMachine::for_machine`] for the sensors of `spec`
-/// (restricted to `settings.sensors` when that is not empty).
+/// (restricted to `settings.sensors` when that is not empty) and the axes' commanded feeds
+/// ([`with_axis_feeds`]).
 pub fn with_history_features(settings: Settings, spec: &MachineSpec) -> Settings {
-    with_axis_feeds(with_spindle_nose_rate(with_ambient_history(settings, spec), spec))
+    with_axis_feeds(with_spindle_nose_rate(
+        with_ambient_history(settings, spec),
+        spec,
+    ))
 }
 
 /// Time constant of the axes' commanded-feed features, s: the order of a ballscrew's thermal
@@ -312,7 +316,11 @@ pub fn fit_to_data(settings: Settings, data: &Dataset) -> Settings {
 /// Whether every record of `data` carries the axes' commanded feeds (the dataset's
 /// `x_feed_mm_per_min` … columns), so that a model can learn from them.
 pub fn uses_axis_feeds(data: &Dataset) -> bool {
-    !data.records.is_empty() && data.records.iter().all(|r| r.axis_feed_mm_per_min.is_some())
+    !data.records.is_empty()
+        && data
+            .records
+            .iter()
+            .all(|r| r.axis_feed_mm_per_min.is_some())
 }
 
 /// Calibration, training and evaluation for one machine seed.

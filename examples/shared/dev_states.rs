@@ -53,4 +53,3 @@ pub fn dev_stress_states() -> Vec<calibration::EvalState> {
         ),
     ]
 }
-
