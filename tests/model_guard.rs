@@ -152,4 +152,52 @@ fn run_checks_the_models_machine_and_trained_ranges() {
         "{e}"
     );
     assert!(!d.join("c/summary.json").exists());
+
+    // The hybrid reads the axes' filtered commanded feeds: the file records their ranges, and a
+    // warm-up that drives them beyond (here: a range narrowed to 0–0.2 m/min under a 2 h warm-up
+    // with axis motion) is reported by name.
+    let feeds = &model["trained_on"]["inputs"]["axis_feeds"];
+    assert_eq!(feeds["taus_s"], serde_json::json!([3600.0]));
+    assert_eq!(feeds["filtered_m_per_min"].as_array().unwrap().len(), 3);
+    let mut slow = model.clone();
+    slow["trained_on"]["inputs"]["axis_feeds"]["filtered_m_per_min"] =
+        serde_json::json!([[0.0, 0.2], [0.0, 0.2], [0.0, 0.2]]);
+    std::fs::write(d.join("slow.json"), slow.to_string()).unwrap();
+    let warmup = repo_file("trajectories/warmup_2h_4000rpm.ngc")
+        .display()
+        .to_string();
+    let out = ok(
+        d,
+        &[
+            "run",
+            &prog,
+            "--warmup",
+            &warmup,
+            "--model",
+            "slow.json",
+            "--compensate",
+            "--out",
+            "f",
+        ],
+    );
+    assert!(out.contains("WARNING: the model extrapolated"), "{out}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("f/summary.json")).unwrap()).unwrap();
+    let names: Vec<&str> = summary["extrapolation"]["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["input"].as_str().unwrap())
+        .collect();
+    assert!(
+        names.contains(&"x_feed_3600s") && names.contains(&"z_feed_3600s"),
+        "{names:?}"
+    );
+    let first = summary["extrapolation"]["inputs"][0]["first_time_s"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        first > 60.0,
+        "a filter needs time to pass 0.25 m/min: {first}"
+    );
 }

@@ -248,6 +248,7 @@ fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunC
         sensors: Vec::new(),
         sensor_degc: Vec::new(),
         spindle_rpm: None,
+        axis_feeds: None,
     };
     let ranges = trained_on.as_ref().map(|t| &t.inputs).unwrap_or(&none);
     Ok(Guarded::new(ctrl, ranges, &names))

@@ -9,7 +9,7 @@ use crate::files;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{self, ErrorPredictor, ModelKind, Settings, TrainSummary};
-use crate::predict::provenance::TrainedOn;
+use crate::predict::provenance::{FeedRanges, TrainedOn};
 use crate::study::{self, ForMachine};
 
 /// What to train, validated.
@@ -67,10 +67,9 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
     let (json, summary) = match cfg.kind {
         ModelKind::Hybrid => {
             let (m, s) = predictor::train_hybrid(&data, &geometry, &settings)?;
-            (
-                m.to_json_string_with(Some(&trained_on(m.sensor_names())))?,
-                s,
-            )
+            let mut on = trained_on(m.sensor_names());
+            on.inputs.axis_feeds = FeedRanges::of(&data, &settings.axis_feed_taus_s);
+            (m.to_json_string_with(Some(&on))?, s)
         }
         ModelKind::Volumetric => {
             let (m, s) = predictor::train_volumetric(&data, &geometry, &settings)?;

@@ -256,6 +256,7 @@ impl Dataset {
             sensors: sensors.to_vec(),
             sensor_degc,
             spindle_rpm: rpm,
+            axis_feeds: None,
         }
     }
 

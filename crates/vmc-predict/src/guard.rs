@@ -1,13 +1,15 @@
 //! The extrapolation guard: a controller whose inputs are checked against a model's trained
 //! ranges on their way in.
 //!
-//! Every reading and every commanded spindle speed is compared with the ranges, with a small
-//! margin ([`InputRanges::margin_degc`], [`InputRanges::margin_rpm`]); what lies outside is
-//! counted ([`Extrapolation`]). A model used there extrapolates: it may be right, but nothing it
+//! Every reading, every commanded spindle speed and, for a model that reads them, the axes'
+//! filtered commanded feeds are compared with the ranges, with a small margin
+//! ([`InputRanges::margin_degc`], [`InputRanges::margin_rpm`],
+//! [`InputRanges::margin_m_per_min`]); what lies outside is counted ([`Extrapolation`]). A model used there extrapolates: it may be right, but nothing it
 //! learnt says so.
 
 use crate::controller::Controller;
-use crate::provenance::{Extrapolation, InputRanges};
+use crate::history::FeedHistory;
+use crate::provenance::{Extrapolation, FeedRanges, InputRanges};
 
 fn outside(range: [f64; 2], v: f64, margin: f64) -> bool {
     // NaN ranges (an input the training never saw a value of) and NaN readings compare false.
@@ -21,12 +23,14 @@ pub struct Guarded<C> {
     /// For each machine sensor (reading order), the model input's range, if the model has it.
     ranges: Vec<Option<(String, [f64; 2])>>,
     rpm: Option<[f64; 2]>,
+    /// The model's feed filters, fed what the controller commanded, and their trained ranges.
+    feeds: Option<(FeedHistory, FeedRanges, Vec<f64>)>,
     seen: Extrapolation,
 }
 
 impl<C: Controller> Guarded<C> {
-    /// Wraps `inner`, checking the readings of `machine_sensors` (reading order) and the
-    /// commanded spindle speed against `ranges`.
+    /// Wraps `inner`, checking the readings of `machine_sensors` (reading order), the
+    /// commanded spindle speed and the filtered commanded feeds against `ranges`.
     pub fn new(inner: C, trained: &InputRanges, machine_sensors: &[String]) -> Self {
         let ranges = machine_sensors
             .iter()
@@ -43,6 +47,11 @@ impl<C: Controller> Guarded<C> {
             inner,
             ranges,
             rpm: trained.spindle_rpm,
+            feeds: trained.axis_feeds.as_ref().map(|r| {
+                let h = FeedHistory::new(&r.taus_s);
+                let n = h.len();
+                (h, r.clone(), vec![0.0; n])
+            }),
             seen: Extrapolation::default(),
         }
     }
@@ -82,6 +91,16 @@ impl<C: Controller> Controller for Guarded<C> {
     }
 
     fn on_axis_feeds(&mut self, time_s: f64, feeds_mm_per_min: [f64; 3]) {
+        if let Some((h, ranges, f)) = &mut self.feeds {
+            h.observe(time_s, feeds_mm_per_min);
+            h.features_into(f);
+            for (k, (range, v)) in ranges.filtered_m_per_min.iter().zip(f.iter()).enumerate() {
+                self.seen.samples += 1;
+                if outside(*range, *v, InputRanges::margin_m_per_min()) {
+                    self.seen.note(&ranges.name(k), *range, *v, time_s);
+                }
+            }
+        }
         self.inner.on_axis_feeds(time_s, feeds_mm_per_min);
     }
 
@@ -118,6 +137,7 @@ mod tests {
             sensors: vec!["A".into(), "B".into()],
             sensor_degc: vec![[19.0, 30.0], [18.0, 22.0]],
             spindle_rpm: Some([0.0, 9000.0]),
+            axis_feeds: None,
         }
     }
 
@@ -155,5 +175,47 @@ mod tests {
         assert_eq!((e.inputs[0].count, e.inputs[0].first_value), (2, 22.3));
         assert_eq!(e.inputs[1].input, "spindle_rpm");
         assert_eq!(e.inputs[1].first_time_s, 3.0);
+    }
+
+    /// Trained ranges with X and Y filtered feeds up to 4 m/min and Z up to 10 m/min (τ = 600 s).
+    fn feed_ranges() -> InputRanges {
+        InputRanges {
+            axis_feeds: Some(FeedRanges {
+                taus_s: vec![600.0],
+                filtered_m_per_min: vec![[0.0, 4.0], [0.0, 4.0], [0.0, 10.0]],
+            }),
+            ..ranges()
+        }
+    }
+
+    #[test]
+    fn the_guard_follows_the_filtered_feeds_not_the_moments_rapids() {
+        let names = vec!["A".to_string(), "B".to_string()];
+        let mut g = Guarded::new(Null, &feed_ranges(), &names);
+        // An hour at 3 m/min on every axis, with a 30 m/min rapid of 2 s every minute: the
+        // filter (τ = 10 min) stays near 3.9 m/min, inside every range.
+        g.on_axis_feeds(0.0, [0.0; 3]);
+        for k in 1..=3600 {
+            let f = if k % 60 < 2 { 30_000.0 } else { 3000.0 };
+            g.on_axis_feeds(f64::from(k), [f; 3]);
+        }
+        assert_eq!(g.extrapolation().samples, 3 * 3601);
+        assert!(
+            g.extrapolation().inputs.is_empty(),
+            "{:?}",
+            g.extrapolation()
+        );
+        // Then Z alone at 12 m/min: from about 3.9 m/min (the hour's mean feed) its filter
+        // passes 10.05 m/min after 600 s × ln(8.1 / 1.95) ≈ 854 s.
+        for k in 3601..=7200 {
+            g.on_axis_feeds(f64::from(k), [0.0, 0.0, 12_000.0]);
+        }
+        let e = g.extrapolation();
+        assert_eq!(e.inputs.len(), 1, "{e:?}");
+        assert_eq!(e.inputs[0].input, "z_feed_600s");
+        assert_eq!(e.inputs[0].range, [0.0, 10.0]);
+        let first = e.inputs[0].first_time_s - 3600.0;
+        assert!((first - 854.0).abs() < 15.0, "{first}");
+        assert!(e.inputs[0].first_value > 10.05 && e.inputs[0].first_value < 10.1);
     }
 }

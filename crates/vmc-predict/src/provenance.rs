@@ -4,8 +4,9 @@
 //! - the identity of the machine it was calibrated on ([`MachineIdentity`]: name, realisation
 //!   and a fingerprint of the machine description), so that a model of another machine or of
 //!   another realisation of the same design is not used without a word;
-//! - the range of every input it was trained on ([`InputRanges`]: each sensor's readings and,
-//!   when the dataset logs it, the commanded spindle speed).
+//! - the range of every input it was trained on ([`InputRanges`]: each sensor's readings, when
+//!   the dataset logs it the commanded spindle speed, and for a model that reads the axes'
+//!   commanded feeds the range of each filtered feed it was trained on, [`FeedRanges`]).
 //!
 //! The guard module's `Guarded` wraps the loop's controller and counts what lies outside the
 //! ranges ([`Extrapolation`]).
@@ -59,6 +60,65 @@ pub struct InputRanges {
     pub sensor_degc: Vec<[f64; 2]>,
     /// `[min, max]` of the commanded spindle speed, rpm (None: not logged).
     pub spindle_rpm: Option<[f64; 2]>,
+    /// The axes' filtered commanded feeds the model reads, and their ranges (None: the model
+    /// does not read them, or a file written before they were recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis_feeds: Option<FeedRanges>,
+}
+
+/// The trained range of the axes' commanded-feed inputs: each axis's mean |speed| through each
+/// low-pass filter of the model (the inputs themselves, not the instantaneous feed: a test's
+/// rapid moves exceed every logged mean for seconds without moving an hour-long filter).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FeedRanges {
+    /// The filters' time constants, s.
+    pub taus_s: Vec<f64>,
+    /// `[min, max]` of each filtered feed over the training records, m/min: X's per time
+    /// constant, then Y's, then Z's.
+    pub filtered_m_per_min: Vec<[f64; 2]>,
+}
+
+impl FeedRanges {
+    /// The ranges of the feed filters `taus_s` over `data`: each cycle's feed log (every
+    /// record, in time order) runs through the filters from the cycle's first record on, as
+    /// when the model was trained. None without time constants or when a record lacks the
+    /// feeds.
+    pub fn of(data: &crate::dataset::Dataset, taus_s: &[f64]) -> Option<FeedRanges> {
+        if taus_s.is_empty()
+            || data
+                .records
+                .iter()
+                .any(|r| r.axis_feed_mm_per_min.is_none())
+        {
+            return None;
+        }
+        let n = crate::history::FeedHistory::n_features(taus_s.len());
+        let mut ranges = vec![[f64::INFINITY, f64::NEG_INFINITY]; n];
+        let mut f = vec![0.0; n];
+        for (_, recs) in crate::predictor::records_by_cycle(data) {
+            let mut h = crate::history::FeedHistory::new(taus_s);
+            for r in recs {
+                h.observe(r.time_s, r.axis_feed_mm_per_min.unwrap_or([0.0; 3]));
+                h.features_into(&mut f);
+                for (range, v) in ranges.iter_mut().zip(&f) {
+                    range[0] = range[0].min(*v);
+                    range[1] = range[1].max(*v);
+                }
+            }
+        }
+        Some(FeedRanges {
+            taus_s: taus_s.to_vec(),
+            filtered_m_per_min: ranges,
+        })
+    }
+
+    /// The name of feature `k` in reports, e.g. `z_feed_3600s`.
+    pub fn name(&self, k: usize) -> String {
+        let per_axis = self.taus_s.len().max(1);
+        let axis = ["x", "y", "z"].get(k / per_axis).copied().unwrap_or("?");
+        let tau = self.taus_s.get(k % per_axis).copied().unwrap_or(f64::NAN);
+        format!("{axis}_feed_{tau}s")
+    }
 }
 
 impl InputRanges {
@@ -71,6 +131,11 @@ impl InputRanges {
     /// A commanded speed counts as outside when it is more than this above the range, rpm.
     pub const fn margin_rpm() -> f64 {
         1.0
+    }
+
+    /// A filtered feed counts as outside when it is more than this beyond its range, m/min.
+    pub const fn margin_m_per_min() -> f64 {
+        0.05
     }
 }
 
@@ -86,7 +151,7 @@ pub struct TrainedOn {
 /// One input found outside its trained range.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OutsideInput {
-    /// The input: a sensor name or `spindle_rpm`.
+    /// The input: a sensor name, `spindle_rpm` or a filtered feed (`z_feed_3600s`).
     pub input: String,
     /// Its trained range.
     pub range: [f64; 2],
@@ -160,5 +225,62 @@ mod tests {
             ..a.clone()
         };
         assert!(a.difference(&changed).unwrap().contains("fingerprint"));
+    }
+
+    fn record(cycle: &str, time_s: f64, feed: Option<[f64; 3]>) -> crate::dataset::Record {
+        crate::dataset::Record {
+            cycle: cycle.into(),
+            time_s,
+            instrument: crate::dataset::Instrument::Spindle,
+            pos_mm: [0.0; 3],
+            values: [0.0; 6],
+            temps_degc: vec![20.0],
+            dir: 1,
+            spindle_rpm: None,
+            axis_feed_mm_per_min: feed,
+        }
+    }
+
+    #[test]
+    fn feed_ranges_follow_each_cycle_through_the_models_filters() {
+        use crate::dataset::Dataset;
+        // Cycle a: X at 6 m/min for 10 τ; cycle b (filters restart at rest): Z at 2 m/min.
+        let mut records = Vec::new();
+        for k in 0..=100 {
+            let t = f64::from(k) * 60.0;
+            records.push(record(
+                "a",
+                t,
+                Some([if k == 0 { 0.0 } else { 6000.0 }, 0.0, 0.0]),
+            ));
+            records.push(record(
+                "b",
+                t,
+                Some([0.0, 0.0, if k == 0 { 0.0 } else { 2000.0 }]),
+            ));
+        }
+        let data = Dataset {
+            sensor_names: vec!["s".into()],
+            records,
+            ..Default::default()
+        };
+        let r = FeedRanges::of(&data, &[600.0]).unwrap();
+        assert_eq!(r.taus_s, vec![600.0]);
+        let [x, y, z] = [
+            r.filtered_m_per_min[0],
+            r.filtered_m_per_min[1],
+            r.filtered_m_per_min[2],
+        ];
+        // 6000 s = 10 τ: the filter reaches the feed within e^-10.
+        assert_eq!(x[0], 0.0);
+        assert!((x[1] - 6.0).abs() < 6.0 * 1e-4, "{x:?}");
+        assert_eq!(y, [0.0, 0.0]);
+        assert!((z[1] - 2.0).abs() < 2.0 * 1e-4, "{z:?}");
+        assert_eq!(r.name(2), "z_feed_600s");
+        // No filters, or a record without feeds: nothing to record.
+        assert_eq!(FeedRanges::of(&data, &[]), None);
+        let mut missing = data.clone();
+        missing.records[7].axis_feed_mm_per_min = None;
+        assert_eq!(FeedRanges::of(&missing, &[600.0]), None);
     }
 }

@@ -51,6 +51,7 @@ mod volumetric;
 #[cfg(test)]
 pub(crate) mod testdata;
 
+pub(crate) use data::records_by_cycle;
 pub use file::{AnyPredictor, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION};
 pub use hybrid::{train_hybrid, HybridPredictor};
 pub use kind::ModelKind;
