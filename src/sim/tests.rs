@@ -95,6 +95,22 @@ impl Controller for SpeedLog {
     }
 }
 
+/// What a [`SpeedLog`] controller is told while `plan` runs on a fresh twin of `spec`.
+fn logged(spec: &MachineSpec, plan: &crate::motion::Plan) -> SpeedLog {
+    let mut twin = Twin::new(spec, 1).unwrap();
+    let mut log = SpeedLog::default();
+    let mut points = CountPoints::default();
+    execute(
+        &mut twin,
+        plan,
+        &SimConfig::default(),
+        Some(&mut log),
+        &mut points,
+    )
+    .unwrap();
+    log
+}
+
 #[test]
 fn the_controller_is_told_the_commanded_axis_feeds_at_every_step() {
     let spec = MachineSpec::reference();
@@ -109,17 +125,7 @@ fn the_controller_is_told_the_commanded_axis_feeds_at_every_step() {
         h[2] - 80.0
     );
     let plan = crate::program::plan_source(&program, "feeds.ngc", &spec, h).unwrap();
-    let mut twin = Twin::new(&spec, 1).unwrap();
-    let mut log = SpeedLog::default();
-    let mut points = CountPoints::default();
-    execute(
-        &mut twin,
-        &plan,
-        &SimConfig::default(),
-        Some(&mut log),
-        &mut points,
-    )
-    .unwrap();
+    let log = logged(&spec, &plan);
     // The mean |speed| of each step times its length adds up to the distance commanded.
     let d = log.distance_mm;
     assert!((d[0] - 240.0).abs() < 1e-6, "{d:?}");
@@ -138,17 +144,7 @@ fn the_controller_is_told_the_commanded_spindle_speed_at_every_step() {
         spec.axes.home_mm,
     )
     .unwrap();
-    let mut twin = Twin::new(&spec, 1).unwrap();
-    let mut log = SpeedLog::default();
-    let mut points = CountPoints::default();
-    execute(
-        &mut twin,
-        &plan,
-        &SimConfig::default(),
-        Some(&mut log),
-        &mut points,
-    )
-    .unwrap();
+    let log = logged(&spec, &plan);
     // rpm × s / 60 = revolutions; whole 1 s steps, the speed sampled mid-step.
     let revolutions = log.revolutions_min / 60.0;
     assert!(
