@@ -145,8 +145,8 @@ pub fn select_shard(cfg: &SelectConfig, shard: Shard, out: &mut dyn Write) -> Re
 
 /// The fingerprints of everything the study's results depend on, each named so that a refusal
 /// says which differs: the machine, the candidates, the count, the selection seed, the draws,
-/// the compare seeds, the selection and predictor settings, the calibration plan and the
-/// diagonal programs.
+/// the compare seeds, the predictor settings, the calibration plan and the diagonal programs.
+/// (The selection procedure's other settings have no option: the version fixes them.)
 fn select_inputs(cfg: &SelectConfig) -> Result<Vec<InputFingerprint>> {
     let study = placement_config(cfg);
     let mut inputs = cfg.inputs.clone();
@@ -161,8 +161,10 @@ fn select_inputs(cfg: &SelectConfig) -> Result<Vec<InputFingerprint>> {
         ("seed", cfg.seed.to_string()),
         ("random draws", cfg.random_draws.to_string()),
         ("compare seeds", join(&cfg.compare_seeds)),
-        ("selection settings", format!("{:?}", study.selection)),
-        ("predictor settings", serde_json::to_string(&study.settings)?),
+        (
+            "predictor settings",
+            serde_json::to_string(&study.settings)?,
+        ),
     ] {
         inputs.push(InputFingerprint::of(name, "arguments", text.as_bytes()));
     }
