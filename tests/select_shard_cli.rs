@@ -148,6 +148,11 @@ fn merge_refuses_select_shards_that_do_not_belong_together_naming_them() {
         ok(&vmc(dir, &args), name);
     };
     shard("1/5", "a1", "1");
+    // An empty shard written with --force over another run's folder leaves no stale stage.
+    std::fs::write(dir.join("a1/selection.json"), "{}").unwrap();
+    let again = study_args(&["--shard", "1/5", "--shard-dir", "a1", "--force"]);
+    ok(&vmc(dir, &again), "a1 again");
+    assert!(!dir.join("a1/selection.json").exists());
     shard("2/5", "a2", "1");
     shard("2/5", "count2", "2");
     let campaign = ["campaign", "--seeds", "1", "--shard", "1/4", "--out", "c1"];

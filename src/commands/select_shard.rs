@@ -111,6 +111,11 @@ pub fn select_shard(cfg: &SelectConfig, shard: Shard, out: &mut dyn Write) -> Re
         let json = serde_json::to_string_pretty(&part)?;
         files::write_atomic(&dir.join(SELECTION_FILE), json.as_bytes(), cfg.force)?;
         runs = placement::compare_seeds(&stage, &study, seeds)?;
+    } else if dir.join(SELECTION_FILE).is_file() {
+        // Overwriting (--force) a folder of another run: an empty shard has no selection stage,
+        // and a stale one must not reach the merge.
+        std::fs::remove_file(dir.join(SELECTION_FILE))
+            .with_context(|| format!("{}: cannot remove", dir.join(SELECTION_FILE).display()))?;
     }
     files::write_atomic_with(&dir.join(COMPARE_FILE), cfg.force, |w| {
         for r in &runs {
