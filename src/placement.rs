@@ -28,7 +28,6 @@
 use rand::rngs::StdRng;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::calibration::{self, CampaignConfig, EvalState, ThermalCycle};
@@ -41,8 +40,13 @@ use crate::study::{self, EvalError, RunReport};
 use crate::thermal::{AmbientProfile, AMBIENT_NODE};
 use crate::twin::sub_seed;
 
+mod compare;
 mod report;
-pub use report::{report_json, write_report};
+pub use compare::{compare_seeds, summarise_comparison, SeedRuns};
+pub use report::{
+    report_json, report_json_with, selection_json, write_comparison, write_report,
+    write_selection_part,
+};
 
 /// Settings of the placement study.
 #[derive(Debug, Clone)]
@@ -344,6 +348,43 @@ pub fn study_among(
     cfg: &PlacementConfig,
     only: Option<&[String]>,
 ) -> Result<PlacementReport, PlacementError> {
+    let stage = selection_stage(spec, cfg, only)?;
+    let mut rep = stage.report.clone();
+    if !cfg.compare_seeds.is_empty() {
+        let runs = compare_seeds(&stage, cfg, &cfg.compare_seeds)?;
+        rep.comparison = summarise_comparison(&stage.sets, &runs);
+    }
+    Ok(rep)
+}
+
+/// What the selection stage leaves for the comparison: the report without its comparison, the
+/// compared sensor sets, and the candidates' machine and selection data they train on.
+#[derive(Debug, Clone)]
+pub struct SelectionStage {
+    /// The study so far ([`PlacementReport::comparison`] empty).
+    pub report: PlacementReport,
+    /// The compared sets in report order: label (`selected`, `study default`, `random #i`,
+    /// `all candidates`) and candidate names.
+    pub sets: Vec<(String, Vec<String>)>,
+    /// The machine with every candidate as a sensor.
+    cand_spec: MachineSpec,
+    /// The candidates.
+    candidates: Vec<SensorSpec>,
+    /// The typical cycles of the selection campaign (the comparison's data on the selection
+    /// seed).
+    typical: Dataset,
+}
+
+/// The selection stage of [`study_among`]: the selection campaign on `cfg.seed`, the proposals,
+/// their validation, the choice and the sets to compare. Every comparison seed depends on it.
+///
+/// # Errors
+/// As [`study()`].
+pub fn selection_stage(
+    spec: &MachineSpec,
+    cfg: &PlacementConfig,
+    only: Option<&[String]>,
+) -> Result<SelectionStage, PlacementError> {
     let candidates = candidates_among(spec, only)?;
     let cand_spec = with_sensors(spec, candidates.clone())?;
     let scenarios = selection_cycles(spec, cfg.seed);
@@ -418,18 +459,20 @@ pub fn study_among(
         candidates.iter().map(|c| c.name.clone()).collect(),
     ));
 
-    let comparison = if cfg.compare_seeds.is_empty() {
-        Vec::new()
-    } else {
-        compare(&cand_spec, &candidates, &sets, cfg, &typical)?
-    };
-    Ok(PlacementReport {
+    let report = PlacementReport {
         scenarios: scenarios.iter().map(|c| c.name.clone()).collect(),
         selection,
         validation,
         chosen,
         selected_sensors,
-        comparison,
+        comparison: Vec::new(),
+    };
+    Ok(SelectionStage {
+        report,
+        sets,
+        cand_spec,
+        candidates,
+        typical,
     })
 }
 
@@ -494,53 +537,9 @@ fn evaluate_set(
     )?)
 }
 
-/// Trains the hybrid predictor with each set on the typical cycles and evaluates it on every
-/// diagonal under the held-out states, for each compare seed.
-fn compare(
-    cand_spec: &MachineSpec,
-    candidates: &[SensorSpec],
-    sets: &[(String, Vec<String>)],
-    cfg: &PlacementConfig,
-    selection_typical: &Dataset,
-) -> Result<Vec<SetResult>, PlacementError> {
-    let cal = ThermalCycle::calibration_plan(cand_spec);
-    let plans = study::diagonal_plans(cand_spec)?;
-    // One calibration dataset per seed, with every candidate logged; each set trains on its
-    // columns. The selection seed's typical cycles are part of the selection data.
-    let datasets: Vec<Dataset> = cfg
-        .compare_seeds
-        .par_iter()
-        .map(|&seed| {
-            if seed == cfg.seed {
-                Ok(selection_typical.clone())
-            } else {
-                calibration::calibrate(cand_spec, &cal, &CampaignConfig::new(seed))
-                    .map_err(EvalError::from)
-            }
-        })
-        .collect::<Result<_, EvalError>>()?;
-    let mut out = Vec::new();
-    for (label, names) in sets {
-        let mut runs: Vec<RunReport> = Vec::new();
-        for (seed, data) in cfg.compare_seeds.iter().zip(&datasets) {
-            let states = calibration::evaluation_states(cand_spec, *seed);
-            runs.extend(evaluate_set(
-                cand_spec,
-                candidates,
-                names,
-                *seed,
-                data,
-                &states,
-                &plans,
-                &cfg.settings,
-            )?);
-        }
-        out.push(summarise(label, names, &runs));
-    }
-    Ok(out)
-}
-
-fn summarise(label: &str, names: &[String], runs: &[RunReport]) -> SetResult {
+/// The summary of one set over its runs (in the order given: the mean and quadratic mean sum
+/// in that order).
+pub fn summarise(label: &str, names: &[String], runs: &[RunReport]) -> SetResult {
     let mut red: Vec<f64> = runs.iter().map(|r| r.reduction).collect();
     SetResult {
         label: label.to_string(),

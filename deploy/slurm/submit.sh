@@ -7,6 +7,12 @@
 # Prints the two job ids (array, merge). Results: OUT/merged/report.json and OUT/summary.txt;
 # logs: OUT/logs/. Set VMC_TWIN to the program's path if it is not on the PATH of the nodes,
 # and OUT to a folder every node sees.
+#
+#   VMC_COMMAND=select-sensors deploy/slurm/submit.sh OUT N CPUS [select-sensors options]
+#
+# shards select-sensors over its compare seeds instead; the merge writes OUT/merged/sensors.toml
+# (the file name of -o) and, with --json, the JSON study; the report goes to OUT/summary.txt.
+# (sbatch passes the environment, VMC_COMMAND included, to both jobs.)
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 OUT=${1:?usage: submit.sh OUT N CPUS_PER_TASK [campaign options]}

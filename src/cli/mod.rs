@@ -453,6 +453,14 @@ pub struct SelectArgs {
     pub json: Option<PathBuf>,
     #[command(flatten)]
     pub force: ForceArg,
+    /// Run only shard I of N of the compare seeds (1-based, e.g. 2/4) and write its results
+    /// under --shard-dir for `vmc-twin merge`, which writes the sensor set (and the JSON study)
+    /// under the file names of --out (and --json).
+    #[arg(long, value_name = "I/N", requires = "shard_dir")]
+    pub shard: Option<String>,
+    /// Folder of a shard's results (shard.json, selection.json, compare.jsonl); with --shard.
+    #[arg(long, value_name = "DIR", requires = "shard")]
+    pub shard_dir: Option<PathBuf>,
 }
 
 impl SelectArgs {
@@ -460,9 +468,20 @@ impl SelectArgs {
     ///
     /// # Errors
     /// An unreadable or invalid machine, a comparison seed given twice, candidates that are not
-    /// thermal nodes (or named twice, or empty), a count of 0 or above the candidates.
+    /// thermal nodes (or named twice, or empty), a bad shard or a shard with --no-compare.
     pub fn config(self) -> Result<commands::select_sensors::SelectConfig> {
+        let shard = self
+            .shard
+            .as_deref()
+            .map(str::parse::<crate::shard::Shard>)
+            .transpose()?;
+        if let Some(s) = shard {
+            if self.no_compare {
+                anyhow::bail!("--shard {s} splits the comparison over the compare seeds; with --no-compare there is nothing to split: run without --shard");
+            }
+        }
         let machine = self.machine.load(None)?;
+        let inputs = commands::input_fingerprints(self.machine.machine.as_deref(), None)?;
         commands::check_distinct_seeds("--compare-seeds", &self.compare_seeds)?;
         let only = commands::select_sensors::parse_candidates(&self.candidates, &machine)?;
         Ok(commands::select_sensors::SelectConfig {
@@ -479,6 +498,10 @@ impl SelectArgs {
             out: self.out,
             json: self.json,
             force: self.force.force,
+            shard,
+            shard_dir: self.shard_dir,
+            inputs,
+            command_line: std::env::args().collect(),
         })
     }
 }

@@ -18,6 +18,7 @@ pub mod probe_campaign;
 pub mod run;
 pub mod run_fiveaxis;
 pub mod select_sensors;
+pub mod select_shard;
 pub mod thermal;
 pub mod train;
 

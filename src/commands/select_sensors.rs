@@ -9,6 +9,8 @@ use anyhow::Result;
 use crate::files;
 use crate::machine::MachineSpec;
 use crate::placement;
+use crate::sensors::SensorSpec;
+use crate::shard::{InputFingerprint, Shard};
 use crate::thermal::AMBIENT_NODE;
 
 /// What to select, validated.
@@ -31,6 +33,15 @@ pub struct SelectConfig {
     pub json: Option<PathBuf>,
     /// Overwrite existing output files.
     pub force: bool,
+    /// Run only this shard of the compare seeds and write its results for `merge` in
+    /// `shard_dir`.
+    pub shard: Option<Shard>,
+    /// Folder of a shard's results (with `shard`).
+    pub shard_dir: Option<PathBuf>,
+    /// Fingerprints of the input files (the machine), for a shard's manifest.
+    pub inputs: Vec<InputFingerprint>,
+    /// The command line, for a shard's manifest.
+    pub command_line: Vec<String>,
 }
 
 /// `--candidates`: `all`, or node names of `machine` (each once).
@@ -66,16 +77,40 @@ pub fn parse_candidates(text: &str, machine: &MachineSpec) -> Result<Option<Vec<
     Ok(Some(wanted))
 }
 
-/// Runs the study, prints it and writes the sensor set (and the JSON study if asked).
+/// Runs the study, prints it and writes the sensor set (and the JSON study if asked); with a
+/// shard, runs that shard instead ([`super::select_shard::select_shard`]).
 ///
 /// # Errors
 /// A count of 0 or above the candidates, outputs that may not be written, study errors.
 pub fn select_sensors(cfg: &SelectConfig, out: &mut dyn Write) -> Result<()> {
+    check_count(cfg)?;
+    if let Some(shard) = cfg.shard {
+        return super::select_shard::select_shard(cfg, shard, out);
+    }
+    files::check_writable(&cfg.out, cfg.force)?;
+    if let Some(j) = &cfg.json {
+        files::check_writable(j, cfg.force)?;
+    }
     let machine = &cfg.machine;
+    let study = placement_config(cfg);
+    let rep = placement::study_among(machine, &study, cfg.only.as_deref())?;
+    placement::write_report(&rep, machine, &study, out)?;
+    let toml = sensor_set_toml(cfg, &rep.selected_sensors);
+    files::write_atomic(&cfg.out, toml.as_bytes(), cfg.force)?;
+    writeln!(out, "wrote {}", cfg.out.display())?;
+    if let Some(j) = &cfg.json {
+        files::write_atomic(j, placement::report_json(&rep)?.as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {}", j.display())?;
+    }
+    Ok(())
+}
+
+/// Refuses a count of 0 or above the candidates besides ambient.
+fn check_count(cfg: &SelectConfig) -> Result<()> {
     if cfg.count == 0 {
         anyhow::bail!("--count must be at least 1");
     }
-    let candidates = placement::candidates_among(machine, cfg.only.as_deref())?
+    let candidates = placement::candidates_among(&cfg.machine, cfg.only.as_deref())?
         .iter()
         .filter(|c| c.node != AMBIENT_NODE)
         .count();
@@ -85,10 +120,11 @@ pub fn select_sensors(cfg: &SelectConfig, out: &mut dyn Write) -> Result<()> {
             cfg.count
         );
     }
-    files::check_writable(&cfg.out, cfg.force)?;
-    if let Some(j) = &cfg.json {
-        files::check_writable(j, cfg.force)?;
-    }
+    Ok(())
+}
+
+/// The study's settings: the defaults with the command's seed, compare seeds, draws and count.
+pub(super) fn placement_config(cfg: &SelectConfig) -> placement::PlacementConfig {
     let mut study = placement::PlacementConfig {
         seed: cfg.seed,
         compare_seeds: cfg.compare_seeds.clone(),
@@ -96,24 +132,22 @@ pub fn select_sensors(cfg: &SelectConfig, out: &mut dyn Write) -> Result<()> {
         ..Default::default()
     };
     study.selection.count = cfg.count;
-    let rep = placement::study_among(machine, &study, cfg.only.as_deref())?;
-    placement::write_report(&rep, machine, &study, out)?;
+    study
+}
+
+/// The sensor set file's text: a header saying how it was chosen and how to use it (naming the
+/// file as given to `--out`), then the sensors.
+pub(super) fn sensor_set_toml(cfg: &SelectConfig, sensors: &[SensorSpec]) -> String {
     let set = placement::SensorSet {
-        sensors: rep.selected_sensors.clone(),
+        sensors: sensors.to_vec(),
     };
     let header = format!(
         "Sensor set chosen by `vmc-twin select-sensors --count {}` on {} (seed {}).\n\
          Use it with `--sensors {}` (run, calibrate, train, campaign) or paste it into a machine file.",
         cfg.count,
-        machine.machine.name,
+        cfg.machine.machine.name,
         cfg.seed,
         cfg.out.display()
     );
-    files::write_atomic(&cfg.out, set.to_toml(&header).as_bytes(), cfg.force)?;
-    writeln!(out, "wrote {}", cfg.out.display())?;
-    if let Some(j) = &cfg.json {
-        files::write_atomic(j, placement::report_json(&rep)?.as_bytes(), cfg.force)?;
-        writeln!(out, "wrote {}", j.display())?;
-    }
-    Ok(())
+    set.to_toml(&header)
 }

@@ -1,6 +1,6 @@
 //! The placement study's text report and JSON (see [`super`]).
 
-use super::{validation_states, PlacementConfig, PlacementReport};
+use super::{validation_states, PlacementConfig, PlacementReport, SetResult};
 use crate::machine::MachineSpec;
 use crate::thermal::AMBIENT_NODE;
 
@@ -10,11 +10,27 @@ fn group_of(name: &str) -> &str {
     name.split('_').next().unwrap_or(name)
 }
 
-/// Prints the study: candidates, ranking with evidence, clusters, comparison.
+/// Prints the study: candidates, ranking with evidence, clusters ([`write_selection_part`]),
+/// comparison ([`write_comparison`]).
 ///
 /// # Errors
 /// Write errors.
 pub fn write_report(
+    rep: &PlacementReport,
+    spec: &MachineSpec,
+    cfg: &PlacementConfig,
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    write_selection_part(rep, spec, cfg, out)?;
+    write_comparison(&rep.comparison, &cfg.compare_seeds, out)
+}
+
+/// Prints the selection stage of the study: candidates, proposals with their validation,
+/// ranking with evidence, clusters, coverage, near-copies.
+///
+/// # Errors
+/// Write errors.
+pub fn write_selection_part(
     rep: &PlacementReport,
     spec: &MachineSpec,
     cfg: &PlacementConfig,
@@ -167,8 +183,21 @@ pub fn write_report(
             multi.join(" ")
         }
     )?;
-    if !rep.comparison.is_empty() {
-        let seeds: Vec<String> = cfg.compare_seeds.iter().map(u64::to_string).collect();
+    Ok(())
+}
+
+/// Prints the comparison table of the sets on the machine seeds `compare_seeds` (nothing when
+/// `comparison` is empty).
+///
+/// # Errors
+/// Write errors.
+pub fn write_comparison(
+    comparison: &[SetResult],
+    compare_seeds: &[u64],
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    if !comparison.is_empty() {
+        let seeds: Vec<String> = compare_seeds.iter().map(u64::to_string).collect();
         writeln!(
             out,
             "compensation on held-out runs (hybrid predictor trained on the typical cycles with each set; every diagonal × held-out state; machine seeds {}):",
@@ -185,7 +214,7 @@ pub fn write_report(
             "max resid um",
             "mean RMS' um"
         )?;
-        for r in &rep.comparison {
+        for r in comparison {
             writeln!(
                 out,
                 "  {:<16} {:>7} {:>5} {:>11.1}% {:>9.1}% {:>13.2} {:>15.2}",
@@ -202,13 +231,35 @@ pub fn write_report(
     Ok(())
 }
 
-/// The study as JSON (selection steps, evidence, comparison).
+/// The study as JSON (selection steps, evidence, comparison): [`selection_json`] with the
+/// comparison added ([`report_json_with`]).
 ///
 /// # Errors
 /// Serialisation errors.
 pub fn report_json(rep: &PlacementReport) -> Result<String, serde_json::Error> {
+    report_json_with(selection_json(rep), &rep.comparison)
+}
+
+/// The JSON study from its selection part ([`selection_json`]) and the comparison.
+///
+/// # Errors
+/// Serialisation errors.
+pub fn report_json_with(
+    selection: serde_json::Value,
+    comparison: &[SetResult],
+) -> Result<String, serde_json::Error> {
+    let mut v = selection;
+    if let serde_json::Value::Object(map) = &mut v {
+        map.insert("comparison".into(), serde_json::to_value(comparison)?);
+    }
+    serde_json::to_string_pretty(&v)
+}
+
+/// The selection stage of the study as a JSON object (selection steps, evidence, proposals
+/// with their validation, the choice), without the comparison.
+pub fn selection_json(rep: &PlacementReport) -> serde_json::Value {
     let sel = &rep.selection;
-    let v = serde_json::json!({
+    serde_json::json!({
         "scenarios": rep.scenarios,
         "reference": sel.reference,
         "reference_score_um": sel.reference_score_um,
@@ -229,7 +280,5 @@ pub fn report_json(rep: &PlacementReport) -> Result<String, serde_json::Error> {
             "validation": v,
         })).collect::<Vec<_>>(),
         "chosen": sel.proposals[rep.chosen].rule.name(),
-        "comparison": rep.comparison,
-    });
-    serde_json::to_string_pretty(&v)
+    })
 }
