@@ -23,7 +23,7 @@ use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{
     self, ErrorPredictor, ModelKind, PredictError, Settings, TrainSummary,
 };
-use crate::predict::provenance::{FeedRanges, TrainedOn};
+use crate::predict::provenance::TrainedOn;
 use crate::program::{self, ProgramError};
 use crate::sim::SimError;
 use crate::twin::{sub_seed, Twin, TwinError};
@@ -359,7 +359,7 @@ fn campaign_for_seed(
         inputs: data.input_ranges(sensors),
     };
     let mut hybrid_on = trained_on(hybrid.sensor_names());
-    hybrid_on.inputs.axis_feeds = FeedRanges::of(&data, &s.axis_feed_taus_s);
+    hybrid_on.inputs.axis_feeds = predictor::feed_ranges(&data, &s.axis_feed_taus_s);
     let trained_on = [
         hybrid_on,
         trained_on(volumetric.sensor_names()),

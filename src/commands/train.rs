@@ -9,7 +9,7 @@ use crate::files;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{self, ErrorPredictor, ModelKind, Settings, TrainSummary};
-use crate::predict::provenance::{FeedRanges, TrainedOn};
+use crate::predict::provenance::TrainedOn;
 use crate::study::{self, ForMachine};
 
 /// What to train, validated.
@@ -68,7 +68,7 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
         ModelKind::Hybrid => {
             let (m, s) = predictor::train_hybrid(&data, &geometry, &settings)?;
             let mut on = trained_on(m.sensor_names());
-            on.inputs.axis_feeds = FeedRanges::of(&data, &settings.axis_feed_taus_s);
+            on.inputs.axis_feeds = predictor::feed_ranges(&data, &settings.axis_feed_taus_s);
             (m.to_json_string_with(Some(&on))?, s)
         }
         ModelKind::Volumetric => {

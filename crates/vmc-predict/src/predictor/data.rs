@@ -537,7 +537,7 @@ pub(crate) fn mix_seed(seed: u64, net_index: u64) -> u64 {
 /// The records of each cycle (first-appearance order of the cycles), each cycle's in time
 /// order: the stream a controller logging the cycle would have seen.
 /// The records of each cycle (in order of first appearance), each cycle's in time order.
-pub(crate) fn records_by_cycle(ds: &Dataset) -> Vec<(&str, Vec<&Record>)> {
+pub(super) fn records_by_cycle(ds: &Dataset) -> Vec<(&str, Vec<&Record>)> {
     let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();
     for r in &ds.records {
         match by_cycle.iter_mut().find(|(c, _)| *c == r.cycle) {

@@ -41,6 +41,7 @@
 
 mod data;
 mod fastnet;
+mod feed_ranges;
 pub mod file;
 mod hybrid;
 mod kind;
@@ -51,7 +52,7 @@ mod volumetric;
 #[cfg(test)]
 pub(crate) mod testdata;
 
-pub(crate) use data::records_by_cycle;
+pub use feed_ranges::feed_ranges;
 pub use file::{AnyPredictor, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION};
 pub use hybrid::{train_hybrid, HybridPredictor};
 pub use kind::ModelKind;
