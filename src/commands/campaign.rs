@@ -14,7 +14,7 @@ use crate::predict::predictor::Settings;
 use crate::progress::Progress;
 use crate::record;
 use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
-use crate::study::{self, CampaignReport, ForMachine, TrainedModels, DIAGONALS, PREDICTORS};
+use crate::study::{self, CampaignReport, ForMachine, TrainedModels, PREDICTORS};
 
 /// Name of a campaign shard's per-seed results (one JSON object per line,
 /// [`study::SeedResults`]).
@@ -190,26 +190,11 @@ fn campaign_shard(cfg: &CampaignConfig, shard: Shard, out: &mut dyn Write) -> Re
 /// diagonal programs, the predictor settings, the calibration plan and the seed list.
 fn campaign_inputs(cfg: &CampaignConfig, settings: &Settings) -> Result<Vec<InputFingerprint>> {
     let mut inputs = cfg.inputs.clone();
-    for (name, text) in DIAGONALS {
-        inputs.push(InputFingerprint::of(
-            &format!("program diag_{}.ngc", name.to_lowercase()),
-            "embedded",
-            text.as_bytes(),
-        ));
-    }
+    inputs.extend(super::embedded_fingerprints(&cfg.machine));
     inputs.push(InputFingerprint::of(
         "settings",
         "arguments",
         &serde_json::to_vec(settings)?,
-    ));
-    let plan: Vec<String> = ThermalCycle::calibration_plan(&cfg.machine)
-        .iter()
-        .map(|c| format!("{} {} {}", c.name, c.duration_s(), c.purpose))
-        .collect();
-    inputs.push(InputFingerprint::of(
-        "calibration plan",
-        "embedded",
-        plan.join("\n").as_bytes(),
     ));
     let seeds: Vec<String> = cfg.seeds.iter().map(|s| s.to_string()).collect();
     inputs.push(InputFingerprint::of(

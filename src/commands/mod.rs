@@ -35,6 +35,31 @@ use crate::shard::InputFingerprint;
 /// The program version written in shard manifests.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
+/// The fingerprints of what a study embeds rather than reads: the diagonal programs and the
+/// calibration plan of `machine` (names, durations, purposes).
+pub(crate) fn embedded_fingerprints(machine: &MachineSpec) -> Vec<InputFingerprint> {
+    let mut v: Vec<InputFingerprint> = crate::study::DIAGONALS
+        .iter()
+        .map(|(name, text)| {
+            InputFingerprint::of(
+                &format!("program diag_{}.ngc", name.to_lowercase()),
+                "embedded",
+                text.as_bytes(),
+            )
+        })
+        .collect();
+    let plan: Vec<String> = crate::calibration::ThermalCycle::calibration_plan(machine)
+        .iter()
+        .map(|c| format!("{} {} {}", c.name, c.duration_s(), c.purpose))
+        .collect();
+    v.push(InputFingerprint::of(
+        "calibration plan",
+        "embedded",
+        plan.join("\n").as_bytes(),
+    ));
+    v
+}
+
 /// Fingerprints of a command's input files: the machine description (the embedded reference
 /// without one) and the sensor set if one is given.
 ///

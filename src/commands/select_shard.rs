@@ -24,11 +24,9 @@ use serde::{Deserialize, Serialize};
 use super::merge::MergeConfig;
 use super::select_sensors::{placement_config, sensor_set_toml, SelectConfig};
 use super::VERSION;
-use crate::calibration::ThermalCycle;
 use crate::files;
 use crate::placement::{self, SeedRuns};
 use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
-use crate::study::DIAGONALS;
 
 /// Name of the command in a shard's manifest.
 pub const COMMAND: &str = "select-sensors";
@@ -173,22 +171,7 @@ fn select_inputs(cfg: &SelectConfig) -> Result<Vec<InputFingerprint>> {
     ] {
         inputs.push(InputFingerprint::of(name, "arguments", text.as_bytes()));
     }
-    let plan: Vec<String> = ThermalCycle::calibration_plan(&cfg.machine)
-        .iter()
-        .map(|c| format!("{} {} {}", c.name, c.duration_s(), c.purpose))
-        .collect();
-    inputs.push(InputFingerprint::of(
-        "calibration plan",
-        "embedded",
-        plan.join("\n").as_bytes(),
-    ));
-    for (name, text) in DIAGONALS {
-        inputs.push(InputFingerprint::of(
-            &format!("program diag_{}.ngc", name.to_lowercase()),
-            "embedded",
-            text.as_bytes(),
-        ));
-    }
+    inputs.extend(super::embedded_fingerprints(&cfg.machine));
     Ok(inputs)
 }
 
