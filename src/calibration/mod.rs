@@ -14,6 +14,8 @@
 //! temperatures logged with each reading. Between blocks the spindle test logs with the spindle
 //! running.
 
+use rayon::prelude::*;
+
 use crate::instruments::Instruments;
 use crate::machine::MachineSpec;
 use crate::predict::dataset::{Dataset, Record};
@@ -155,78 +157,101 @@ fn measurement_block(
     inst.volumetric(twin, grid, cycle, t0_s, out)
 }
 
-/// Runs the calibration campaign over `cycles` and returns the dataset.
+/// Runs the calibration campaign over `cycles` and returns the dataset. The cycles are
+/// independent (each on a fresh twin of the same realisation with its own noise stream) and run
+/// side by side; their records are concatenated in cycle order, so the dataset does not depend
+/// on how many threads ran them.
 pub fn calibrate(
     spec: &MachineSpec,
     cycles: &[ThermalCycle],
     cfg: &CampaignConfig,
 ) -> Result<Dataset, TwinError> {
-    let mut records = Vec::new();
     let grid = volume_grid(spec, cfg.grid_points_per_axis);
+    let per_cycle: Vec<Result<(Vec<String>, Vec<Record>), TwinError>> = cycles
+        .par_iter()
+        .enumerate()
+        .map(|(k, cycle)| calibrate_cycle(spec, cfg, &grid, k, cycle))
+        .collect();
+    let mut records = Vec::new();
     let mut sensor_names = Vec::new();
-    for (k, cycle) in cycles.iter().enumerate() {
-        let noise = sub_seed(cfg.machine_seed, 1000 + k as u64);
-        let mut twin = Twin::with_noise_seed(spec, cfg.machine_seed, noise)?;
-        cycle.prepare(&mut twin)?;
-        let mut inst = Instruments::new(&twin, sub_seed(noise, 5));
-        sensor_names = twin.sensor_readings().names.to_vec();
-        let t0 = twin.time_s();
-        let end = cycle.duration_s();
-        let mut next_block = 0.0;
-        // The commanded spindle speed and axis feeds since the previous record (the dataset's
-        // `spindle_rpm` and axis-feed columns): the spindle runs and the axes shuttle while the
-        // duty is driven; during a block the spindle stands still and the axes' moves between
-        // measurement points are short (logged as parked).
-        let mut driven = (0.0, [0.0; 3]);
-        let log_rpm = |records: &mut Vec<Record>, from: usize, (rpm, feed): (f64, [f64; 3])| {
-            for r in &mut records[from..] {
-                r.spindle_rpm = Some(rpm);
-                r.axis_feed_mm_per_min = Some(feed);
-            }
-        };
-        loop {
-            let t = twin.time_s() - t0;
-            if t >= next_block - 1e-9 {
-                let first = records.len();
-                inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
-                log_rpm(&mut records, first, driven);
-                let first = records.len();
-                inst.spindle_stop_log(
-                    &mut twin,
-                    mid(spec),
-                    cfg.spindle_stop_log_s,
-                    cfg.spindle_stop_every_s,
-                    &cycle.name,
-                    t0,
-                    &mut records,
-                )?;
-                measurement_block(&mut twin, &mut inst, &grid, &cycle.name, t0, &mut records)?;
-                log_rpm(&mut records, first, (0.0, [0.0; 3]));
-                next_block += cfg.measure_every_s;
-                continue;
-            }
-            if t >= end - 1e-9 {
-                break;
-            }
-            // Drive the duty to the next block, logging the spindle probes on the way.
-            let target = next_block.min(end);
-            while twin.time_s() - t0 < target - 1e-9 {
-                let t = twin.time_s() - t0;
-                let next_probe = ((t / cfg.spindle_every_s).floor() + 1.0) * cfg.spindle_every_s;
-                drive(&mut twin, cycle, t0, next_probe.min(target), cfg.step_s)?;
-                let now = twin.time_s() - t0;
-                driven = (cycle.mean_rpm(t, now), cycle.mean_axis_feed(t, now));
-                let first = records.len();
-                inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
-                log_rpm(&mut records, first, driven);
-            }
-        }
+    for r in per_cycle {
+        let (names, recs) = r?;
+        sensor_names = names;
+        records.extend(recs);
     }
     Ok(Dataset {
         origin: Some(spec.identity(Some(cfg.machine_seed))),
         sensor_names,
         records,
     })
+}
+
+/// Cycle `k` of the calibration campaign: the sensor names and the records.
+fn calibrate_cycle(
+    spec: &MachineSpec,
+    cfg: &CampaignConfig,
+    grid: &[[f64; 3]],
+    k: usize,
+    cycle: &ThermalCycle,
+) -> Result<(Vec<String>, Vec<Record>), TwinError> {
+    let mut records = Vec::new();
+    let noise = sub_seed(cfg.machine_seed, 1000 + k as u64);
+    let mut twin = Twin::with_noise_seed(spec, cfg.machine_seed, noise)?;
+    cycle.prepare(&mut twin)?;
+    let mut inst = Instruments::new(&twin, sub_seed(noise, 5));
+    let sensor_names = twin.sensor_readings().names.to_vec();
+    let t0 = twin.time_s();
+    let end = cycle.duration_s();
+    let mut next_block = 0.0;
+    // The commanded spindle speed and axis feeds since the previous record (the dataset's
+    // `spindle_rpm` and axis-feed columns): the spindle runs and the axes shuttle while the
+    // duty is driven; during a block the spindle stands still and the axes' moves between
+    // measurement points are short (logged as parked).
+    let mut driven = (0.0, [0.0; 3]);
+    let log_rpm = |records: &mut Vec<Record>, from: usize, (rpm, feed): (f64, [f64; 3])| {
+        for r in &mut records[from..] {
+            r.spindle_rpm = Some(rpm);
+            r.axis_feed_mm_per_min = Some(feed);
+        }
+    };
+    loop {
+        let t = twin.time_s() - t0;
+        if t >= next_block - 1e-9 {
+            let first = records.len();
+            inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
+            log_rpm(&mut records, first, driven);
+            let first = records.len();
+            inst.spindle_stop_log(
+                &mut twin,
+                mid(spec),
+                cfg.spindle_stop_log_s,
+                cfg.spindle_stop_every_s,
+                &cycle.name,
+                t0,
+                &mut records,
+            )?;
+            measurement_block(&mut twin, &mut inst, grid, &cycle.name, t0, &mut records)?;
+            log_rpm(&mut records, first, (0.0, [0.0; 3]));
+            next_block += cfg.measure_every_s;
+            continue;
+        }
+        if t >= end - 1e-9 {
+            break;
+        }
+        // Drive the duty to the next block, logging the spindle probes on the way.
+        let target = next_block.min(end);
+        while twin.time_s() - t0 < target - 1e-9 {
+            let t = twin.time_s() - t0;
+            let next_probe = ((t / cfg.spindle_every_s).floor() + 1.0) * cfg.spindle_every_s;
+            drive(&mut twin, cycle, t0, next_probe.min(target), cfg.step_s)?;
+            let now = twin.time_s() - t0;
+            driven = (cycle.mean_rpm(t, now), cycle.mean_axis_feed(t, now));
+            let first = records.len();
+            inst.spindle_test(&twin, mid(spec), &cycle.name, t0, &mut records);
+            log_rpm(&mut records, first, driven);
+        }
+    }
+    Ok((sensor_names, records))
 }
 
 /// A thermal state at which diagonals are evaluated: a cycle run up to a time.

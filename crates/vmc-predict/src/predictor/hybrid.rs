@@ -13,6 +13,7 @@
 //! synthesis ([`ErrorPredictor::negative_approach_shift_mm`]). Without backward records the
 //! reversal is zero and the networks see the forward records only.
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::{Dataset, Instrument, Record};
@@ -482,31 +483,40 @@ pub fn train_hybrid(
         false,
     )?;
 
+    // The three axis parts and the spindle part are independent, each seeded by its index:
+    // trained side by side, they give the same bits as one after the other.
+    let fitted: Vec<_> = (0..4usize)
+        .into_par_iter()
+        .map(|k| match axis_tables.get(k) {
+            Some(table) => fit_linear_plus_net(
+                AXIS_NETS[k],
+                &VALUE_COLUMNS,
+                table,
+                &split,
+                settings,
+                k as u64,
+                usize::from(settings.axis_bilinear),
+            ),
+            None => fit_linear_plus_net(
+                "spindle",
+                &VALUE_COLUMNS[..5],
+                &spindle_table,
+                &split,
+                settings,
+                3,
+                0,
+            ),
+        })
+        .collect();
     let mut nets = Vec::new();
-    let mut axis_nets = Vec::with_capacity(3);
-    for (k, table) in axis_tables.iter().enumerate() {
-        let (reg, summary) = fit_linear_plus_net(
-            AXIS_NETS[k],
-            &VALUE_COLUMNS,
-            table,
-            &split,
-            settings,
-            k as u64,
-            usize::from(settings.axis_bilinear),
-        )?;
-        axis_nets.push(reg);
+    let mut parts = Vec::with_capacity(4);
+    for f in fitted {
+        let (reg, summary) = f?;
+        parts.push(reg);
         nets.push(summary);
     }
-    let (spindle_net, summary) = fit_linear_plus_net(
-        "spindle",
-        &VALUE_COLUMNS[..5],
-        &spindle_table,
-        &split,
-        settings,
-        3,
-        0,
-    )?;
-    nets.push(summary);
+    let spindle_net = parts.pop().expect("four parts were fitted");
+    let axis_nets = parts;
     let (squareness, summary) = fit_linear(
         "squareness",
         &SQUARENESS_OUTPUTS,
