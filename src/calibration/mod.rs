@@ -167,7 +167,7 @@ pub fn calibrate(
     cfg: &CampaignConfig,
 ) -> Result<Dataset, TwinError> {
     let grid = volume_grid(spec, cfg.grid_points_per_axis);
-    let per_cycle: Vec<Result<(Vec<String>, Vec<Record>), TwinError>> = cycles
+    let per_cycle: Vec<Result<CycleRecords, TwinError>> = cycles
         .par_iter()
         .enumerate()
         .map(|(k, cycle)| calibrate_cycle(spec, cfg, &grid, k, cycle))
@@ -186,6 +186,9 @@ pub fn calibrate(
     })
 }
 
+/// The sensor names and the records of one calibration cycle.
+type CycleRecords = (Vec<String>, Vec<Record>);
+
 /// Cycle `k` of the calibration campaign: the sensor names and the records.
 fn calibrate_cycle(
     spec: &MachineSpec,
@@ -193,7 +196,7 @@ fn calibrate_cycle(
     grid: &[[f64; 3]],
     k: usize,
     cycle: &ThermalCycle,
-) -> Result<(Vec<String>, Vec<Record>), TwinError> {
+) -> Result<CycleRecords, TwinError> {
     let mut records = Vec::new();
     let noise = sub_seed(cfg.machine_seed, 1000 + k as u64);
     let mut twin = Twin::with_noise_seed(spec, cfg.machine_seed, noise)?;
