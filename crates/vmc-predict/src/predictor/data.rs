@@ -234,20 +234,12 @@ impl SensorSelection {
                 time_s: r.time_s,
             });
         }
-        for (cycle, recs) in records_by_cycle(ds) {
-            let mut h = FeedHistory::new(taus_s);
-            let at = self.feed.entry(cycle.to_string()).or_default();
-            for r in recs {
-                let key = r.time_s.to_bits();
-                if at.contains_key(&key) {
-                    continue;
-                }
-                h.observe(r.time_s, r.axis_feed_mm_per_min.unwrap_or([0.0; 3]));
-                let mut f = vec![0.0; h.len()];
-                h.features_into(&mut f);
-                at.insert(key, f);
-            }
-        }
+        for_each_feed_instant(ds, taus_s, |cycle, time_s, f| {
+            self.feed
+                .entry(cycle.to_string())
+                .or_default()
+                .insert(time_s.to_bits(), f.to_vec());
+        });
         Ok(self)
     }
 
@@ -536,6 +528,31 @@ pub(crate) fn mix_seed(seed: u64, net_index: u64) -> u64 {
 /// Refuses time constants that are not finite and > 0 (`field` names the setting).
 /// The records of each cycle (first-appearance order of the cycles), each cycle's in time
 /// order: the stream a controller logging the cycle would have seen.
+/// Runs each cycle's axis-feed log (every record, in time order; records at the same instant
+/// once) through the feed filters `taus_s` from the cycle's first record on (axes at rest
+/// before it) and gives `f` the cycle, the instant and the features there. A record without
+/// feeds counts as axes at rest.
+pub(super) fn for_each_feed_instant(
+    ds: &Dataset,
+    taus_s: &[f64],
+    mut f: impl FnMut(&str, f64, &[f64]),
+) {
+    let mut features = vec![0.0; FeedHistory::n_features(taus_s.len())];
+    for (cycle, recs) in records_by_cycle(ds) {
+        let mut h = FeedHistory::new(taus_s);
+        let mut last: Option<f64> = None;
+        for r in recs {
+            if last == Some(r.time_s) {
+                continue;
+            }
+            last = Some(r.time_s);
+            h.observe(r.time_s, r.axis_feed_mm_per_min.unwrap_or([0.0; 3]));
+            h.features_into(&mut features);
+            f(cycle, r.time_s, &features);
+        }
+    }
+}
+
 /// The records of each cycle (in order of first appearance), each cycle's in time order.
 pub(super) fn records_by_cycle(ds: &Dataset) -> Vec<(&str, Vec<&Record>)> {
     let mut by_cycle: Vec<(&str, Vec<&Record>)> = Vec::new();

@@ -5,11 +5,10 @@ use crate::dataset::Dataset;
 use crate::history::FeedHistory;
 use crate::provenance::FeedRanges;
 
-use super::data::records_by_cycle;
+use super::data::for_each_feed_instant;
 
-/// The ranges of the feed filters `taus_s` over `data`: each cycle's feed log (every record, in
-/// time order) runs through the filters from the cycle's first record on, as when the model was
-/// trained. None without time constants or when a record lacks the feeds.
+/// The ranges of the feed filters `taus_s` over `data`, through the same filtering as the
+/// model's training. None without time constants or when a record lacks the feeds.
 pub fn feed_ranges(data: &Dataset, taus_s: &[f64]) -> Option<FeedRanges> {
     if taus_s.is_empty()
         || data
@@ -19,20 +18,14 @@ pub fn feed_ranges(data: &Dataset, taus_s: &[f64]) -> Option<FeedRanges> {
     {
         return None;
     }
-    let n = FeedHistory::n_features(taus_s.len());
-    let mut ranges = vec![[f64::INFINITY, f64::NEG_INFINITY]; n];
-    let mut f = vec![0.0; n];
-    for (_, recs) in records_by_cycle(data) {
-        let mut h = FeedHistory::new(taus_s);
-        for r in recs {
-            h.observe(r.time_s, r.axis_feed_mm_per_min.unwrap_or([0.0; 3]));
-            h.features_into(&mut f);
-            for (range, v) in ranges.iter_mut().zip(&f) {
-                range[0] = range[0].min(*v);
-                range[1] = range[1].max(*v);
-            }
+    let mut ranges =
+        vec![[f64::INFINITY, f64::NEG_INFINITY]; FeedHistory::n_features(taus_s.len())];
+    for_each_feed_instant(data, taus_s, |_, _, f| {
+        for (range, v) in ranges.iter_mut().zip(f) {
+            range[0] = range[0].min(*v);
+            range[1] = range[1].max(*v);
         }
-    }
+    });
     Some(FeedRanges {
         taus_s: taus_s.to_vec(),
         filtered_m_per_min: ranges,
