@@ -167,6 +167,15 @@ pub fn default_locations(spec: &MachineSpec) -> Vec<String> {
     v
 }
 
+/// The machine's own sensor locations ([`default_locations`]) that are not among `candidates`:
+/// with any, the comparison leaves the "study default" set out.
+pub fn defaults_not_candidates(spec: &MachineSpec, candidates: &[&str]) -> Vec<String> {
+    default_locations(spec)
+        .into_iter()
+        .filter(|n| !candidates.contains(&n.as_str()))
+        .collect()
+}
+
 /// Scenarios of the selection campaign: the typical calibration cycles (what the predictor is
 /// trained on) followed by the selection-validation cycles of [`validation_cycles`].
 pub fn selection_cycles(spec: &MachineSpec, seed: u64) -> Vec<ThermalCycle> {
@@ -363,8 +372,8 @@ pub fn study_among(
 pub struct SelectionStage {
     /// The study so far ([`PlacementReport::comparison`] empty).
     pub report: PlacementReport,
-    /// The compared sets in report order: label (`selected`, `study default`, `random #i`,
-    /// `all candidates`) and candidate names.
+    /// The compared sets in report order: label (`selected`, `study default` when its
+    /// locations are all candidates, `random #i`, `all candidates`) and candidate names.
     pub sets: Vec<(String, Vec<String>)>,
     /// The machine with every candidate as a sensor.
     cand_spec: MachineSpec,
@@ -432,10 +441,13 @@ pub fn selection_stage(
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
         .collect();
 
-    let mut sets: Vec<(String, Vec<String>)> = vec![
-        ("selected".into(), names.clone()),
-        ("study default".into(), default_locations(spec)),
-    ];
+    let mut sets: Vec<(String, Vec<String>)> = vec![("selected".into(), names.clone())];
+    // The machine's own locations are compared when they are all candidates; a restricted
+    // candidate list may leave some out (the report says so: [`defaults_not_candidates`]).
+    let cand_names: Vec<&str> = candidates.iter().map(|c| c.name.as_str()).collect();
+    if defaults_not_candidates(spec, &cand_names).is_empty() {
+        sets.push(("study default".into(), default_locations(spec)));
+    }
     let pool: Vec<String> = candidates
         .iter()
         .map(|c| c.name.clone())

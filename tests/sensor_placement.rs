@@ -150,6 +150,62 @@ fn the_comparison_reports_each_sensor_set_on_held_out_runs() {
 }
 
 #[test]
+fn a_comparison_among_restricted_candidates_says_why_the_machines_own_set_is_not_compared() {
+    let tmp = TempDir::new("restricted");
+    let dir = tmp.path();
+    // Two of the machine's own locations and two others: the study default set (11 locations)
+    // cannot be trained on these candidates' columns.
+    let o = vmc(
+        dir,
+        &[
+            "select-sensors",
+            "--count",
+            "2",
+            "--candidates",
+            "spindle_housing,x_motor,spindle_front_bearing,saddle",
+            "--random-draws",
+            "1",
+            "-o",
+            "s.toml",
+            "--json",
+            "study.json",
+        ],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let note = out
+        .lines()
+        .find(|l| l.contains("(study default) is not compared"))
+        .unwrap_or_else(|| panic!("no note on the study default set in\n{out}"));
+    for missing in ["headstock_right", "work_zone", "column_top_front"] {
+        assert!(note.contains(missing), "{note}");
+    }
+    assert!(
+        !note.contains("spindle_housing") && !note.contains("x_motor"),
+        "{note}"
+    );
+    assert!(
+        !out.lines()
+            .any(|l| l.trim_start().starts_with("study default")),
+        "{out}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("study.json")).unwrap()).unwrap();
+    let labels: Vec<&str> = json["comparison"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(labels, ["selected", "random #1", "all candidates"]);
+    // Ambient and the four candidates.
+    assert_eq!(
+        json["comparison"][2]["sensors"].as_array().unwrap().len(),
+        5
+    );
+}
+
+#[test]
 fn bad_selection_requests_are_clear_errors() {
     let tmp = TempDir::new("bad");
     let dir = tmp.path();

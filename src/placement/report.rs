@@ -183,6 +183,15 @@ pub fn write_selection_part(
             multi.join(" ")
         }
     )?;
+    let names: Vec<&str> = sel.candidates.iter().map(|c| c.name.as_str()).collect();
+    let left_out = super::defaults_not_candidates(spec, &names);
+    if !cfg.compare_seeds.is_empty() && !left_out.is_empty() {
+        writeln!(
+            out,
+            "the machine's own sensor set (study default) is not compared: {} not among the candidates",
+            left_out.join(", ")
+        )?;
+    }
     Ok(())
 }
 
