@@ -525,9 +525,6 @@ pub(crate) fn mix_seed(seed: u64, net_index: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// Refuses time constants that are not finite and > 0 (`field` names the setting).
-/// The records of each cycle (first-appearance order of the cycles), each cycle's in time
-/// order: the stream a controller logging the cycle would have seen.
 /// Runs each cycle's axis-feed log (every record, in time order; records at the same instant
 /// once) through the feed filters `taus_s` from the cycle's first record on (axes at rest
 /// before it) and gives `f` the cycle, the instant and the features there. A record without
@@ -568,6 +565,7 @@ pub(super) fn records_by_cycle(ds: &Dataset) -> Vec<(&str, Vec<&Record>)> {
     by_cycle
 }
 
+/// Refuses time constants that are not finite and > 0 (`field` names the setting).
 fn check_taus(field: &'static str, taus_s: &[f64]) -> Result<(), PredictError> {
     match crate::history::invalid_tau(taus_s) {
         Some(t) => Err(PredictError::BadSettings {
