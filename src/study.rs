@@ -30,17 +30,19 @@ use crate::twin::{sub_seed, Twin, TwinError};
 
 pub use crate::program::DIAGONALS;
 pub use report::{
-    headline, headline_of, median, run_report, write_run_row, write_run_table,
-    write_run_table_foot, write_run_table_head, CampaignReport, Headline, PlannedCycle, RunDigest,
-    RunReport, PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
+    headline, median, run_report, write_run_row, write_run_table, write_run_table_foot,
+    write_run_table_head, CampaignReport, Headline, HeadlineBuilder, PlannedCycle, RunReport,
+    PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
 };
 pub use summary::{
-    write_campaign_summary, write_report_json, write_summary, ReportHeader, SeedResults,
-    SummaryDigest,
+    write_campaign_summary, write_report_json, write_summary, ReportHeader, SeedResults, Summary,
+    SummaryBuilder,
 };
 
 pub mod fleet;
 pub mod fleet_png;
+pub mod histogram;
+pub mod order_stats;
 mod report;
 mod summary;
 

@@ -80,12 +80,13 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
     let (rep, models) =
         study::run_campaign_with_progress(&cfg.machine, &cfg.seeds, &settings, &progress)?;
     progress.finish();
-    study::write_campaign_summary(&rep, out)?;
+    let summary = study::Summary::of(rep.header(), &rep.runs);
+    study::write_summary(&summary, out)?;
     if cfg.print_runs {
         study::write_run_table(&rep, out)?;
     }
     if let Some(rrd) = &cfg.rrd {
-        write_recording(cfg, rrd, &rep, &models, out)?;
+        write_recording(cfg, rrd, &rep, &models, &summary.fleet, out)?;
     }
     if let Some(dir) = out_dir {
         let path = dir.join("report.json");
@@ -211,6 +212,7 @@ fn write_recording(
     rrd: &RrdOutput,
     rep: &CampaignReport,
     models: &[TrainedModels],
+    fleet: &study::fleet::FleetSummary,
     out: &mut dyn Write,
 ) -> Result<()> {
     let seeds: Vec<String> = cfg.seeds.iter().map(|s| s.to_string()).collect();
@@ -228,7 +230,7 @@ fn write_recording(
         record::layout::campaign_blueprint(rrd.settings.magnify, &pick.title()),
     )?;
     record::campaign::record_campaign(&file, &cfg.machine, rep, models, rrd.settings)?;
-    record::fleet::log_fleet(&file, &study::fleet::Fleet::of(&rep.runs))?;
+    record::fleet::log_fleet(&file, fleet)?;
     let bytes = file.finish()?;
     wrote_recording(
         out,

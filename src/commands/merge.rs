@@ -2,9 +2,10 @@
 //! command writes and prints. The shard folders are checked as a set first
 //! ([`crate::shard::check_set`]), then merged by the command their manifests name: `campaign`
 //! here, `select-sensors` in [`super::select_shard`]. The campaign's per-seed results are
-//! streamed from the files, twice
-//! (training summaries, then runs, the order of `report.json`), so the merge holds one seed's
-//! results at a time plus a few numbers per run for the summary's medians.
+//! streamed from the files, one seed's results at a time: the training summaries, then the
+//! runs (the order of `report.json`), then the runs again as often as the summary's exact
+//! medians and percentiles need (once more for a few machines, two or three times for a large
+//! fleet), so the merge's memory does not grow with the runs it streams.
 
 use std::cell::RefCell;
 use std::io::{BufRead, BufReader, Write};
@@ -18,7 +19,7 @@ use super::campaign::{model_file_names, SEED_RESULTS_FILE};
 use crate::files;
 use crate::record;
 use crate::shard::{check_set, ShardManifest, MANIFEST_FILE};
-use crate::study::{self, ReportHeader, SeedResults, SummaryDigest};
+use crate::study::{self, ReportHeader, SeedResults, SummaryBuilder};
 
 /// What to merge, validated.
 pub struct MergeConfig {
@@ -104,7 +105,7 @@ fn merge_campaign(
         files: dirs.iter().map(|d| d.join(SEED_RESULTS_FILE)).collect(),
         seeds: seeds.to_vec(),
     };
-    let digest = RefCell::new(SummaryDigest::new(header.clone()));
+    let digest = RefCell::new(SummaryBuilder::new(header.clone()));
     let path = cfg.out_dir.join("report.json");
     files::write_atomic_with(&path, cfg.force, |w| {
         let training = TrainingStream(&results);
@@ -130,7 +131,18 @@ fn merge_campaign(
             bail!("no shard holds the trained model {name}");
         }
     }
-    let digest = digest.into_inner();
+    let mut digest = digest.into_inner();
+    let changed = "the shard results changed while they were merged";
+    while !digest.end_pass().context(changed)? {
+        results.for_each(
+            |r| {
+                r.runs.iter().for_each(|run| digest.push(run));
+                Ok(())
+            },
+            |e| e,
+        )?;
+    }
+    let digest = digest.finish();
     let mut summary = Vec::new();
     study::write_summary(&digest, &mut summary)?;
     out.write_all(&summary)?;
@@ -236,10 +248,10 @@ impl Serialize for TrainingStream<'_> {
 }
 
 /// The runs of every seed, serialised as one sequence while the files are read; each run also
-/// goes into the summary's digest.
+/// goes into the summary's first pass.
 struct RunStream<'a> {
     files: &'a SeedFiles,
-    digest: &'a RefCell<SummaryDigest>,
+    digest: &'a RefCell<SummaryBuilder>,
 }
 
 impl Serialize for RunStream<'_> {
@@ -261,18 +273,18 @@ impl Serialize for RunStream<'_> {
 /// Writes the fleet's histograms as a PNG picture and says what each panel spans.
 fn write_png(
     path: &Path,
-    fleet: &study::fleet::Fleet,
+    fleet: &study::fleet::FleetSummary,
     force: bool,
     out: &mut dyn Write,
 ) -> Result<()> {
-    let panels = study::fleet_png::panels(fleet, record::fleet::BINS);
+    let panels = study::fleet_png::panels(fleet);
     let bytes = study::fleet_png::encode_png(&study::fleet_png::raster(&panels))?;
     files::write_atomic(path, &bytes, force)?;
     writeln!(
         out,
         "wrote {} (histograms across machines, {} bins; red line: the goal):",
         path.display(),
-        record::fleet::BINS
+        study::fleet::BINS
     )?;
     for (pos, (name, (hist, _))) in ["top left", "top right", "bottom left", "bottom right"]
         .iter()

@@ -1,5 +1,5 @@
 //! The fleet in a recording: a histogram across machines (one per seed) of each fleet quantity
-//! of the hybrid predictor ([`crate::study::fleet::Fleet::quantities`]) as a bar chart under
+//! of the hybrid predictor ([`crate::study::fleet::QUANTITIES`]) as a bar chart under
 //! `fleet/<quantity>`, and, in a recording of its own (`merge --rrd`), the printed summary as
 //! `report`.
 
@@ -7,13 +7,10 @@ use std::path::Path;
 
 use rerun::blueprint::{BarChartView, Blueprint, Horizontal, TextDocumentView, Vertical};
 
-use crate::study::fleet::{Fleet, Histogram};
+use crate::study::fleet::FleetSummary;
 
 use super::layout::framed_with;
 use super::{RecordError, RrdFile};
-
-/// Bins of each histogram.
-pub const BINS: usize = 20;
 
 /// The entity of a quantity's histogram.
 fn entity(name: &str) -> String {
@@ -28,12 +25,12 @@ fn entity(name: &str) -> String {
 ///
 /// # Errors
 /// The recording cannot be written.
-pub fn log_fleet(file: &RrdFile, fleet: &Fleet) -> Result<(), RecordError> {
-    if fleet.machines.len() < 2 {
+pub fn log_fleet(file: &RrdFile, fleet: &FleetSummary) -> Result<(), RecordError> {
+    if fleet.machines < 2 {
         return Ok(());
     }
-    for (name, values) in fleet.quantities() {
-        let Some(h) = Histogram::of(&values, BINS) else {
+    for q in &fleet.quantities {
+        let (name, Some(h)) = (q.name, &q.histogram) else {
             continue;
         };
         let counts: Vec<f64> = h.counts.iter().map(|&c| c as f64).collect();
@@ -58,15 +55,15 @@ pub fn record_fleet(
     path: &Path,
     force: bool,
     title: &str,
-    fleet: &Fleet,
+    fleet: &FleetSummary,
     summary: &str,
 ) -> Result<u64, RecordError> {
     let views: Vec<_> = fleet
-        .quantities()
+        .quantities
         .iter()
-        .map(|(name, _)| {
-            BarChartView::new(format!("Machines against {name}"))
-                .with_origin(entity(name))
+        .map(|q| {
+            BarChartView::new(format!("Machines against {}", q.name))
+                .with_origin(entity(q.name))
                 .into()
         })
         .collect();

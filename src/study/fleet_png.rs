@@ -5,7 +5,8 @@
 //! the quantity has one (80 % reduction, 2 µm). The picture has no text: the axis ranges are
 //! printed by the caller.
 
-use super::fleet::{Fleet, Histogram, GOAL_MAX_RESIDUAL_UM, GOAL_REDUCTION};
+use super::fleet::{FleetSummary, GOAL_MAX_RESIDUAL_UM, GOAL_REDUCTION};
+use super::histogram::Histogram;
 
 /// Picture width and height, pixels.
 pub const SIZE_PX: (u32, u32) = (800, 560);
@@ -14,7 +15,7 @@ pub const SIZE_PX: (u32, u32) = (800, 560);
 type Panel = (Option<Histogram>, Option<f64>);
 
 /// The four panels, in grid order.
-pub fn panels(fleet: &Fleet, bins: usize) -> Vec<(String, Panel)> {
+pub fn panels(fleet: &FleetSummary) -> Vec<(String, Panel)> {
     let goals = [
         None,
         Some(GOAL_REDUCTION * 100.0),
@@ -22,10 +23,10 @@ pub fn panels(fleet: &Fleet, bins: usize) -> Vec<(String, Panel)> {
         None,
     ];
     fleet
-        .quantities()
-        .into_iter()
+        .quantities
+        .iter()
         .zip(goals)
-        .map(|((name, v), goal)| (name.to_string(), (Histogram::of(&v, bins), goal)))
+        .map(|(q, goal)| (q.name.to_string(), (q.histogram.clone(), goal)))
         .collect()
 }
 

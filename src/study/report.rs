@@ -10,6 +10,8 @@ use crate::predict::predictor::{ModelKind, TrainSummary};
 use crate::report::error_stats;
 use crate::sim::PointRecord;
 
+use super::order_stats::{median_of_middle, Selector, StreamChanged, Wanted};
+
 /// The predictors of a campaign, in report order.
 pub const PREDICTORS: [ModelKind; 3] =
     [ModelKind::Hybrid, ModelKind::Volumetric, ModelKind::Linear];
@@ -158,18 +160,15 @@ pub fn run_report(
     })
 }
 
-/// Median of a list (NaN-free); None if empty.
+/// Median of a list (in f64's total order; the mean of the two middle values of an even
+/// number); None if empty.
 pub fn median(v: &mut [f64]) -> Option<f64> {
     if v.is_empty() {
         return None;
     }
     v.sort_by(|a, b| a.total_cmp(b));
     let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+    Some(median_of_middle(n, v[(n - 1) / 2], v[n / 2]))
 }
 
 /// Headline figures of a set of runs.
@@ -193,78 +192,94 @@ pub struct Headline {
 impl Headline {
     /// The figures of `runs`; None if there are none.
     pub fn of<'a>(runs: impl IntoIterator<Item = &'a RunReport>) -> Option<Self> {
-        Self::of_digests(
-            runs.into_iter()
-                .map(RunDigest::of)
-                .collect::<Vec<_>>()
-                .iter(),
-        )
+        let runs: Vec<&RunReport> = runs.into_iter().collect();
+        let mut h = HeadlineBuilder::default();
+        loop {
+            runs.iter().for_each(|r| h.push(r));
+            // The same runs in the same order: the passes agree.
+            if h.end_pass().unwrap_or(true) {
+                return h.finish();
+            }
+        }
+    }
+}
+
+/// Builds a [`Headline`] from runs fed in passes over the same runs in the same order
+/// ([`HeadlineBuilder::push`] every run, then [`HeadlineBuilder::end_pass`], until it says
+/// done): the sums and extremes in the first pass, the exact median in as many as it takes
+/// (one for at most [`super::order_stats::KEEP_MAX`] runs), in memory that does not grow with
+/// the runs.
+#[derive(Debug, Clone)]
+pub struct HeadlineBuilder {
+    /// Passes ended.
+    passes: u32,
+    runs: usize,
+    worst_reduction: f64,
+    max_after_um: f64,
+    /// Sum of the runs' RMSE in run order (from −0, as `Iterator::sum`).
+    rmse_sum_um: f64,
+    worst_residual_share: Option<f64>,
+    median: Selector,
+}
+
+impl Default for HeadlineBuilder {
+    fn default() -> Self {
+        Self::with_keep_max(super::order_stats::KEEP_MAX)
+    }
+}
+
+impl HeadlineBuilder {
+    /// A builder whose median keeps at most `keep_max` values per search.
+    pub fn with_keep_max(keep_max: usize) -> Self {
+        Self {
+            passes: 0,
+            runs: 0,
+            worst_reduction: f64::INFINITY,
+            max_after_um: 0.0,
+            rmse_sum_um: -0.0,
+            worst_residual_share: None,
+            median: Selector::with_keep_max(Wanted::Median, keep_max),
+        }
     }
 
-    /// The figures of the digested `runs`; None if there are none. Gives what [`Self::of`]
-    /// gives for the runs themselves, bit for bit.
-    pub fn of_digests<'a>(runs: impl IntoIterator<Item = &'a RunDigest>) -> Option<Self> {
-        let r: Vec<&RunDigest> = runs.into_iter().collect();
-        if r.is_empty() {
-            return None;
+    /// Adds a run of the current pass.
+    pub fn push(&mut self, r: &RunReport) {
+        self.median.push(r.reduction);
+        if self.passes > 0 {
+            return;
         }
-        let mut red: Vec<f64> = r.iter().map(|r| r.reduction).collect();
-        let worst = red.iter().cloned().fold(f64::INFINITY, f64::min);
-        Some(Self {
-            runs: r.len(),
-            median_reduction: median(&mut red)?,
-            worst_reduction: worst,
-            max_after_um: r.iter().map(|r| r.max_after_um).fold(0.0, f64::max),
-            mean_rmse_um: r.iter().map(|r| r.rmse_um).sum::<f64>() / r.len() as f64,
-            worst_residual_share: r
-                .iter()
-                .filter_map(|r| r.residual_share_of_thermal)
-                .max_by(f64::total_cmp),
+        self.runs += 1;
+        self.worst_reduction = self.worst_reduction.min(r.reduction);
+        self.max_after_um = self.max_after_um.max(r.max_after_um);
+        self.rmse_sum_um += r.rmse_um;
+        if let Some(s) = r.residual_share_of_thermal {
+            self.worst_residual_share = Some(match self.worst_residual_share {
+                Some(w) if w.total_cmp(&s).is_gt() => w,
+                _ => s,
+            });
+        }
+    }
+
+    /// Ends a pass; true when the figures are complete.
+    ///
+    /// # Errors
+    /// A pass over other runs than the first one.
+    pub fn end_pass(&mut self) -> Result<bool, StreamChanged> {
+        self.passes += 1;
+        self.median.end_pass()
+    }
+
+    /// The figures (after the pass that said done); None without runs.
+    pub fn finish(&self) -> Option<Headline> {
+        Some(Headline {
+            runs: self.runs,
+            median_reduction: self.median.median()?,
+            worst_reduction: self.worst_reduction,
+            max_after_um: self.max_after_um,
+            mean_rmse_um: self.rmse_sum_um / self.runs as f64,
+            worst_residual_share: self.worst_residual_share,
         })
     }
-}
-
-/// What the summary tables need of one run (a few numbers instead of the whole
-/// [`RunReport`]), so that a summary over many runs holds little per run.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RunDigest {
-    /// The predictor.
-    pub predictor: ModelKind,
-    /// Machine seed.
-    pub seed: u64,
-    /// 1 − RMS after / RMS before, of |E| (fraction).
-    pub reduction: f64,
-    /// Max |E| with compensation, µm.
-    pub max_after_um: f64,
-    /// Prediction RMSE, µm.
-    pub rmse_um: f64,
-    /// Residual share of the thermal part on a warm run (fraction).
-    pub residual_share_of_thermal: Option<f64>,
-    /// Position of the run's diagonal in its summary's list of diagonals.
-    pub diagonal: u16,
-    /// Position of the run's thermal state in its summary's list of states.
-    pub state: u16,
-}
-
-impl RunDigest {
-    /// The digest of `r` (group positions 0: see [`super::summary::SummaryDigest`]).
-    pub fn of(r: &RunReport) -> Self {
-        Self {
-            predictor: r.predictor,
-            seed: r.seed,
-            reduction: r.reduction,
-            max_after_um: r.max_after_um,
-            rmse_um: r.rmse_um,
-            residual_share_of_thermal: r.residual_share_of_thermal,
-            diagonal: 0,
-            state: 0,
-        }
-    }
-}
-
-/// The headline figures of one predictor over the digested runs.
-pub fn headline_of(runs: &[RunDigest], predictor: ModelKind) -> Option<Headline> {
-    Headline::of_digests(runs.iter().filter(|r| r.predictor == predictor))
 }
 
 /// The headline figures of one predictor over all runs.

@@ -1,8 +1,8 @@
 //! The printed campaign summary and `report.json`, both built from parts that can also come
 //! one at a time: a [`ReportHeader`] (the set-up), the training summaries and the runs. The
 //! whole campaign in memory and a merge of shard results streamed from files go through the
-//! same two functions ([`write_summary`] over a [`SummaryDigest`], [`write_report_json`]), so
-//! they print and write the same bytes.
+//! same builder and writers ([`SummaryBuilder`] → [`Summary`] → [`write_summary`], and
+//! [`write_report_json`]), so they print and write the same bytes.
 
 use std::io::Write;
 
@@ -10,9 +10,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::predict::predictor::ModelKind;
 
-use super::fleet::{write_fleet_summary, Fleet};
+use super::fleet::{write_fleet_summary, FleetBuilder, FleetSummary};
+use super::order_stats::StreamChanged;
 use super::report::{
-    headline_of, CampaignReport, Headline, PlannedCycle, RunDigest, RunReport, PREDICTORS,
+    CampaignReport, Headline, HeadlineBuilder, PlannedCycle, RunReport, PREDICTORS,
     WARM_RUN_MIN_THERMAL_UM,
 };
 
@@ -83,63 +84,145 @@ pub fn write_report_json<T: Serialize, R: Serialize>(
     )
 }
 
-/// What the printed summary needs of a campaign: the header and a [`RunDigest`] per run, fed
-/// one run at a time.
+/// The headline figures of one group of runs for each of the [`PREDICTORS`].
+type PerPredictor<T> = [T; 3];
+
+/// Position of a predictor in [`PREDICTORS`].
+fn predictor_index(p: ModelKind) -> usize {
+    PREDICTORS.iter().position(|&q| q == p).unwrap_or(0)
+}
+
+/// Everything the printed summary says, computed.
 #[derive(Debug, Clone)]
-pub struct SummaryDigest {
+pub struct Summary {
     /// The set-up.
     pub header: ReportHeader,
-    /// Diagonal names in the order of their first run.
-    pub diagonals: Vec<String>,
-    /// Thermal state names in the order of their first run.
-    pub states: Vec<String>,
-    /// One digest per run, in run order.
-    pub runs: Vec<RunDigest>,
+    /// Headline per predictor over all runs (None: the predictor has no run).
+    pub overall: PerPredictor<Option<Headline>>,
+    /// Per diagonal (in the order of their first run): its headline per predictor.
+    pub by_diagonal: Vec<(String, PerPredictor<Option<Headline>>)>,
+    /// Per thermal state (in the order of their first run): its headline per predictor.
+    pub by_state: Vec<(String, PerPredictor<Option<Headline>>)>,
     /// The machines' figures (the fleet section).
-    pub fleet: Fleet,
+    pub fleet: FleetSummary,
 }
 
-impl SummaryDigest {
-    /// An empty digest of the campaign set up as `header`.
+/// Builds a [`Summary`] from the runs of a campaign, fed in passes over the same runs in the
+/// same order: [`SummaryBuilder::push`] every run, then [`SummaryBuilder::end_pass`], until it
+/// says done. The campaign replays its runs from memory, the merge reads them again from the
+/// shards' files; either way the memory does not grow with the runs (the medians and
+/// percentiles are exact order statistics found over the passes, see
+/// [`super::order_stats`]).
+#[derive(Debug, Clone)]
+pub struct SummaryBuilder {
+    header: ReportHeader,
+    keep_max: usize,
+    /// Passes ended.
+    passes: u32,
+    overall: PerPredictor<HeadlineBuilder>,
+    by_diagonal: Vec<(String, PerPredictor<HeadlineBuilder>)>,
+    by_state: Vec<(String, PerPredictor<HeadlineBuilder>)>,
+    fleet: FleetBuilder,
+}
+
+impl SummaryBuilder {
+    /// An empty summary of the campaign set up as `header`.
     pub fn new(header: ReportHeader) -> Self {
+        Self::with_keep_max(header, super::order_stats::KEEP_MAX)
+    }
+
+    /// The same, with order statistics keeping at most `keep_max` values per search (fewer:
+    /// more passes; the figures are the same).
+    pub fn with_keep_max(header: ReportHeader, keep_max: usize) -> Self {
+        let group = || std::array::from_fn(|_| HeadlineBuilder::with_keep_max(keep_max));
         Self {
             header,
-            diagonals: Vec::new(),
-            states: Vec::new(),
-            runs: Vec::new(),
-            fleet: Fleet::default(),
+            keep_max,
+            passes: 0,
+            overall: group(),
+            by_diagonal: Vec::new(),
+            by_state: Vec::new(),
+            fleet: FleetBuilder::with_keep_max(keep_max),
         }
     }
 
-    /// The digest of a whole report.
-    pub fn of(rep: &CampaignReport) -> Self {
-        let mut d = Self::new(rep.header());
-        for r in &rep.runs {
-            d.push(r);
-        }
-        d
-    }
-
-    /// Adds a run.
+    /// Adds a run of the current pass.
     pub fn push(&mut self, r: &RunReport) {
-        let diagonal = intern(&mut self.diagonals, &r.diagonal);
-        let state = intern(&mut self.states, &r.thermal_state);
+        let p = predictor_index(r.predictor);
+        let keep_max = self.keep_max;
+        self.overall[p].push(r);
+        group_of(&mut self.by_diagonal, &r.diagonal, keep_max)[p].push(r);
+        group_of(&mut self.by_state, &r.thermal_state, keep_max)[p].push(r);
         self.fleet.push(r);
-        self.runs.push(RunDigest {
-            diagonal,
-            state,
-            ..RunDigest::of(r)
-        });
+    }
+
+    /// Ends a pass; true when the summary is complete.
+    ///
+    /// # Errors
+    /// A pass over other runs than the first one.
+    pub fn end_pass(&mut self) -> Result<bool, StreamChanged> {
+        self.passes += 1;
+        let mut done = self.fleet.end_pass()?;
+        for h in self
+            .overall
+            .iter_mut()
+            .chain(self.by_diagonal.iter_mut().flat_map(|g| g.1.iter_mut()))
+            .chain(self.by_state.iter_mut().flat_map(|g| g.1.iter_mut()))
+        {
+            done &= h.end_pass()?;
+        }
+        Ok(done)
+    }
+
+    /// The summary (after the pass that said done).
+    pub fn finish(self) -> Summary {
+        let heads = |g: &PerPredictor<HeadlineBuilder>| -> PerPredictor<Option<Headline>> {
+            std::array::from_fn(|k| g[k].finish())
+        };
+        Summary {
+            overall: heads(&self.overall),
+            by_diagonal: self
+                .by_diagonal
+                .iter()
+                .map(|(n, g)| (n.clone(), heads(g)))
+                .collect(),
+            by_state: self
+                .by_state
+                .iter()
+                .map(|(n, g)| (n.clone(), heads(g)))
+                .collect(),
+            fleet: self.fleet.finish(),
+            header: self.header,
+        }
     }
 }
 
-/// Position of `name` in `names`, appended when new.
-fn intern(names: &mut Vec<String>, name: &str) -> u16 {
-    let at = names.iter().position(|n| n == name).unwrap_or_else(|| {
-        names.push(name.to_string());
-        names.len() - 1
+/// The group named `name` (appended when new).
+fn group_of<'a>(
+    groups: &'a mut Vec<(String, PerPredictor<HeadlineBuilder>)>,
+    name: &str,
+    keep_max: usize,
+) -> &'a mut PerPredictor<HeadlineBuilder> {
+    let at = groups.iter().position(|g| g.0 == name).unwrap_or_else(|| {
+        let group = std::array::from_fn(|_| HeadlineBuilder::with_keep_max(keep_max));
+        groups.push((name.to_string(), group));
+        groups.len() - 1
     });
-    u16::try_from(at).unwrap_or(u16::MAX)
+    &mut groups[at].1
+}
+
+impl Summary {
+    /// The summary of a campaign's runs in memory.
+    pub fn of(header: ReportHeader, runs: &[RunReport]) -> Self {
+        let mut b = SummaryBuilder::new(header);
+        loop {
+            runs.iter().for_each(|r| b.push(r));
+            // The same runs in the same order: the passes agree.
+            if b.end_pass().unwrap_or(true) {
+                return b.finish();
+            }
+        }
+    }
 }
 
 /// Writes what a person reads first for a campaign in memory: see [`write_summary`].
@@ -147,16 +230,16 @@ fn intern(names: &mut Vec<String>, name: &str) -> u16 {
 /// # Errors
 /// The writer's.
 pub fn write_campaign_summary(rep: &CampaignReport, out: &mut dyn Write) -> std::io::Result<()> {
-    write_summary(&SummaryDigest::of(rep), out)
+    write_summary(&Summary::of(rep.header(), &rep.runs), out)
 }
 
 /// Writes what a person reads first: the campaign's set-up, the headline figures per predictor,
 /// then median reduction and max residual per predictor × diagonal and per predictor × thermal
-/// state.
+/// state, then the fleet.
 ///
 /// # Errors
 /// The writer's.
-pub fn write_summary(d: &SummaryDigest, out: &mut dyn Write) -> std::io::Result<()> {
+pub fn write_summary(d: &Summary, out: &mut dyn Write) -> std::io::Result<()> {
     let rep = &d.header;
     let hours: f64 = rep.calibration_plan.iter().map(|c| c.hours).sum();
     writeln!(
@@ -180,74 +263,68 @@ pub fn write_summary(d: &SummaryDigest, out: &mut dyn Write) -> std::io::Result<
         )?;
     }
     writeln!(out, "summary over all diagonals, states and seeds:")?;
-    for p in PREDICTORS {
-        if let Some(h) = headline_of(&d.runs, p) {
+    for (p, h) in PREDICTORS.iter().zip(&d.overall) {
+        if let Some(h) = h {
             writeln!(out, "  {:<10} runs {:>4}  median reduction {:>5.1} %  worst run {:>5.1} %  max residual |E| {:>5.2} µm  worst residual/thermal part {:>5.1} %  mean prediction RMSE {:>5.2} µm",
                 p.name(), h.runs, h.median_reduction * 100.0, h.worst_reduction * 100.0, h.max_after_um,
                 h.worst_residual_share.unwrap_or(f64::NAN) * 100.0, h.mean_rmse_um)?;
         }
     }
-    let diagonals: Vec<(&str, Option<u16>)> = d
-        .diagonals
+    let diagonals: Vec<(&str, Option<&PerPredictor<Option<Headline>>>)> = d
+        .by_diagonal
         .iter()
-        .enumerate()
-        .map(|(k, n)| (n.as_str(), u16::try_from(k).ok()))
+        .map(|(n, g)| (n.as_str(), Some(g)))
         .collect();
-    let states: Vec<(&str, Option<u16>)> = rep
+    let states: Vec<(&str, Option<&PerPredictor<Option<Headline>>>)> = rep
         .evaluation_states
         .iter()
         .map(|s| {
-            let at = d.states.iter().position(|n| n == s);
-            (s.as_str(), at.and_then(|k| u16::try_from(k).ok()))
+            let g = d.by_state.iter().find(|g| g.0 == *s).map(|g| &g.1);
+            (s.as_str(), g)
         })
         .collect();
     writeln!(out, "by diagonal: median reduction % / max residual |E| µm")?;
-    write_aggregate(d, out, &diagonals, |r, g| Some(r.diagonal) == g)?;
+    write_aggregate(d, out, &diagonals)?;
     writeln!(
         out,
         "by thermal state: median reduction % / max residual |E| µm / worst residual share of the thermal part %"
     )?;
-    write_aggregate(d, out, &states, |r, g| Some(r.state) == g)?;
+    write_aggregate(d, out, &states)?;
     writeln!(out, "(reduction = 1 − RMS|E'|/RMS|E| of a run, E' compensated; residual share = RMS|E'| / RMS of the error's thermal part, on warm runs (thermal part ≥ {WARM_RUN_MIN_THERMAL_UM} µm RMS); every run: --runs, or report.json)")?;
     write_fleet_summary(&d.fleet, out)
 }
 
-/// One table: a row per group, a column per predictor, each cell `median red % / max |E'| µm`
-/// over the runs of the group.
+/// One table: a row per group, a column per predictor with runs, each cell
+/// `median red % / max |E'| µm` over the runs of the group.
 fn write_aggregate(
-    d: &SummaryDigest,
+    d: &Summary,
     out: &mut dyn Write,
-    groups: &[(&str, Option<u16>)],
-    in_group: impl Fn(&RunDigest, Option<u16>) -> bool,
+    groups: &[(&str, Option<&PerPredictor<Option<Headline>>>)],
 ) -> std::io::Result<()> {
     let label = groups.iter().map(|g| g.0.len()).max().unwrap_or(0);
-    let predictors: Vec<ModelKind> = PREDICTORS
-        .into_iter()
-        .filter(|p| d.runs.iter().any(|r| r.predictor == *p))
+    let predictors: Vec<usize> = (0..PREDICTORS.len())
+        .filter(|&k| d.overall[k].is_some())
         .collect();
     write!(out, "  {:<label$}", "")?;
-    for p in &predictors {
-        write!(out, " {:>19}", p.name())?;
+    for &k in &predictors {
+        write!(out, " {:>19}", PREDICTORS[k].name())?;
     }
     writeln!(out)?;
-    for (g, at) in groups {
+    for (g, heads) in groups {
         write!(out, "  {g:<label$}")?;
-        for p in &predictors {
-            let cell = Headline::of_digests(
-                d.runs
-                    .iter()
-                    .filter(|r| r.predictor == *p && in_group(r, *at)),
-            )
-            .map(|h| match h.worst_residual_share {
-                Some(s) => format!(
-                    "{:.1} / {:.2} / {:.0}",
-                    h.median_reduction * 100.0,
-                    h.max_after_um,
-                    s * 100.0
-                ),
-                None => format!("{:.1} / {:.2}", h.median_reduction * 100.0, h.max_after_um),
-            })
-            .unwrap_or_else(|| "-".into());
+        for &k in &predictors {
+            let cell = heads
+                .and_then(|h| h[k])
+                .map(|h| match h.worst_residual_share {
+                    Some(s) => format!(
+                        "{:.1} / {:.2} / {:.0}",
+                        h.median_reduction * 100.0,
+                        h.max_after_um,
+                        s * 100.0
+                    ),
+                    None => format!("{:.1} / {:.2}", h.median_reduction * 100.0, h.max_after_um),
+                })
+                .unwrap_or_else(|| "-".into());
             write!(out, " {cell:>19}")?;
         }
         writeln!(out)?;
@@ -290,5 +367,89 @@ impl CampaignReport {
                     .collect(),
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run with figures that vary with `i` (ties included).
+    fn run(i: u32, predictor: ModelKind, seed: u64, diagonal: &str, state: &str) -> RunReport {
+        let red = 0.85 + f64::from((i * 37) % 29) / 250.0;
+        RunReport {
+            predictor,
+            diagonal: diagonal.into(),
+            thermal_state: state.into(),
+            seed,
+            points: 10,
+            rms_before_um: 10.0,
+            rms_after_um: 10.0 * (1.0 - red),
+            max_before_um: 20.0,
+            max_after_um: 0.5 + f64::from((i * 13) % 31) / 10.0,
+            reduction: red,
+            max_reduction: 0.0,
+            rms_before_xyz_um: [0.0; 3],
+            rms_after_xyz_um: [0.0; 3],
+            max_before_xyz_um: [5.0, 6.0, 7.0],
+            max_after_xyz_um: [0.1, 0.3, 0.2],
+            rms_thermal_um: Some(2.0),
+            residual_share_of_thermal: i.is_multiple_of(3).then(|| f64::from(i % 7) / 50.0),
+            mad_um: 0.0,
+            mape: None,
+            rmse_um: f64::from(i % 11) / 10.0,
+            r2: None,
+            samples: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_printed_summary_does_not_depend_on_how_many_values_are_kept_per_pass() {
+        let header = ReportHeader {
+            machine: "m".into(),
+            calibration_cycles: vec!["c".into()],
+            calibration_plan: vec![PlannedCycle {
+                name: "c".into(),
+                hours: 2.0,
+                purpose: "p".into(),
+            }],
+            evaluation_states: vec!["cold".into(), "warm".into(), "stress_z".into()],
+            hybrid_uses_spindle_speed: false,
+        };
+        let mut runs = Vec::new();
+        let mut i = 0;
+        for seed in 1..=12 {
+            for p in PREDICTORS {
+                for state in ["cold", "warm", "stress_z"] {
+                    for diagonal in ["XY", "YZ", "PPP", "NPP"] {
+                        i += 1;
+                        runs.push(run(i, p, seed, diagonal, state));
+                    }
+                }
+            }
+        }
+        let text = |s: &Summary| {
+            let mut v = Vec::new();
+            write_summary(s, &mut v).unwrap();
+            String::from_utf8(v).unwrap()
+        };
+        let whole = text(&Summary::of(header.clone(), &runs));
+        let mut b = SummaryBuilder::with_keep_max(header, 3);
+        let mut passes = 0;
+        loop {
+            runs.iter().for_each(|r| b.push(r));
+            passes += 1;
+            if b.end_pass().unwrap() {
+                break;
+            }
+        }
+        assert!(passes > 2, "{passes} passes");
+        assert_eq!(text(&b.finish()), whole);
+        assert!(whole.contains("fleet of 12 machines"), "{whole}");
+        let h = Headline::of(runs.iter().filter(|r| r.predictor == ModelKind::Hybrid)).unwrap();
+        assert!(whole.contains(&format!(
+            "median reduction {:>5.1} %",
+            h.median_reduction * 100.0
+        )));
     }
 }
