@@ -30,9 +30,9 @@ use crate::twin::{sub_seed, Twin, TwinError};
 
 pub use crate::program::DIAGONALS;
 pub use report::{
-    headline, median, run_report, write_run_row, write_run_table, write_run_table_foot,
-    write_run_table_head, CampaignReport, Headline, HeadlineBuilder, PlannedCycle, RunReport,
-    PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
+    headline, median, replay, run_report, write_run_row, write_run_table, write_run_table_foot,
+    write_run_table_head, CampaignReport, Headline, HeadlineBuilder, PlannedCycle, RunPasses,
+    RunReport, PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
 };
 pub use summary::{
     write_campaign_summary, write_report_json, write_summary, ReportHeader, SeedResults, Summary,

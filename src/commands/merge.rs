@@ -19,7 +19,7 @@ use super::campaign::{model_file_names, SEED_RESULTS_FILE};
 use crate::files;
 use crate::record;
 use crate::shard::{check_set, ShardManifest, MANIFEST_FILE};
-use crate::study::{self, ReportHeader, SeedResults, SummaryBuilder};
+use crate::study::{self, ReportHeader, RunPasses, SeedResults, SummaryBuilder};
 
 /// What to merge, validated.
 pub struct MergeConfig {

@@ -22,7 +22,7 @@ use crate::predict::predictor::ModelKind;
 
 use super::histogram::{Histogram, HistogramBuilder};
 use super::order_stats::{median_of_middle, Selector, StreamChanged, Wanted};
-use super::report::RunReport;
+use super::report::{replay, RunPasses, RunReport};
 
 /// Reduction of RMS |E| every run of a machine must reach (fraction).
 pub const GOAL_REDUCTION: f64 = 0.80;
@@ -218,9 +218,8 @@ struct QuantityBuilder {
     histogram: HistogramBuilder,
 }
 
-/// Builds a [`FleetSummary`] from the runs, fed in passes over the same runs in the same order:
-/// [`FleetBuilder::push`] every run, then [`FleetBuilder::end_pass`], until it says done. A
-/// machine's runs must come together.
+/// Builds a [`FleetSummary`] from the runs, fed in passes ([`RunPasses`]). A machine's runs
+/// must come together.
 #[derive(Debug, Clone)]
 pub struct FleetBuilder {
     /// Passes ended.
@@ -263,26 +262,6 @@ impl FleetBuilder {
         }
     }
 
-    /// Adds a run of the current pass (only the hybrid's count).
-    pub fn push(&mut self, r: &RunReport) {
-        if r.predictor != ModelKind::Hybrid {
-            return;
-        }
-        if self
-            .current
-            .as_ref()
-            .is_some_and(|c| c.machine.seed != r.seed)
-        {
-            self.end_machine();
-        }
-        let c = self.current.get_or_insert_with(|| Current {
-            machine: Machine::new(r.seed),
-            reductions: Vec::new(),
-        });
-        c.machine.push(r);
-        c.reductions.push(r.reduction);
-    }
-
     /// The current machine is complete.
     fn end_machine(&mut self) {
         let Some(c) = self.current.take() else {
@@ -319,24 +298,6 @@ impl FleetBuilder {
         }
     }
 
-    /// Ends a pass; true when the figures are complete (the first pass finds the ranges of the
-    /// histograms, the second counts them; the percentiles may take a few more).
-    ///
-    /// # Errors
-    /// A pass over other runs than the first one.
-    pub fn end_pass(&mut self) -> Result<bool, StreamChanged> {
-        self.end_machine();
-        let mut done = self.passes >= 1 || self.machines == 0;
-        for q in &mut self.quantities {
-            done &= q.selector.end_pass()?;
-            if self.passes == 0 {
-                q.histogram.end_range_pass();
-            }
-        }
-        self.passes += 1;
-        Ok(done)
-    }
-
     /// The fleet's figures (after the pass that said done).
     pub fn finish(self) -> FleetSummary {
         let m = self.meeting;
@@ -363,19 +324,53 @@ impl FleetBuilder {
     }
 }
 
+impl RunPasses for FleetBuilder {
+    /// Adds a run of the current pass (only the hybrid's count).
+    fn push(&mut self, r: &RunReport) {
+        if r.predictor != ModelKind::Hybrid {
+            return;
+        }
+        if self
+            .current
+            .as_ref()
+            .is_some_and(|c| c.machine.seed != r.seed)
+        {
+            self.end_machine();
+        }
+        let c = self.current.get_or_insert_with(|| Current {
+            machine: Machine::new(r.seed),
+            reductions: Vec::new(),
+        });
+        c.machine.push(r);
+        c.reductions.push(r.reduction);
+    }
+
+    /// Ends a pass; true when the figures are complete (the first pass finds the ranges of the
+    /// histograms, the second counts them; the percentiles may take a few more).
+    ///
+    /// # Errors
+    /// A pass over other runs than the first one.
+    fn end_pass(&mut self) -> Result<bool, StreamChanged> {
+        self.end_machine();
+        let mut done = self.passes >= 1 || self.machines == 0;
+        for q in &mut self.quantities {
+            done &= q.selector.end_pass()?;
+            if self.passes == 0 {
+                q.histogram.end_range_pass();
+            }
+        }
+        self.passes += 1;
+        Ok(done)
+    }
+}
+
 impl FleetSummary {
     /// The fleet of a campaign's runs (a machine's runs together).
     pub fn of(runs: &[RunReport]) -> Self {
         let mut b = FleetBuilder::default();
-        loop {
-            for r in runs {
-                b.push(r);
-            }
-            // The same runs in the same order: the passes agree.
-            if b.end_pass().unwrap_or(true) {
-                return b.finish();
-            }
-        }
+        // The same runs in the same order: the passes agree.
+        let _ = replay(&mut b, runs.iter());
+        b.finish()
     }
 }
 
@@ -519,14 +514,7 @@ mod tests {
             .collect();
         let whole = FleetSummary::of(&runs);
         let mut b = FleetBuilder::with_keep_max(2);
-        let mut passes = 0;
-        loop {
-            runs.iter().for_each(|r| b.push(r));
-            passes += 1;
-            if b.end_pass().unwrap() {
-                break;
-            }
-        }
+        let passes = replay(&mut b, runs.iter()).unwrap();
         assert!(passes > 2, "{passes} passes");
         assert_eq!(b.finish(), whole);
         assert_eq!(whole.worst.len(), WORST_LISTED);

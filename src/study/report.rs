@@ -194,19 +194,45 @@ impl Headline {
     pub fn of<'a>(runs: impl IntoIterator<Item = &'a RunReport>) -> Option<Self> {
         let runs: Vec<&RunReport> = runs.into_iter().collect();
         let mut h = HeadlineBuilder::default();
-        loop {
-            runs.iter().for_each(|r| h.push(r));
-            // The same runs in the same order: the passes agree.
-            if h.end_pass().unwrap_or(true) {
-                return h.finish();
-            }
+        // The same runs in the same order: the passes agree.
+        replay(&mut h, runs.iter().copied()).ok()?;
+        h.finish()
+    }
+}
+
+/// Figures built from a campaign's runs fed in passes over the same runs in the same order:
+/// [`RunPasses::push`] every run, then [`RunPasses::end_pass`], until it says done (see
+/// [`replay`]).
+pub trait RunPasses {
+    /// Adds a run of the current pass.
+    fn push(&mut self, r: &RunReport);
+
+    /// Ends a pass; true when the figures are complete.
+    ///
+    /// # Errors
+    /// A pass over other runs than the first one.
+    fn end_pass(&mut self) -> Result<bool, StreamChanged>;
+}
+
+/// Feeds `runs` to `builder` pass after pass until it is done; gives the number of passes.
+///
+/// # Errors
+/// The iterator gave other runs in a later pass.
+pub fn replay<'a, B: RunPasses>(
+    builder: &mut B,
+    runs: impl Iterator<Item = &'a RunReport> + Clone,
+) -> Result<u32, StreamChanged> {
+    let mut passes = 0;
+    loop {
+        runs.clone().for_each(|r| builder.push(r));
+        passes += 1;
+        if builder.end_pass()? {
+            return Ok(passes);
         }
     }
 }
 
-/// Builds a [`Headline`] from runs fed in passes over the same runs in the same order
-/// ([`HeadlineBuilder::push`] every run, then [`HeadlineBuilder::end_pass`], until it says
-/// done): the sums and extremes in the first pass, the exact median in as many as it takes
+/// Builds a [`Headline`] from runs fed in passes ([`RunPasses`]): the sums and extremes in the first pass, the exact median in as many as it takes
 /// (one for at most [`super::order_stats::KEEP_MAX`] runs), in memory that does not grow with
 /// the runs.
 #[derive(Debug, Clone)]
@@ -242,8 +268,21 @@ impl HeadlineBuilder {
         }
     }
 
-    /// Adds a run of the current pass.
-    pub fn push(&mut self, r: &RunReport) {
+    /// The figures (after the pass that said done); None without runs.
+    pub fn finish(&self) -> Option<Headline> {
+        Some(Headline {
+            runs: self.runs,
+            median_reduction: self.median.median()?,
+            worst_reduction: self.worst_reduction,
+            max_after_um: self.max_after_um,
+            mean_rmse_um: self.rmse_sum_um / self.runs as f64,
+            worst_residual_share: self.worst_residual_share,
+        })
+    }
+}
+
+impl RunPasses for HeadlineBuilder {
+    fn push(&mut self, r: &RunReport) {
         self.median.push(r.reduction);
         if self.passes > 0 {
             return;
@@ -260,25 +299,9 @@ impl HeadlineBuilder {
         }
     }
 
-    /// Ends a pass; true when the figures are complete.
-    ///
-    /// # Errors
-    /// A pass over other runs than the first one.
-    pub fn end_pass(&mut self) -> Result<bool, StreamChanged> {
+    fn end_pass(&mut self) -> Result<bool, StreamChanged> {
         self.passes += 1;
         self.median.end_pass()
-    }
-
-    /// The figures (after the pass that said done); None without runs.
-    pub fn finish(&self) -> Option<Headline> {
-        Some(Headline {
-            runs: self.runs,
-            median_reduction: self.median.median()?,
-            worst_reduction: self.worst_reduction,
-            max_after_um: self.max_after_um,
-            mean_rmse_um: self.rmse_sum_um / self.runs as f64,
-            worst_residual_share: self.worst_residual_share,
-        })
     }
 }
 

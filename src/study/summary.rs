@@ -13,8 +13,8 @@ use crate::predict::predictor::ModelKind;
 use super::fleet::{write_fleet_summary, FleetBuilder, FleetSummary};
 use super::order_stats::StreamChanged;
 use super::report::{
-    CampaignReport, Headline, HeadlineBuilder, PlannedCycle, RunReport, PREDICTORS,
-    WARM_RUN_MIN_THERMAL_UM,
+    replay, CampaignReport, Headline, HeadlineBuilder, PlannedCycle, RunPasses, RunReport,
+    PREDICTORS, WARM_RUN_MIN_THERMAL_UM,
 };
 
 /// Everything in a campaign report but the training summaries and the runs.
@@ -107,9 +107,7 @@ pub struct Summary {
     pub fleet: FleetSummary,
 }
 
-/// Builds a [`Summary`] from the runs of a campaign, fed in passes over the same runs in the
-/// same order: [`SummaryBuilder::push`] every run, then [`SummaryBuilder::end_pass`], until it
-/// says done. The campaign replays its runs from memory, the merge reads them again from the
+/// Builds a [`Summary`] from the runs of a campaign, fed in passes ([`RunPasses`]). The campaign replays its runs from memory, the merge reads them again from the
 /// shards' files; either way the memory does not grow with the runs (the medians and
 /// percentiles are exact order statistics found over the passes, see
 /// [`super::order_stats`]).
@@ -146,34 +144,6 @@ impl SummaryBuilder {
         }
     }
 
-    /// Adds a run of the current pass.
-    pub fn push(&mut self, r: &RunReport) {
-        let p = predictor_index(r.predictor);
-        let keep_max = self.keep_max;
-        self.overall[p].push(r);
-        group_of(&mut self.by_diagonal, &r.diagonal, keep_max)[p].push(r);
-        group_of(&mut self.by_state, &r.thermal_state, keep_max)[p].push(r);
-        self.fleet.push(r);
-    }
-
-    /// Ends a pass; true when the summary is complete.
-    ///
-    /// # Errors
-    /// A pass over other runs than the first one.
-    pub fn end_pass(&mut self) -> Result<bool, StreamChanged> {
-        self.passes += 1;
-        let mut done = self.fleet.end_pass()?;
-        for h in self
-            .overall
-            .iter_mut()
-            .chain(self.by_diagonal.iter_mut().flat_map(|g| g.1.iter_mut()))
-            .chain(self.by_state.iter_mut().flat_map(|g| g.1.iter_mut()))
-        {
-            done &= h.end_pass()?;
-        }
-        Ok(done)
-    }
-
     /// The summary (after the pass that said done).
     pub fn finish(self) -> Summary {
         let heads = |g: &PerPredictor<HeadlineBuilder>| -> PerPredictor<Option<Headline>> {
@@ -197,6 +167,36 @@ impl SummaryBuilder {
     }
 }
 
+impl RunPasses for SummaryBuilder {
+    /// Adds a run of the current pass.
+    fn push(&mut self, r: &RunReport) {
+        let p = predictor_index(r.predictor);
+        let keep_max = self.keep_max;
+        self.overall[p].push(r);
+        group_of(&mut self.by_diagonal, &r.diagonal, keep_max)[p].push(r);
+        group_of(&mut self.by_state, &r.thermal_state, keep_max)[p].push(r);
+        self.fleet.push(r);
+    }
+
+    /// Ends a pass; true when the summary is complete.
+    ///
+    /// # Errors
+    /// A pass over other runs than the first one.
+    fn end_pass(&mut self) -> Result<bool, StreamChanged> {
+        self.passes += 1;
+        let mut done = self.fleet.end_pass()?;
+        for h in self
+            .overall
+            .iter_mut()
+            .chain(self.by_diagonal.iter_mut().flat_map(|g| g.1.iter_mut()))
+            .chain(self.by_state.iter_mut().flat_map(|g| g.1.iter_mut()))
+        {
+            done &= h.end_pass()?;
+        }
+        Ok(done)
+    }
+}
+
 /// The group named `name` (appended when new).
 fn group_of<'a>(
     groups: &'a mut Vec<(String, PerPredictor<HeadlineBuilder>)>,
@@ -215,13 +215,9 @@ impl Summary {
     /// The summary of a campaign's runs in memory.
     pub fn of(header: ReportHeader, runs: &[RunReport]) -> Self {
         let mut b = SummaryBuilder::new(header);
-        loop {
-            runs.iter().for_each(|r| b.push(r));
-            // The same runs in the same order: the passes agree.
-            if b.end_pass().unwrap_or(true) {
-                return b.finish();
-            }
-        }
+        // The same runs in the same order: the passes agree.
+        let _ = replay(&mut b, runs.iter());
+        b.finish()
     }
 }
 
@@ -435,14 +431,7 @@ mod tests {
         };
         let whole = text(&Summary::of(header.clone(), &runs));
         let mut b = SummaryBuilder::with_keep_max(header, 3);
-        let mut passes = 0;
-        loop {
-            runs.iter().for_each(|r| b.push(r));
-            passes += 1;
-            if b.end_pass().unwrap() {
-                break;
-            }
-        }
+        let passes = replay(&mut b, runs.iter()).unwrap();
         assert!(passes > 2, "{passes} passes");
         assert_eq!(text(&b.finish()), whole);
         assert!(whole.contains("fleet of 12 machines"), "{whole}");
