@@ -126,5 +126,6 @@ pub fn lobes_config(
         out,
         rrd,
         force,
+        shard: None,
     })
 }

@@ -10,6 +10,7 @@ mod control;
 mod cut;
 mod fiveaxis;
 mod identify_thermal;
+mod lobes;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -28,6 +29,7 @@ pub use control::{ControlAction, ControlArgs};
 pub use cut::CutArgs;
 pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
 pub use identify_thermal::IdentifyThermalArgs;
+pub use lobes::{LobesArgs, MethodArg};
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
 /// `vmc-twin`: the whole command line.
@@ -55,8 +57,9 @@ pub enum Command {
     /// baselines, every face and body diagonal under held-out thermal states without and with
     /// compensation, and the report.
     Campaign(CampaignArgs),
-    /// Combine the results of the shards of a sharded command (`campaign --shard I/N`) into
-    /// what the unsharded command writes and prints; refuses shards that do not belong together.
+    /// Combine the results of the shards of a sharded command (`campaign`, `select-sensors` or
+    /// `lobes` with `--shard I/N`) into what the unsharded command writes and prints; refuses
+    /// shards that do not belong together.
     Merge(MergeArgs),
     /// Train a predictor on a calibration dataset (CSV) and write the model (JSON).
     Train(TrainArgs),
@@ -551,17 +554,6 @@ impl CheckArgs {
     }
 }
 
-/// Stability method of `lobes --method`.
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum MethodArg {
-    /// First-order semi-discretisation (Insperger–Stépán).
-    Sdm,
-    /// Zero-order analytic solution (Altintas–Budak).
-    Zoa,
-    /// Time-domain cutting simulation with bisection on the depth.
-    Time,
-}
-
 /// Milling direction of `lobes --milling` and `cut --milling`.
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum MillingArg {
@@ -569,98 +561,6 @@ pub enum MillingArg {
     Up,
     /// Down (climb) milling.
     Down,
-}
-
-/// Arguments of `lobes`.
-#[derive(clap::Args)]
-pub struct LobesArgs {
-    /// Tool file (TOML: teeth, diameter, cutting coefficients, tool-tip modes); default: the
-    /// one-degree-of-freedom benchmark of the field (machines/benchmarks/insperger-1dof.toml).
-    #[arg(long)]
-    pub tool: Option<PathBuf>,
-    /// Stability method.
-    #[arg(long, value_enum, default_value = "sdm")]
-    pub method: MethodArg,
-    /// Radial immersion a_e/D, in (0, 1] (1 = slotting).
-    #[arg(long, default_value_t = 1.0)]
-    pub immersion: f64,
-    /// Milling direction.
-    #[arg(long, value_enum, default_value = "down")]
-    pub milling: MillingArg,
-    /// Spindle speeds, rpm: first:last:count (e.g. 5000:25000:201) or a comma-separated list;
-    /// default 5000:25000:201, or 200 speeds over the plant's speed band with --controller.
-    #[arg(long)]
-    pub rpm: Option<String>,
-    /// Write the lobes as CSV (spindle_rpm, critical_depth_mm, chatter_frequency_hz, kind;
-    /// with --controller: spindle_rpm, open_depth_mm, closed_depth_mm).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// A controller file from `control design`: the lobes of its blade without and with the
-    /// controller in the loop (closed-loop semi-discretisation; --tool, --method, --immersion
-    /// and --milling do not apply: the blade's cut is in the file).
-    #[arg(long, conflicts_with = "tool")]
-    pub controller: Option<PathBuf>,
-    /// Semi-discretisation steps per tooth period with --controller (default 160).
-    #[arg(long, requires = "controller")]
-    pub steps: Option<usize>,
-    /// Write a Rerun recording of the lobe diagram (depth against speed, Hopf and flip lobes;
-    /// with --controller: the open- and closed-loop lobes).
-    #[arg(long, value_name = "FILE.rrd")]
-    pub rrd: Option<PathBuf>,
-    #[command(flatten)]
-    pub force: ForceArg,
-}
-
-impl LobesArgs {
-    /// The config of `lobes --controller`, when given.
-    ///
-    /// # Errors
-    /// An unreadable or invalid controller file, malformed speeds, too few steps.
-    pub fn controller_config(&self) -> Result<Option<commands::control::ControlLobesConfig>> {
-        self.controller
-            .as_deref()
-            .map(|path| {
-                control::lobes_config(
-                    path,
-                    self.rpm.as_deref(),
-                    self.steps,
-                    (self.out.clone(), self.rrd.clone()),
-                    self.force.force,
-                )
-            })
-            .transpose()
-    }
-
-    /// The validated config.
-    ///
-    /// # Errors
-    /// An unreadable or invalid tool file, an immersion outside (0, 1], malformed speeds.
-    pub fn config(self) -> Result<commands::lobes::LobesConfig> {
-        let (tool, tool_source) = crate::milling::ToolDynamics::from_option(self.tool.as_deref())?;
-        crate::dynamics::params::validate_immersion(self.immersion)
-            .map_err(|e| anyhow::anyhow!("--immersion: {e}"))?;
-        let rpm = self.rpm.as_deref().unwrap_or("5000:25000:201");
-        let speeds_rpm =
-            crate::milling::parse_speeds(rpm).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?;
-        Ok(commands::lobes::LobesConfig {
-            tool,
-            tool_source,
-            method: match self.method {
-                MethodArg::Sdm => crate::dynamics::Method::Sdm,
-                MethodArg::Zoa => crate::dynamics::Method::Zoa,
-                MethodArg::Time => crate::dynamics::Method::Time,
-            },
-            immersion: self.immersion,
-            milling: match self.milling {
-                MillingArg::Up => crate::dynamics::Milling::Up,
-                MillingArg::Down => crate::dynamics::Milling::Down,
-            },
-            speeds_rpm,
-            out: self.out,
-            rrd: self.rrd,
-            force: self.force.force,
-        })
-    }
 }
 
 /// Arguments of `interpret`.

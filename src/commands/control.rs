@@ -8,11 +8,13 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
+use serde::{Deserialize, Serialize};
 
+use super::lobes::{LobesOutputs, ShardOutput};
 use crate::blade::{ControllerFile, Figures, ModeFigure, Plant, CONTROLLER_FORMAT};
 use crate::dynamics::control::blade::BladePlant;
 use crate::dynamics::control::closed_loop::{
-    attenuation, close, lobes as closed_lobes, open, sampled_model, ClosedLoop, LobeCut,
+    attenuation, close, lobes_block as closed_lobes_block, open, sampled_model, ClosedLoop, LobeCut,
 };
 use crate::dynamics::control::design::{to_metres, CuttingCoupling, DesignPlant};
 use crate::dynamics::control::simulate::{
@@ -261,12 +263,45 @@ pub struct ControlLobesConfig {
     pub speeds_rpm: Vec<f64>,
     /// Semi-discretisation steps per tooth period.
     pub steps_per_period: usize,
-    /// CSV output.
+    /// CSV output (with `shard`: its file name names the CSV the merge writes).
     pub out: Option<PathBuf>,
     /// A Rerun recording of the open- and closed-loop lobes.
     pub rrd: Option<PathBuf>,
     /// Overwrite them.
     pub force: bool,
+    /// Compute only this shard of the speeds and write it for `merge`.
+    pub shard: Option<ShardOutput>,
+}
+
+/// What the report, the CSV and the recording of `lobes --controller` say besides the points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ControlLobesHead {
+    /// The plant's name.
+    pub plant_name: String,
+    /// The controller type as the file names it (`lqg`, `hinf`).
+    pub kind: String,
+    /// The design strategy, 1 or 2.
+    pub strategy: u8,
+    /// Where the controller file came from.
+    pub source: String,
+    /// Semi-discretisation steps per tooth period.
+    pub steps_per_period: usize,
+    /// Every spindle speed asked for, rpm, in order.
+    pub speeds_rpm: Vec<f64>,
+}
+
+impl ControlLobesHead {
+    /// The head of `cfg`.
+    pub fn of(cfg: &ControlLobesConfig) -> Self {
+        Self {
+            plant_name: cfg.file.plant.name.clone(),
+            kind: cfg.file.kind.clone(),
+            strategy: cfg.file.strategy,
+            source: cfg.source.clone(),
+            steps_per_period: cfg.steps_per_period,
+            speeds_rpm: cfg.speeds_rpm.clone(),
+        }
+    }
 }
 
 /// Deepest depth searched by the lobes, mm.
@@ -280,49 +315,70 @@ fn minimum(points: &[LobePoint]) -> Option<&LobePoint> {
         .min_by(|a, b| a.critical_depth_mm.total_cmp(&b.critical_depth_mm))
 }
 
-/// Open- and closed-loop lobes of the blade; prints both minima and the table, writes the CSV.
+/// Open- and closed-loop lobes of the blade; prints both minima and the table, writes the CSV;
+/// with a shard, computes that shard's speeds and writes them for `merge` instead
+/// ([`super::lobes_shard::control_lobes_shard`]).
 ///
 /// # Errors
 /// An unstable loop, an output that may not be written.
 pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
-    if let Some(path) = &cfg.out {
-        files::check_writable(path, cfg.force)?;
+    if let Some(target) = &cfg.shard {
+        return super::lobes_shard::control_lobes_shard(cfg, target, out);
     }
-    if let Some(path) = &cfg.rrd {
-        crate::record::check_rrd_path(path, cfg.force)?;
-    }
+    let outputs = LobesOutputs {
+        csv: cfg.out.as_deref(),
+        rrd: cfg.rrd.as_deref(),
+        force: cfg.force,
+    };
+    super::lobes::check_outputs(&outputs)?;
+    let [ol, cl] = lobes_block(cfg, 0..cfg.speeds_rpm.len())?
+        .map(|curve| curve.into_iter().flatten().collect::<Vec<_>>());
+    write_lobes(&ControlLobesHead::of(cfg), ol, cl, &outputs, out)
+}
+
+/// The open- and closed-loop lobe points of the block `block` of the speeds, one per speed
+/// (`None` without a boundary below 50 mm): the same bits as the whole list's.
+///
+/// # Errors
+/// An unstable loop, a bad plant or controller.
+pub fn lobes_block(
+    cfg: &ControlLobesConfig,
+    block: std::ops::Range<usize>,
+) -> Result<[Vec<Option<LobePoint>>; 2]> {
     let p = &cfg.file.plant;
     let bp = p.blade.plant()?;
     let k = cfg.file.state_space()?;
     let closed = close(&bp, &sampled_model(&k, p.sample_rate_hz)?)?;
     let cut = lobe_cut(p);
     let tol = (MAX_DEPTH_MM, DEPTH_TOL_MM);
-    let ol = closed_lobes(
-        &bp,
-        &open(&bp),
-        &cut,
-        &cfg.speeds_rpm,
-        tol,
-        cfg.steps_per_period,
-    )?;
-    let cl = closed_lobes(
-        &bp,
-        &closed,
-        &cut,
-        &cfg.speeds_rpm,
-        tol,
-        cfg.steps_per_period,
-    )?;
+    let (speeds, steps) = (&cfg.speeds_rpm, cfg.steps_per_period);
+    let ol = closed_lobes_block(&bp, &open(&bp), &cut, speeds, block.clone(), tol, steps)?;
+    let cl = closed_lobes_block(&bp, &closed, &cut, speeds, block, tol, steps)?;
+    Ok([ol, cl])
+}
+
+/// Prints the report of the open- (`ol`) and closed-loop (`cl`) lobes (both minima, their
+/// ratio and the table), writes the CSV and the recording.
+///
+/// # Errors
+/// A file that cannot be written.
+pub fn write_lobes(
+    head: &ControlLobesHead,
+    ol: Vec<LobePoint>,
+    cl: Vec<LobePoint>,
+    outputs: &LobesOutputs<'_>,
+    out: &mut dyn Write,
+) -> Result<()> {
     let mut text = String::new();
     writeln!(
         text,
         "vmc-twin lobes: {} with the {} controller (strategy {}) of {}, {} speeds, semi-discretisation with {} steps per tooth period",
-        p.name,
-        cfg.file.kind,
-        cfg.file.strategy,
-        cfg.source,
-        cfg.speeds_rpm.len(),
-        cfg.steps_per_period
+        head.plant_name,
+        head.kind,
+        head.strategy,
+        head.source,
+        head.speeds_rpm.len(),
+        head.steps_per_period
     )?;
     let (mo, mc) = (minimum(&ol), minimum(&cl));
     for (label, m) in [("open loop  ", mo), ("closed loop", mc)] {
@@ -354,8 +410,8 @@ pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
         "  {:>12} {:>16} {:>16}",
         "spindle_rpm", "open_depth_mm", "closed_depth_mm"
     )?;
-    let every = cfg.speeds_rpm.len().div_ceil(41).max(1);
-    for (i, &n) in cfg.speeds_rpm.iter().enumerate() {
+    let every = head.speeds_rpm.len().div_ceil(41).max(1);
+    for (i, &n) in head.speeds_rpm.iter().enumerate() {
         let (o, c) = (depth_at(&ol, n), depth_at(&cl, n));
         writeln!(csv, "{n},{},{}", fmt(o), fmt(c))?;
         if i % every == 0 {
@@ -363,11 +419,11 @@ pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
         }
     }
     out.write_all(text.as_bytes())?;
-    if let Some(path) = &cfg.out {
-        files::write_atomic(path, csv.as_bytes(), cfg.force)?;
+    if let Some(path) = outputs.csv {
+        files::write_atomic(path, csv.as_bytes(), outputs.force)?;
         writeln!(out, "wrote {}", path.display())?;
     }
-    if let Some(path) = &cfg.rrd {
+    if let Some(path) = outputs.rrd {
         use crate::record::chatter::{record_lobe_diagram, LobeCurve};
         let curves = [
             LobeCurve {
@@ -375,7 +431,7 @@ pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
                 points: ol,
             },
             LobeCurve {
-                name: format!("with {} (strategy {})", cfg.file.kind, cfg.file.strategy),
+                name: format!("with {} (strategy {})", head.kind, head.strategy),
                 points: cl,
             },
         ];
@@ -384,8 +440,8 @@ pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
              controller (closed-loop semi-discretisation, linear loop: no saturation).\n\n\
              ```text\n{text}```\n"
         );
-        let title = format!("vmc-twin lobes --controller {}", cfg.source);
-        let bytes = record_lobe_diagram(path, cfg.force, &title, &curves, &[], &md)?;
+        let title = format!("vmc-twin lobes --controller {}", head.source);
+        let bytes = record_lobe_diagram(path, outputs.force, &title, &curves, &[], &md)?;
         super::wrote_recording(out, path, bytes, "")?;
     }
     Ok(())

@@ -1,11 +1,11 @@
 //! `vmc-twin merge`: combines the shard results of a sharded command into what the unsharded
 //! command writes and prints. The shard folders are checked as a set first
 //! ([`crate::shard::check_set`]), then merged by the command their manifests name: `campaign`
-//! here, `select-sensors` in [`super::select_shard`]. The campaign's per-seed results are
-//! streamed from the files, one seed's results at a time: the training summaries, then the
-//! runs (the order of `report.json`), then the runs again as often as the summary's exact
-//! medians and percentiles need (once more for a few machines, two or three times for a large
-//! fleet), so the merge's memory does not grow with the runs it streams.
+//! here, `select-sensors` in [`super::select_shard`], `lobes` in [`super::lobes_shard`]. The
+//! campaign's per-seed results are streamed from the files, one seed's results at a time: the
+//! training summaries, then the runs (the order of `report.json`), then the runs again as often
+//! as the summary's exact medians and percentiles need (once more for a few machines, two or
+//! three times for a large fleet), so the merge's memory does not grow with the runs it streams.
 
 use std::cell::RefCell;
 use std::io::{BufRead, BufReader, Write};
@@ -48,7 +48,7 @@ pub fn merge(cfg: &MergeConfig, out: &mut dyn Write) -> Result<()> {
         let path = dir.join(MANIFEST_FILE);
         if !path.is_file() {
             bail!(
-                "{}: not a shard folder (no {MANIFEST_FILE}; a shard writes it: campaign --shard I/N --out DIR, select-sensors --shard I/N --shard-dir DIR)",
+                "{}: not a shard folder (no {MANIFEST_FILE}; a shard writes it: campaign --shard I/N --out DIR, select-sensors or lobes --shard I/N --shard-dir DIR)",
                 dir.display()
             );
         }
@@ -72,6 +72,7 @@ pub fn merge(cfg: &MergeConfig, out: &mut dyn Write) -> Result<()> {
             merge_campaign(cfg, header, &dirs, &seeds, out)
         }
         super::select_shard::COMMAND => super::select_shard::merge(cfg, first, &dirs, out),
+        super::lobes_shard::COMMAND => super::lobes_shard::merge(cfg, first, &dirs, out),
         other => bail!("shards of `{other}` cannot be merged by this version"),
     }
 }

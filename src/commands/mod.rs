@@ -13,6 +13,7 @@ pub mod identify;
 pub mod identify_thermal;
 pub mod interpret;
 pub mod lobes;
+pub mod lobes_shard;
 pub mod merge;
 pub mod probe_campaign;
 pub mod run;

@@ -3,9 +3,12 @@
 //! [`lobes`] returns, for each requested speed that has a boundary, the critical axial depth
 //! (the smallest unstable depth), the chatter frequency and the kind of stability loss.
 //! Depth search range: (0, 20 × the ZOA minimum depth]; tolerance 1e-3 × the ZOA minimum.
-//! SDM uses the boundary tracer of [`crate::milling`] (speeds in the given order, default
-//! 40 steps per period); ZOA the frequency scan of [`crate::zoa`] (always `Hopf`); the time
+//! SDM uses the boundary tracer of [`crate::milling`] (speeds in the given order, runs of
+//! [`crate::milling::TRACE_RUN`] speeds each starting from the ZOA minimum, default 40 steps
+//! per period); ZOA the frequency scan of [`crate::zoa`] (always `Hopf`); the time
 //! domain bisects the linear simulation of [`crate::time_domain`] (frequency from the spectrum).
+
+use std::ops::Range;
 
 use serde::{Deserialize, Serialize};
 
@@ -58,6 +61,25 @@ pub fn lobes(
     milling: Milling,
     speeds_rpm: &[f64],
 ) -> Result<Vec<LobePoint>, DynamicsError> {
+    let all = 0..speeds_rpm.len();
+    let points = lobes_block(method, tool, modes, immersion, milling, speeds_rpm, all)?;
+    Ok(points.into_iter().flatten().collect())
+}
+
+/// The lobe points of the block `block` of `speeds_rpm`, one per speed (`None` without a
+/// boundary in range), bit-identical to the same speeds' points of [`lobes`] over the whole
+/// list: ZOA and the time domain treat each speed on its own, SDM traces the block with
+/// [`MillingSdm::trace_block`] from the ZOA minimum depth. Every speed of the list is checked,
+/// so a block fails where the whole list would.
+pub fn lobes_block(
+    method: Method,
+    tool: &Tool,
+    modes: &TipModes,
+    immersion: f64,
+    milling: Milling,
+    speeds_rpm: &[f64],
+    block: Range<usize>,
+) -> Result<Vec<Option<LobePoint>>, DynamicsError> {
     for &n in speeds_rpm {
         crate::params::validate_speed(n)?;
     }
@@ -65,18 +87,28 @@ pub fn lobes(
     let (min_mm, _) = zoa.minimum_depth();
     let (max_mm, tol_mm) = (20.0 * min_mm, 1e-3 * min_mm);
     match method {
-        Method::Zoa => speeds_rpm
-            .iter()
-            .filter_map(|&n| zoa.critical_depth(n).transpose())
-            .collect(),
         Method::Sdm => MillingSdm::new(tool, modes, immersion, milling, SdmOptions::default())?
-            .trace(speeds_rpm, max_mm, tol_mm),
+            .trace_block(speeds_rpm, block, Some(min_mm), max_mm, tol_mm),
+        Method::Zoa => speeds_of(speeds_rpm, block)?
+            .iter()
+            .map(|&n| zoa.critical_depth(n))
+            .collect(),
         Method::Time => {
             let td = TimeDomain::new(tool, modes, immersion, milling, TimeOptions::default())?;
-            speeds_rpm
+            speeds_of(speeds_rpm, block)?
                 .iter()
-                .filter_map(|&n| td.critical_depth(n, max_mm, tol_mm).transpose())
+                .map(|&n| td.critical_depth(n, max_mm, tol_mm))
                 .collect()
         }
     }
+}
+
+/// The speeds of `block`, or the error of a block beyond the list.
+fn speeds_of(speeds_rpm: &[f64], block: Range<usize>) -> Result<&[f64], DynamicsError> {
+    let end = block.end;
+    speeds_rpm.get(block).ok_or(DynamicsError::TooManySteps {
+        name: "end of the block of speeds",
+        max: speeds_rpm.len(),
+        value: end,
+    })
 }

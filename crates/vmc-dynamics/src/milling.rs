@@ -21,8 +21,11 @@
 //! Critical depth at a speed: [`MillingSdm::grid_boundary`] scans a depth grid and returns the
 //! midpoint between the last stable and the first unstable depth; [`MillingSdm::trace`]
 //! follows the boundary from speed to speed, bracketing around the previous speed's depth and
-//! bisecting to a tolerance, which needs far fewer stability evaluations.
+//! bisecting to a tolerance, which needs far fewer stability evaluations. It starts afresh
+//! every [`TRACE_RUN`] speeds of the list, so that any block of the list can be traced on its
+//! own with the same result ([`MillingSdm::trace_block`]).
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::{Complex, DMatrix};
@@ -40,6 +43,13 @@ use crate::sdm::{
     chatter_frequency_hz, classify, critical_multiplier, monodromy_compact, monodromy_from,
     BoundaryKind, Step, StepRef,
 };
+
+/// Speeds over which [`MillingSdm::trace_block`] follows the boundary before it starts afresh.
+/// Following makes a speed's search cheap (its bracket starts at the depth of the speed before);
+/// fresh starts at fixed places of the list let any block of it be traced on its own, with at
+/// most `TRACE_RUN − 1` speeds before the block recomputed. (Figures in the decision record on
+/// lobe shards.)
+pub const TRACE_RUN: usize = 8;
 
 /// Fractions of the previous speed's critical depth probed for unstable islands.
 const ISLAND_PROBES: [f64; 2] = [0.55, 0.8];
@@ -248,24 +258,69 @@ impl MillingSdm {
 
     /// Boundary tracer: critical depth at each speed (in the given order) to within `tol_mm`,
     /// searching in (0, `max_depth_mm`]; speeds with no boundary below the maximum are omitted.
+    /// [`MillingSdm::trace_block`] over the whole list, each run starting from the whole range.
     pub fn trace(
         &self,
         speeds_rpm: &[f64],
         max_depth_mm: f64,
         tol_mm: f64,
     ) -> Result<Vec<LobePoint>, DynamicsError> {
+        let all = 0..speeds_rpm.len();
+        let points = self.trace_block(speeds_rpm, all, None, max_depth_mm, tol_mm)?;
+        Ok(points.into_iter().flatten().collect())
+    }
+
+    /// Boundary tracer over the block `block` of `speeds_rpm`: the critical depth at each of its
+    /// speeds to within `tol_mm`, searching in (0, `max_depth_mm`], `None` where no boundary
+    /// lies below the maximum. The list is traced in runs of [`TRACE_RUN`] speeds (from index
+    /// 0, 8, 16, … of the whole list): the first speed of a run searches from `start_mm`
+    /// (`None`: the whole range), every other speed from the depth of the one before it (the
+    /// whole range after a speed without a boundary). A block is traced from the first speed of
+    /// its first run, so its points are bit-identical to the same speeds' points in the trace
+    /// of the whole list, wherever the list is split.
+    ///
+    /// # Errors
+    /// A block beyond the list, a bad speed, depth range or tolerance.
+    pub fn trace_block(
+        &self,
+        speeds_rpm: &[f64],
+        block: Range<usize>,
+        start_mm: Option<f64>,
+        max_depth_mm: f64,
+        tol_mm: f64,
+    ) -> Result<Vec<Option<LobePoint>>, DynamicsError> {
         positive("max_depth_mm", max_depth_mm)?;
         positive("tol_mm", tol_mm)?;
-        let mut out = Vec::with_capacity(speeds_rpm.len());
-        let mut guess: Option<f64> = None;
-        for &n in speeds_rpm {
-            let s = self.at_speed(n)?;
-            match s.critical_depth(guess, max_depth_mm, tol_mm)? {
-                Some(p) => {
-                    guess = Some(p.critical_depth_mm);
-                    out.push(p);
-                }
-                None => guess = None,
+        if let Some(g) = start_mm {
+            positive("start_mm", g)?;
+        }
+        if block.end > speeds_rpm.len() {
+            return Err(DynamicsError::TooManySteps {
+                name: "end of the block of speeds",
+                max: speeds_rpm.len(),
+                value: block.end,
+            });
+        }
+        if block.start > block.end {
+            return Err(DynamicsError::TooFewSteps {
+                name: "end of the block of speeds",
+                min: block.start,
+                value: block.end,
+            });
+        }
+        let first = block.start - block.start % TRACE_RUN;
+        let mut out = Vec::with_capacity(block.len());
+        let mut guess = start_mm;
+        for (k, &n) in speeds_rpm.iter().enumerate().take(block.end).skip(first) {
+            if k % TRACE_RUN == 0 {
+                guess = start_mm;
+            }
+            let p = self
+                .at_speed(n)?
+                .critical_depth(guess, max_depth_mm, tol_mm)?;
+            guess = p.map(|p| p.critical_depth_mm);
+            if k >= block.start {
+                out.push(p);
             }
         }
         Ok(out)

@@ -19,6 +19,8 @@
 //! augmented system (structure + actuator + controller states) — the cutting force enters the
 //! blade's modes and the regenerative delay acts on the tip displacement only.
 
+use std::ops::Range;
+
 use nalgebra::{Complex, DMatrix};
 
 use super::blade::BladePlant;
@@ -237,8 +239,36 @@ pub fn lobes(
     if !closed.is_stable() {
         return Err(ControlError::UnstableLoop);
     }
+    let all = 0..speeds_rpm.len();
+    let tol = (max_depth_mm, tol_mm);
+    let points = lobes_block(plant, closed, cut, speeds_rpm, all, tol, steps_per_period)?;
+    Ok(points.into_iter().flatten().collect())
+}
+
+/// The closed-loop lobe points of the block `block` of `speeds_rpm`, one per speed (`None`
+/// without a boundary below `max_depth_mm`), bit-identical to the same speeds' points of
+/// [`lobes`] over the whole list (see [`MillingSdm::trace_block`]; each run of the trace starts
+/// from the whole depth range).
+pub fn lobes_block(
+    plant: &BladePlant,
+    closed: &ClosedLoop,
+    cut: &LobeCut,
+    speeds_rpm: &[f64],
+    block: Range<usize>,
+    (max_depth_mm, tol_mm): (f64, f64),
+    steps_per_period: usize,
+) -> Result<Vec<Option<LobePoint>>, ControlError> {
+    if !closed.is_stable() {
+        return Err(ControlError::UnstableLoop);
+    }
     let options = SdmOptions { steps_per_period };
-    Ok(sdm(plant, closed, cut, options)?.trace(speeds_rpm, max_depth_mm, tol_mm)?)
+    Ok(sdm(plant, closed, cut, options)?.trace_block(
+        speeds_rpm,
+        block,
+        None,
+        max_depth_mm,
+        tol_mm,
+    )?)
 }
 
 #[cfg(test)]
