@@ -12,6 +12,8 @@
 #
 # shards select-sensors over its compare seeds instead; the merge writes OUT/merged/sensors.toml
 # (the file name of -o) and, with --json, the JSON study; the report goes to OUT/summary.txt.
+# VMC_COMMAND=lobes shards lobes over its speeds; the merge writes OUT/merged/lobes.csv (or the
+# file name of --out) and the report to OUT/summary.txt.
 # (sbatch passes the environment, VMC_COMMAND included, to both jobs.)
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
