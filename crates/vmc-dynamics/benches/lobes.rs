@@ -5,9 +5,9 @@
 //! 2-core machine shared with other work; two runs, so figures vary with the load):
 //! * `sdm_grid_201x100` — full grid, 201 speeds (5000–13000 rpm) × 100 depths (0.15–15 mm),
 //!   m = 40, 20 100 stability evaluations: 0.84–0.89 s (≈ 43 µs per evaluation).
-//! * `sdm_tracer_201` — boundary tracer on the same speeds, tolerance 0.03 mm:
-//!   1 648 evaluations (12× fewer; within one grid cell of the grid's boundary at all 201
-//!   speeds, asserted in `tests/agreement.rs`): 52–84 ms.
+//! * `sdm_tracer_201` — boundary tracer on the same speeds, tolerance 0.03 mm, restarting
+//!   every 8 speeds: 1 424 evaluations (14× fewer; within one grid cell of the grid's boundary
+//!   at all 201 speeds, asserted in `tests/agreement.rs`): 24–26 ms (idle machine, one run).
 //! * `time_domain_400_teeth` — linear time-domain simulation, 400 tooth periods × 64 RK4
 //!   steps = 25 600 steps: 3.0–5.1 ms, i.e. 5.0–8.7 M RK4 steps/s = 78 000–135 000 tooth
 //!   passes/s (64 steps each); 3.18 ms (8.1 M steps/s) in a later run, after helical teeth were
