@@ -5,28 +5,8 @@
 mod common;
 
 use std::path::Path;
-use std::process::Output;
 
-use common::{vmc, TempDir};
-
-/// The standard output of a command that must succeed.
-fn ok(out: &Output, what: &str) -> String {
-    assert!(
-        out.status.success(),
-        "{what} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout.clone()).unwrap()
-}
-
-/// The standard error of a command that must fail.
-fn refused(out: &Output, what: &str) -> String {
-    assert!(!out.status.success(), "{what} was accepted");
-    let err = String::from_utf8(out.stderr.clone()).unwrap();
-    assert!(err.starts_with("vmc-twin: error: "), "{what}: {err}");
-    assert_eq!(err.lines().count(), 1, "{what}: one line: {err}");
-    err
-}
+use common::{ok, refused, vmc, TempDir};
 
 /// What the campaign prints, without the last line (which names the output folder).
 fn printed(stdout: &str) -> String {

@@ -7,28 +7,8 @@
 mod common;
 
 use std::path::Path;
-use std::process::Output;
 
-use common::{repo_file, vmc, TempDir};
-
-/// The standard output of a command that must succeed.
-fn ok(out: &Output, what: &str) -> String {
-    assert!(
-        out.status.success(),
-        "{what} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout.clone()).unwrap()
-}
-
-/// The standard error of a command that must fail.
-fn refused(out: &Output, what: &str) -> String {
-    assert!(!out.status.success(), "{what} was accepted");
-    let err = String::from_utf8(out.stderr.clone()).unwrap();
-    assert!(err.starts_with("vmc-twin: error: "), "{what}: {err}");
-    assert_eq!(err.lines().count(), 1, "{what}: one line: {err}");
-    err
-}
+use common::{ok, refused, repo_file, vmc, TempDir};
 
 /// What a command printed, without the lines naming the files it wrote.
 fn report(stdout: &str) -> String {

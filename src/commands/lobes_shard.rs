@@ -16,7 +16,7 @@
 //! speeds, and prints and writes them with the functions of the unsharded command: the report
 //! and the CSV are bit-identical to the unsharded run's.
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::ops::Range;
 use std::path::Path;
 
@@ -292,15 +292,10 @@ pub fn merge(
 fn read_points(dirs: &[&Path], speeds: &[f64], curves: usize) -> Result<Vec<Vec<LobePoint>>> {
     let mut expected = speeds.iter();
     let mut all: Vec<Vec<LobePoint>> = vec![Vec::new(); curves];
-    for dir in dirs {
-        let file = dir.join(POINTS_FILE);
-        let reader = BufReader::new(
-            std::fs::File::open(&file)
-                .with_context(|| format!("{}: cannot read shard results", file.display()))?,
-        );
-        for (k, line) in reader.lines().enumerate() {
-            let at = || format!("{} line {}", file.display(), k + 1);
-            let r: SpeedPoints = serde_json::from_str(&line.with_context(at)?).with_context(at)?;
+    let files = dirs.iter().map(|d| d.join(POINTS_FILE));
+    super::for_each_shard_line(
+        files,
+        |r: SpeedPoints, at| {
             let n = r.spindle_rpm;
             match expected.next() {
                 Some(&s) if s.to_bits() == n.to_bits() => {}
@@ -317,8 +312,10 @@ fn read_points(dirs: &[&Path], speeds: &[f64], curves: usize) -> Result<Vec<Vec<
             for (curve, p) in all.iter_mut().zip(r.points) {
                 curve.extend(p);
             }
-        }
-    }
+            Ok(())
+        },
+        |e| e,
+    )?;
     if let Some(s) = expected.next() {
         bail!("the shard results hold no points for speed {s} rpm");
     }

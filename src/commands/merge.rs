@@ -8,7 +8,7 @@
 //! three times for a large fleet), so the merge's memory does not grow with the runs it streams.
 
 use std::cell::RefCell;
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -193,18 +193,9 @@ impl SeedFiles {
         wrap: impl Fn(anyhow::Error) -> E,
     ) -> Result<(), E> {
         let mut expected = self.seeds.iter();
-        for file in &self.files {
-            let reader = BufReader::new(
-                std::fs::File::open(file)
-                    .with_context(|| format!("{}: cannot read shard results", file.display()))
-                    .map_err(&wrap)?,
-            );
-            for (k, line) in reader.lines().enumerate() {
-                let at = || format!("{} line {}", file.display(), k + 1);
-                let line = line.with_context(at).map_err(&wrap)?;
-                let r: SeedResults = serde_json::from_str(&line)
-                    .with_context(at)
-                    .map_err(&wrap)?;
+        super::for_each_shard_line(
+            self.files.iter().cloned(),
+            |r: SeedResults, at| {
                 match expected.next() {
                     Some(&s) if s == r.seed => {}
                     Some(&s) => {
@@ -222,9 +213,10 @@ impl SeedFiles {
                         )))
                     }
                 }
-                f(&r)?;
-            }
-        }
+                f(&r)
+            },
+            &wrap,
+        )?;
         match expected.next() {
             Some(s) => Err(wrap(anyhow::anyhow!(
                 "the shard results hold no results for seed {s}"

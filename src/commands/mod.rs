@@ -152,6 +152,36 @@ pub fn check_distinct_seeds(option: &str, seeds: &[u64]) -> Result<()> {
     Ok(())
 }
 
+/// Reads the result files of shards (JSON lines), in order, and hands each line parsed as a `T`
+/// to `f` with where it came from (`FILE line K`, for messages); a problem of the files becomes
+/// an `E` through `wrap`.
+///
+/// # Errors
+/// An unreadable file or line, a line that is not a `T`, and `f`'s errors.
+pub(crate) fn for_each_shard_line<T: serde::de::DeserializeOwned, E>(
+    files: impl IntoIterator<Item = PathBuf>,
+    mut f: impl FnMut(T, &dyn Fn() -> String) -> Result<(), E>,
+    wrap: impl Fn(anyhow::Error) -> E,
+) -> Result<(), E> {
+    use std::io::BufRead;
+    for file in files {
+        let reader = std::io::BufReader::new(
+            std::fs::File::open(&file)
+                .with_context(|| format!("{}: cannot read shard results", file.display()))
+                .map_err(&wrap)?,
+        );
+        for (k, line) in reader.lines().enumerate() {
+            let at = || format!("{} line {}", file.display(), k + 1);
+            let line = line.with_context(at).map_err(&wrap)?;
+            let r: T = serde_json::from_str(&line)
+                .with_context(at)
+                .map_err(&wrap)?;
+            f(r, &at)?;
+        }
+    }
+    Ok(())
+}
+
 /// Says which recording was written and its size (`wrote FILE (x.xx MB<extra>)`).
 ///
 /// # Errors

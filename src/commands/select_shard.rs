@@ -15,7 +15,7 @@
 //! seeds, and writes the sensor set and the JSON study with the writers the unsharded command
 //! uses: the outputs are bit-identical to the unsharded run's.
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
@@ -260,15 +260,10 @@ fn read_selection(dirs: &[&Path]) -> Result<SelectionPart> {
 fn read_runs(dirs: &[&Path], seeds: &[u64], sets: usize) -> Result<Vec<SeedRuns>> {
     let mut expected = seeds.iter();
     let mut all = Vec::with_capacity(seeds.len());
-    for dir in dirs {
-        let file = dir.join(COMPARE_FILE);
-        let reader = BufReader::new(
-            std::fs::File::open(&file)
-                .with_context(|| format!("{}: cannot read shard results", file.display()))?,
-        );
-        for (k, line) in reader.lines().enumerate() {
-            let at = || format!("{} line {}", file.display(), k + 1);
-            let r: SeedRuns = serde_json::from_str(&line.with_context(at)?).with_context(at)?;
+    let files = dirs.iter().map(|d| d.join(COMPARE_FILE));
+    super::for_each_shard_line(
+        files,
+        |r: SeedRuns, at| {
             match expected.next() {
                 Some(&s) if s == r.seed => {}
                 Some(&s) => bail!("{}: seed {}, expected seed {s}", at(), r.seed),
@@ -282,8 +277,10 @@ fn read_runs(dirs: &[&Path], seeds: &[u64], sets: usize) -> Result<Vec<SeedRuns>
                 );
             }
             all.push(r);
-        }
-    }
+            Ok(())
+        },
+        |e| e,
+    )?;
     if let Some(s) = expected.next() {
         bail!("the shard results hold no runs for compare seed {s}");
     }

@@ -53,3 +53,22 @@ pub fn vmc(cwd: &Path, args: &[&str]) -> Output {
         .output()
         .expect("the vmc-twin binary starts")
 }
+
+/// The standard output of a command that must succeed.
+pub fn ok(out: &Output, what: &str) -> String {
+    assert!(
+        out.status.success(),
+        "{what} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout.clone()).unwrap()
+}
+
+/// The standard error of a command that must fail: one line, `vmc-twin: error: …`.
+pub fn refused(out: &Output, what: &str) -> String {
+    assert!(!out.status.success(), "{what} was accepted");
+    let err = String::from_utf8(out.stderr.clone()).unwrap();
+    assert!(err.starts_with("vmc-twin: error: "), "{what}: {err}");
+    assert_eq!(err.lines().count(), 1, "{what}: one line: {err}");
+    err
+}
