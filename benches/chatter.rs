@@ -16,10 +16,10 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 
-use vmc_twin::chatter::stock_file::StockSpec;
-use vmc_twin::chatter::{check, ChatterOptions};
-use vmc_twin::interp::{run_program, InterpConfig};
-use vmc_twin::milling::ToolDynamics;
+use vmc_gcode::interp::{run_program, InterpConfig};
+use vmc_machine::milling::ToolDynamics;
+use vmc_twin::studies::chatter::stock_file::StockSpec;
+use vmc_twin::studies::chatter::{check, ChatterOptions};
 
 const PROGRAM: &str = include_str!("../trajectories/pocket_chatter.ngc");
 const STOCK: &str = include_str!("../trajectories/pocket_chatter.stock.toml");

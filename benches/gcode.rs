@@ -9,10 +9,10 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 
+use vmc_gcode::interp::{run_program, InterpConfig};
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::program::plan_source_unchecked;
 use vmc_twin::benchmark::finishing_program;
-use vmc_twin::interp::{run_program, InterpConfig};
-use vmc_twin::machine::MachineSpec;
-use vmc_twin::program::plan_source_unchecked;
 
 fn gcode_1mb(c: &mut Criterion) {
     let (text, _) = finishing_program(1 << 20);

@@ -23,13 +23,13 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 
-use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::thermal::Activity;
+use vmc_machine::twin::Twin;
 use vmc_twin::predict::controller::{Compensator, Controller};
 use vmc_twin::predict::dataset::Dataset;
 use vmc_twin::predict::predictor::{self, AnyPredictor, Settings};
-use vmc_twin::thermal::Activity;
-use vmc_twin::twin::Twin;
+use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
 
 /// The reference machine and its calibration dataset (machine seed 1).
 fn reference_calibration() -> (MachineSpec, Dataset) {
@@ -103,7 +103,7 @@ fn campaign_one_seed(c: &mut Criterion) {
     g.bench_function("one_seed", |b| {
         b.iter(|| {
             black_box(
-                vmc_twin::study::run_campaign(&spec, &[1], &Settings::default())
+                vmc_twin::studies::campaign::run_campaign(&spec, &[1], &Settings::default())
                     .unwrap()
                     .0
                     .runs

@@ -6,12 +6,12 @@
 //! The truth printed is the twin's error functions, without the approach: the predictor learns
 //! the positive approach, which lies half a reversal above them in the axis's own positioning
 //! error (0.25–0.3 µm on the reference machine).
-use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::twin::Twin;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
-use vmc_twin::study::follow_to_state;
-use vmc_twin::study::ForMachine;
-use vmc_twin::twin::Twin;
+use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::studies::campaign::follow_to_state;
+use vmc_twin::studies::campaign::ForMachine;
 
 fn main() {
     let a: Vec<u64> = std::env::args()

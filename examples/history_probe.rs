@@ -1,9 +1,9 @@
 //! Diagnosis: validation RMSE (calibration cycles only) of each hybrid network for several
 //! history-feature settings.
 //! `cargo run --release --example history_probe -- SEED`
-use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, Settings};
+use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
 
 fn main() {
     let seed: u64 = std::env::args()

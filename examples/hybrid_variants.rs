@@ -9,11 +9,11 @@
 //! `plan=full|noaxes|nosweep|noshops|combined` the calibration plan) and campaign settings
 //! (`every=`, `stoplog=`, `stopevery=`, `spevery=`, s).
 //! Prints per seed the kept nets, then the headline figures and the eight worst runs.
-use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, ModelKind, Settings};
-use vmc_twin::study::ForMachine;
-use vmc_twin::study::{self, diagonal_plans};
+use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::studies::campaign::ForMachine;
+use vmc_twin::studies::campaign::{self, diagonal_plans};
 
 #[path = "shared/dev_states.rs"]
 mod dev_states;
@@ -137,7 +137,7 @@ fn main() {
             })
             .collect();
         let states = if dev {
-            let mut v = vmc_twin::placement::validation_states(seed);
+            let mut v = vmc_twin::studies::placement::validation_states(seed);
             v.extend(dev_stress_states());
             v
         } else {

@@ -13,13 +13,13 @@
 //! `cargo run --release --example residual_breakdown -- 1 2 3` (add `dev` for the selection-only
 //! states, `rpm` for the opt-in commanded spindle speed, `--spindle-speed`)
 
-use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::twin::{sub_seed, Twin};
 use vmc_twin::predict::predictor::{self, ErrorPredictor, Settings};
 use vmc_twin::predict::synthesis::first_order_error_mm;
-use vmc_twin::study::follow_to_state;
-use vmc_twin::study::ForMachine;
-use vmc_twin::twin::{sub_seed, Twin};
+use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::studies::campaign::follow_to_state;
+use vmc_twin::studies::campaign::ForMachine;
 
 #[path = "shared/dev_states.rs"]
 mod dev_states;
@@ -86,7 +86,7 @@ fn main() {
             "|E|-sp"
         );
         let states = if dev {
-            let mut v = vmc_twin::placement::validation_states(seed);
+            let mut v = vmc_twin::studies::placement::validation_states(seed);
             v.extend(dev_states::dev_stress_states());
             v
         } else {
@@ -104,7 +104,7 @@ fn main() {
             // At the state and over the next 90 s with the spindle stopped (a diagonal test).
             for step in 0..4 {
                 if step > 0 {
-                    let stopped = vmc_twin::thermal::Activity {
+                    let stopped = vmc_machine::thermal::Activity {
                         spindle_rpm: 0.0,
                         axis_pos_mm: grid[13],
                         axis_speed_mm_per_min: [0.0; 3],

@@ -1,7 +1,7 @@
 //! 8 h of machine time with an XY diagonal every 30 min at 1 ms (the `machine_8h_with_diagonals`
 //! benchmark, once): for profilers (`valgrind --tool=callgrind`, `perf record`).
+use vmc_machine::machine::MachineSpec;
 use vmc_twin::benchmark;
-use vmc_twin::machine::MachineSpec;
 
 fn main() {
     let spec = MachineSpec::reference();

@@ -13,11 +13,11 @@
 //!   commanded, shown to say what it is worth (the hybrid takes it with `--spindle-speed`).
 //!
 //! `cargo run --release --example spindle_probe -- SEED`
-use vmc_twin::calibration::{self, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::twin::{sub_seed, Twin};
 use vmc_twin::predict::linreg::LinearModel;
 use vmc_twin::predict::nn::Samples;
-use vmc_twin::twin::{sub_seed, Twin};
+use vmc_twin::studies::calibration::{self, ThermalCycle};
 
 const SPEED_TAUS_S: [f64; 3] = [120.0, 600.0, 1800.0];
 const NOSE_TAU_S: f64 = 300.0;
@@ -29,7 +29,7 @@ struct NoseFilter {
     last_s: f64,
 }
 
-impl vmc_twin::sim::Controller for NoseFilter {
+impl vmc_machine::sim::Controller for NoseFilter {
     fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
         p_mm
     }
@@ -137,7 +137,7 @@ fn main() {
     let train = collect(&ThermalCycle::calibration_plan(&spec), 0);
     let mut test_cycles = ThermalCycle::evaluation_set(seed);
     test_cycles.extend(
-        vmc_twin::placement::validation_states(seed)
+        vmc_twin::studies::placement::validation_states(seed)
             .into_iter()
             .map(|s| s.cycle),
     );

@@ -11,11 +11,11 @@
 //!
 //! `cargo run --release --example travel_probe -- SEED [every=MIN] [noise=µm]` — `every=30
 //! noise=0.3` thins and blurs the training samples like the campaign's laser blocks.
-use vmc_twin::calibration::{self, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::twin::{sub_seed, Twin};
 use vmc_twin::predict::linreg::LinearModel;
 use vmc_twin::predict::nn::Samples;
-use vmc_twin::twin::{sub_seed, Twin};
+use vmc_twin::studies::calibration::{self, ThermalCycle};
 
 const TAUS_S: [f64; 2] = [1200.0, 3600.0];
 
@@ -131,7 +131,7 @@ fn main() {
         .collect();
     let mut test_cycles = ThermalCycle::evaluation_set(seed);
     test_cycles.extend(
-        vmc_twin::placement::validation_states(seed)
+        vmc_twin::studies::placement::validation_states(seed)
             .into_iter()
             .map(|s| s.cycle),
     );

@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
 # Regenerates the expected canonical output of LinuxCNC's stand-alone interpreter for every
-# example program in tests/data/linuxcnc/nc_files (recursively):
-#   tests/data/linuxcnc/rs274-expected/<relative path>.out   program accepted: rs274 -g output
-#   tests/data/linuxcnc/rs274-expected/REFUSED.txt           program refused: path and error line
+# example program in crates/vmc-gcode/tests/data/linuxcnc/nc_files (recursively):
+#   crates/vmc-gcode/tests/data/linuxcnc/rs274-expected/<relative path>.out   program accepted: rs274 -g output
+#   crates/vmc-gcode/tests/data/linuxcnc/rs274-expected/REFUSED.txt           program refused: path and error line
 # and the output for the CAM-style example trajectories/cam_pocket_drill.ngc (tests/data/cam/).
-# The tool table tests/data/linuxcnc/tool.tbl is in inches, as rs274 reads it without an INI
-# file. In mm: T1 Ø12 × 150 long, T2 Ø6 × 100, T3 Ø3 × 80, T4 Ø20 × 120 (tests/linuxcnc_corpus.rs
+# The tool table crates/vmc-gcode/tests/data/linuxcnc/tool.tbl is in inches, as rs274 reads it without an INI
+# file. In mm: T1 Ø12 × 150 long, T2 Ø6 × 100, T3 Ø3 × 80, T4 Ø20 × 120 (crates/vmc-gcode/tests/linuxcnc_corpus.rs
 # gives our interpreter the same tools).
 # Needs LinuxCNC's `rs274` (default /usr/bin/rs274; override with RS274=...).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RS274=${RS274:-/usr/bin/rs274}
-corpus=tests/data/linuxcnc
+corpus=crates/vmc-gcode/tests/data/linuxcnc
 src=$corpus/nc_files
 dst=$corpus/rs274-expected
 tools=$(realpath $corpus/tool.tbl)

@@ -9,15 +9,15 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::calibration::{self, CampaignConfig, ThermalCycle};
-use crate::machine::MachineSpec;
 use crate::predict::controller::{Compensator, Controller};
 use crate::predict::predictor::{self, Settings};
-use crate::program;
-use crate::sim::{self, SampleMode, SimConfig, SimError};
-use crate::study::ForMachine;
-use crate::study::{self, EvalError};
-use crate::twin::Twin;
+use crate::studies::calibration::{self, CampaignConfig, ThermalCycle};
+use crate::studies::campaign::ForMachine;
+use crate::studies::campaign::{self, EvalError};
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::program;
+use vmc_machine::sim::{self, SampleMode, SimConfig, SimError};
+use vmc_machine::twin::Twin;
 
 /// One measured row: what, the figure, its unit.
 #[derive(Debug, Clone)]
@@ -115,7 +115,7 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
 pub fn workload_8h(
     spec: &MachineSpec,
     interp_ms: f64,
-) -> Result<(crate::motion::Plan, ThermalCycle, SimConfig), EvalError> {
+) -> Result<(vmc_machine::motion::Plan, ThermalCycle, SimConfig), EvalError> {
     let plan = program::plan_source(
         include_str!("../trajectories/diag_xy.ngc"),
         "diag_xy.ngc",
@@ -136,7 +136,7 @@ pub fn workload_8h(
 /// Simulation errors.
 pub fn run_8h(
     spec: &MachineSpec,
-    workload: &(crate::motion::Plan, ThermalCycle, SimConfig),
+    workload: &(vmc_machine::motion::Plan, ThermalCycle, SimConfig),
 ) -> Result<usize, EvalError> {
     let (plan, cycle, cfg) = workload;
     let mut twin = Twin::new(spec, 1)?;
@@ -239,12 +239,12 @@ pub fn finishing_program(min_bytes: usize) -> (String, usize) {
 /// The program refused (a defect), the temporary file for `rs274` not writable.
 pub fn gcode_1mb(spec: &MachineSpec, repeats: usize) -> anyhow::Result<GcodeTimes> {
     let (text, lines) = finishing_program(1 << 20);
-    let cfg = crate::interp::InterpConfig::default();
+    let cfg = vmc_gcode::interp::InterpConfig::default();
     let mut interp_s = Vec::new();
     let mut plan_s = Vec::new();
     for _ in 0..repeats.max(1) {
         let t0 = Instant::now();
-        std::hint::black_box(crate::interp::run_program(&text, &cfg)?);
+        std::hint::black_box(vmc_gcode::interp::run_program(&text, &cfg)?);
         interp_s.push(t0.elapsed().as_secs_f64());
         let t0 = Instant::now();
         let plan = program::plan_source_unchecked(&text, "finishing.ngc", spec, spec.axes.home_mm)?;

@@ -1,72 +1,15 @@
-//! Files: reading text, checking outputs before any work, and writing atomically.
+//! Files the application writes: checking outputs before any work, and writing atomically.
 //!
-//! Every file the tool reads goes through [`read_text`] (UTF-8 errors name line and column);
-//! every file it writes goes through [`write_atomic`] (temporary file in the same folder, then
-//! rename), and an existing file is never replaced unless the caller allows it (`--force`).
+//! Every file the tool writes goes through [`write_atomic`] (temporary file in the same folder,
+//! then rename), and an existing file is never replaced unless the caller allows it (`--force`).
 //! Outputs are checked with [`check_writable`] / [`prepare_output_folder`] before any
-//! simulation starts, so a wrong path costs no minutes of work.
+//! simulation starts, so a wrong path costs no minutes of work. Reading is
+//! `vmc_machine::read`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use thiserror::Error;
-
-/// Reads a text file; bytes that are not UTF-8 are an `InvalidData` error naming their line,
-/// column and value (instead of the standard library's location-free message).
-pub fn read_text(path: &Path) -> std::io::Result<String> {
-    let bytes = std::fs::read(path)?;
-    String::from_utf8(bytes).map_err(|e| {
-        let bad_at = e.utf8_error().valid_up_to();
-        let bytes = e.as_bytes();
-        let before = &bytes[..bad_at];
-        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        // Characters (not bytes) before the bad byte on its line; the prefix is valid UTF-8.
-        let col = 1 + String::from_utf8_lossy(&before[line_start..])
-            .chars()
-            .count();
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "not UTF-8 text: line {line}, column {col}: byte 0x{:02X}",
-                bytes[bad_at]
-            ),
-        )
-    })
-}
-
-/// Reads a text file, naming the file and what it holds in the error
-/// (`FILE: cannot read WHAT: why`).
-///
-/// # Errors
-/// [`ReadError`] when the file cannot be read or is not UTF-8.
-pub fn read_named(path: &Path, what: &'static str) -> Result<String, ReadError> {
-    read_text(path).map_err(|err| ReadError {
-        path: path.to_path_buf(),
-        what,
-        err,
-    })
-}
-
-/// A TOML parser's message on one line (it spans several, with a caret under the column).
-pub fn one_line_toml_error(e: &toml::de::Error) -> String {
-    e.to_string().trim_end().replace('\n', " ")
-}
-
-/// A file could not be read.
-#[derive(Debug, Error)]
-#[error("{}: cannot read {what}: {err}", path.display())]
-pub struct ReadError {
-    /// The file.
-    pub path: PathBuf,
-    /// What it should hold (e.g. `dataset`).
-    pub what: &'static str,
-    /// Why.
-    pub err: std::io::Error,
-}
 
 /// A file could not be written.
 #[derive(Debug, Error)]
@@ -215,20 +158,6 @@ mod tests {
                 missing.display(),
                 dir.join("no-such-folder").display()
             )
-        );
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn a_file_that_is_not_utf8_is_refused_with_its_line_and_column() {
-        let dir = std::env::temp_dir().join(format!("vmc-files-test-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let f = dir.join("bad.ngc");
-        std::fs::write(&f, b"G0 X1\nG1 X\xE92\n").unwrap();
-        let e = read_named(&f, "program").unwrap_err().to_string();
-        assert!(
-            e.ends_with("cannot read program: not UTF-8 text: line 2, column 5: byte 0xE9"),
-            "{e}"
         );
         std::fs::remove_dir_all(&dir).unwrap();
     }

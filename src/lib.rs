@@ -1,42 +1,25 @@
-//! vmc-twin: a digital twin of a 3-axis vertical machining center.
+//! vmc-twin: the application — command line, use cases, studies, recordings and reports.
 //!
-//! Truth side (this crate): [`machine`] descriptions, [`kinematics`] (full HTM product),
-//! the geometric [`errors`] field, the [`thermal`] network, [`sensors`], the [`twin`] that ties
-//! them together, the G-code front end ([`gcode`] syntax, [`interp`] semantics), the [`motion`]
-//! planner, the [`sim`] loop, [`report`]s, Rerun [`record`]ings and [`progress`] bars. Knowledge side: the `vmc-predict` crate, re-exported
-//! as [`predict`]; it does not depend on this crate (the information boundary, docs/architecture.md).
+//! The workspace's crates are its sides (docs/architecture.md):
+//! - `vmc-gcode`: RS274/NGC syntax and the modal interpreter, knowing no machine;
+//! - `vmc-machine`: the simulated machine, the truth side;
+//! - `vmc-predict`, `vmc-identify`, `vmc-dynamics`: the knowledge side (error prediction and
+//!   compensation, five-axis identification, milling dynamics and chatter control), re-exported
+//!   here as [`predict`], [`identify`] and [`dynamics`]; none depends on the machine;
+//! - this crate: the [`cli`] and its [`commands`] (the use cases), the [`studies`], Rerun
+//!   [`record`]ings, [`report`]s, [`shard`]s of a study and their merge, output [`files`],
+//!   [`progress`] bars and the [`benchmark`] figures. It is the only crate that knows Rerun,
+//!   output files and terminals.
 pub use vmc_dynamics as dynamics;
 pub use vmc_identify as identify;
 pub use vmc_predict as predict;
 
 pub mod benchmark;
-pub mod blade;
-pub mod calibration;
-pub mod chatter;
 pub mod cli;
-pub mod collision;
-pub mod collision_spec;
 pub mod commands;
-pub mod cutting;
-pub mod errors;
 pub mod files;
-pub mod fiveaxis;
-pub mod gcode;
-pub mod instruments;
-pub mod interp;
-pub mod kinematics;
-pub mod machine;
-pub mod milling;
-pub mod motion;
-pub mod placement;
-pub mod program;
 pub mod progress;
 pub mod record;
 pub mod report;
-pub mod sensors;
 pub mod shard;
-pub mod sim;
-pub mod study;
-pub mod thermal;
-pub mod tools;
-pub mod twin;
+pub mod studies;

@@ -40,12 +40,12 @@ fn run(command: Command) -> Result<()> {
             commands::identify_thermal::identify_thermal(&args.config()?, out)
         }
         Command::SelectSensors(args) => {
-            commands::select_sensors::select_sensors(&args.config()?, out)
+            commands::select_sensors_whole_or_shard(&args.config()?, out)
         }
         Command::Check(args) => commands::check::check(&args.config()?, out),
         Command::Lobes(args) => match args.controller_config()? {
-            Some(cfg) => commands::control::lobes(&cfg, out),
-            None => commands::lobes::lobes(&args.config()?, out),
+            Some(cfg) => commands::control_lobes_whole_or_shard(&cfg, out),
+            None => commands::lobes_whole_or_shard(&args.config()?, out),
         },
         Command::Cut(args) => match args.controller_config()? {
             Some(cfg) => commands::control::cut(&cfg, out),

@@ -2,16 +2,16 @@
 //! or redirected output stays clean.
 //!
 //! [`Progress`] serves both the campaign (work units through
-//! [`crate::study::CampaignProgress`], from parallel runs) and a single run (as a
-//! [`crate::sim::Observer`], its position the simulated time in seconds).
+//! [`crate::studies::campaign::CampaignProgress`], from parallel runs) and a single run (as a
+//! [`vmc_machine::sim::Observer`], its position the simulated time in seconds).
 
 use std::io::IsTerminal;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::sensors::SensorReadings;
-use crate::sim::{Observer, RunStart};
-use crate::study::CampaignProgress;
+use crate::studies::campaign::CampaignProgress;
+use vmc_machine::sensors::SensorReadings;
+use vmc_machine::sim::{Observer, RunStart};
 
 /// A progress bar on stderr (hidden unless stderr is a terminal).
 pub struct Progress {

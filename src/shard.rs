@@ -15,6 +15,7 @@
 
 use std::fmt;
 use std::ops::Range;
+use std::path::PathBuf;
 use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
@@ -345,6 +346,22 @@ fn differing_inputs(a: &[InputFingerprint], b: &[InputFingerprint]) -> String {
         }
     }
     names.join(", ")
+}
+
+/// What to merge, validated.
+pub struct MergeConfig {
+    /// The shard folders (each with its `shard.json`), in any order.
+    pub shard_dirs: Vec<PathBuf>,
+    /// Folder for the merged results.
+    pub out_dir: PathBuf,
+    /// Overwrite existing output files.
+    pub force: bool,
+    /// Print the per-run table too (campaign).
+    pub print_runs: bool,
+    /// A Rerun recording of the fleet's histograms and the summary.
+    pub rrd: Option<PathBuf>,
+    /// A PNG picture of the fleet's histograms.
+    pub png: Option<PathBuf>,
 }
 
 #[cfg(test)]

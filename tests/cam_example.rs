@@ -9,8 +9,8 @@ use std::process::Command;
 
 mod common;
 use common::rs274::{compare, ours, parse_expected, rs274_binary, run_rs274};
+use vmc_gcode::interp::{run_program, InterpConfig};
 use vmc_twin::commands::interpret::load_tools;
-use vmc_twin::interp::{run_program, InterpConfig};
 
 const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
 const PROGRAM: &str = "trajectories/cam_pocket_drill.ngc";

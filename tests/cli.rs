@@ -270,7 +270,7 @@ fn out_writes_samples_and_summary_and_never_overwrites_without_force() {
     let t = csv.col("time_s");
     assert!(t.windows(2).all(|w| w[1] > w[0]), "time increases: {t:?}");
     // One column per sensor of the machine, in its order, in °C.
-    let sensors: Vec<String> = vmc_twin::machine::MachineSpec::reference()
+    let sensors: Vec<String> = vmc_machine::machine::MachineSpec::reference()
         .sensors
         .iter()
         .map(|s| format!("{}_degc", s.name))

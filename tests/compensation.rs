@@ -10,11 +10,11 @@
 //! inputs frozen at a cold reading (so it knows only the cold geometry) does not reach 80 % on
 //! the warm runs.
 
-use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
 use vmc_twin::predict::predictor::{self, ErrorPredictor, HybridPredictor, ModelKind, Settings};
-use vmc_twin::study::ForMachine;
-use vmc_twin::study::{self, RunReport};
+use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
+use vmc_twin::studies::campaign::ForMachine;
+use vmc_twin::studies::campaign::{self, RunReport};
 
 const SEEDS: [u64; 3] = [1, 2, 3];
 

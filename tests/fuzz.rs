@@ -14,10 +14,10 @@
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
-use vmc_twin::collision::{self, FixtureSpec, Scene};
-use vmc_twin::machine::{MachineSpec, REFERENCE_TOML};
-use vmc_twin::motion::MAX_PLAN_DURATION_S;
-use vmc_twin::program::{self, ProgramError};
+use vmc_machine::collision::{self, FixtureSpec, Scene};
+use vmc_machine::machine::{MachineSpec, REFERENCE_TOML};
+use vmc_machine::motion::MAX_PLAN_DURATION_S;
+use vmc_machine::program::{self, ProgramError};
 
 const VISE: &str = include_str!("data/collision/vise.toml");
 
@@ -303,16 +303,16 @@ fn mutated_real_programs_never_panic_hang_or_reject_without_a_location() {
 fn machine_file(text: &str) -> Result<(), TestCaseError> {
     match MachineSpec::from_toml_str(text, "m.toml") {
         Ok(spec) => {
-            if let Ok(mut twin) = vmc_twin::twin::Twin::new(&spec, 1) {
+            if let Ok(mut twin) = vmc_machine::twin::Twin::new(&spec, 1) {
                 let prog = "G0 X10 Y10 Z-10\nG4 P2\nM30";
                 if let Ok(plan) = program::plan_source(prog, "p.ngc", &spec, spec.axes.home_mm) {
-                    let cfg = vmc_twin::sim::SimConfig::default().with_thermal_part(true);
-                    let _ = vmc_twin::sim::execute(
+                    let cfg = vmc_machine::sim::SimConfig::default().with_thermal_part(true);
+                    let _ = vmc_machine::sim::execute(
                         &mut twin,
                         &plan,
                         &cfg,
                         None,
-                        &mut vmc_twin::sim::NullObserver,
+                        &mut vmc_machine::sim::NullObserver,
                     );
                 }
             }
@@ -438,7 +438,7 @@ fn mutated_fixtures_never_panic_and_name_the_field() {
 /// A small real dataset: every 25th record of the reference machine's calibration campaign
 /// (all instruments, every cycle), as the CSV `calibrate` writes.
 fn small_dataset_csv() -> String {
-    use vmc_twin::calibration::{self, CampaignConfig, ThermalCycle};
+    use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
     let spec = MachineSpec::reference();
     let mut ds = calibration::calibrate(
         &spec,

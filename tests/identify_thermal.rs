@@ -5,12 +5,12 @@
 
 use std::fmt::Write as _;
 
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::thermal::{Activity, ThermalNetwork, ThermalSpec};
 use vmc_twin::commands::identify_thermal::fragment::{self, Fragment, Meta};
-use vmc_twin::machine::MachineSpec;
 use vmc_twin::predict::rc_identify::{
     identify, Mode, RcData, RcFit, RcSettings, BEARING_W_PER_KRPM_N_MM,
 };
-use vmc_twin::thermal::{Activity, ThermalNetwork, ThermalSpec};
 
 mod common;
 use common::*;

@@ -1,12 +1,17 @@
-//! The information boundary (docs/architecture.md), checked: the knowledge side (`vmc-predict`: predictors,
-//! controller, synthesis, datasets; `vmc-identify`: five-axis identification) cannot reach the twin's internals because it does not depend
-//! on the twin crate — and cannot, since the twin crate depends on it (Cargo forbids cycles).
-//! This test fails if someone adds such a dependency or names the twin in its sources.
+//! The information boundary (docs/architecture.md), checked: the knowledge side (`vmc-predict`:
+//! predictors, controller, synthesis, datasets; `vmc-identify`: five-axis identification;
+//! `vmc-dynamics`: milling dynamics and chatter control) cannot reach the machine's truth because
+//! it depends neither on the machine crate (`vmc-machine`) nor on the application
+//! (`vmc-twin`) — and cannot, since both depend on it (Cargo forbids cycles). This test fails
+//! if someone adds such a dependency or names either crate in the knowledge side's sources.
 
 use std::path::Path;
 
 /// The crates of the knowledge side.
-const KNOWLEDGE_CRATES: [&str; 2] = ["vmc-predict", "vmc-identify"];
+const KNOWLEDGE_CRATES: [&str; 3] = ["vmc-predict", "vmc-identify", "vmc-dynamics"];
+
+/// The crates of the truth side and the application, which the knowledge side must not name.
+const TRUTH_CRATES: [&str; 2] = ["vmc-machine", "vmc-twin"];
 
 #[test]
 fn the_identification_crate_depends_only_on_numerics() {
@@ -34,7 +39,7 @@ fn dependency_names(t: &toml::Table) -> Vec<String> {
 }
 
 #[test]
-fn the_knowledge_crate_does_not_depend_on_the_twin() {
+fn the_knowledge_crates_do_not_depend_on_the_machine_or_the_application() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for krate in KNOWLEDGE_CRATES {
         let m = manifest(&root.join(format!("crates/{krate}/Cargo.toml")));
@@ -42,11 +47,11 @@ fn the_knowledge_crate_does_not_depend_on_the_twin() {
         assert!(!deps.is_empty());
         for d in &deps {
             assert!(
-                !d.contains("vmc-twin") && !d.contains("vmc_twin"),
+                !TRUTH_CRATES.contains(&d.replace('_', "-").as_str()),
                 "{krate} depends on {d}"
             );
         }
-        // And the twin depends on the knowledge crate (the only allowed direction).
+        // And the application depends on the knowledge crate (the only allowed direction).
         let twin = manifest(&root.join("Cargo.toml"));
         assert!(dependency_names(&twin).iter().any(|d| d == krate));
     }
@@ -81,7 +86,7 @@ fn no_knowledge_side_source_names_the_twin() {
             .enumerate()
             .filter(|(_, l)| !l.trim_start().starts_with("//"))
         {
-            for forbidden in ["vmc_twin", "extern crate"] {
+            for forbidden in ["vmc_twin", "vmc_machine", "extern crate"] {
                 assert!(
                     !line.contains(forbidden),
                     "{}:{} uses `{forbidden}`",

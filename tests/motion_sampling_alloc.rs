@@ -4,8 +4,8 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use vmc_twin::interp::{CanonKind, CanonMove};
-use vmc_twin::motion::{plan, MotionLimits, DEFAULT_INTERPOLATION_CYCLE_S};
+use vmc_gcode::interp::{CanonKind, CanonMove};
+use vmc_machine::motion::{plan, MotionLimits, DEFAULT_INTERPOLATION_CYCLE_S};
 
 struct CountingAlloc;
 

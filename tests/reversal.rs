@@ -9,12 +9,12 @@
 //! positioning error moves the workpiece, +1 for the Z head), so its sign is the direction in
 //! which the twin's axis really last moved.
 
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::sim::{self, CollectPoints, Controller, SimConfig};
+use vmc_machine::twin::Twin;
 use vmc_twin::predict::controller::Compensator;
 use vmc_twin::predict::predictor::ErrorPredictor;
-use vmc_twin::sim::{self, CollectPoints, Controller, SimConfig};
-use vmc_twin::study;
-use vmc_twin::twin::Twin;
+use vmc_twin::studies::campaign;
 
 /// Predicts no error: only the compensator's direction tracking matters here.
 #[derive(Clone)]

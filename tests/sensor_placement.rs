@@ -3,7 +3,7 @@
 //! compares compensation quality on held-out runs, and rejects bad requests clearly.
 
 use std::process::Output;
-use vmc_twin::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
 
 mod common;
 use common::*;
@@ -37,7 +37,7 @@ fn select_sensors_ranks_candidates_and_writes_a_set_that_run_accepts() {
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     // Every thermal node of the machine and the ambient air.
-    let candidates = vmc_twin::machine::MachineSpec::reference()
+    let candidates = vmc_machine::machine::MachineSpec::reference()
         .thermal
         .nodes
         .len()
@@ -128,7 +128,9 @@ fn the_comparison_reports_each_sensor_set_on_held_out_runs() {
             .find(|l| l.trim_start().starts_with(label))
             .unwrap_or_else(|| panic!("no `{label}` row in\n{out}"));
         // 7 diagonals × the held-out states of one seed (atypical and stress states).
-        let runs = 7 * vmc_twin::calibration::evaluation_states(&MachineSpec::reference(), 1).len();
+        let runs =
+            7 * vmc_twin::studies::calibration::evaluation_states(&MachineSpec::reference(), 1)
+                .len();
         assert!(line.contains(&format!(" {runs} ")), "{line}");
     }
     let json: serde_json::Value =
@@ -141,7 +143,7 @@ fn the_comparison_reports_each_sensor_set_on_held_out_runs() {
         assert!(red > 0.0 && red < 1.0, "{c}");
     }
     assert_eq!(cmp[0]["sensors"].as_array().unwrap().len(), 4);
-    let candidates = vmc_twin::machine::MachineSpec::reference()
+    let candidates = vmc_machine::machine::MachineSpec::reference()
         .thermal
         .nodes
         .len()

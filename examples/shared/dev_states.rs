@@ -1,11 +1,11 @@
 //! Selection-only stress states shared by the diagnosis examples.
-use vmc_twin::calibration::{self, ThermalCycle};
+use vmc_twin::studies::calibration::{self, ThermalCycle};
 
 /// Selection-only stress states (never the held-out ones): Z strokes at another feed and
 /// length, a high speed below the maximum, a shop at 24.5 °C.
 pub fn dev_stress_states() -> Vec<calibration::EvalState> {
-    use vmc_twin::calibration::Phase;
-    use vmc_twin::thermal::AmbientProfile;
+    use vmc_machine::thermal::AmbientProfile;
+    use vmc_twin::studies::calibration::Phase;
     let ph = |h: f64, rpm: f64, f: [f64; 3]| Phase {
         duration_s: h * 3600.0,
         spindle_rpm: rpm,

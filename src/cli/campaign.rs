@@ -152,8 +152,8 @@ pub struct MergeArgs {
 
 impl MergeArgs {
     /// The config.
-    pub fn config(self) -> commands::merge::MergeConfig {
-        commands::merge::MergeConfig {
+    pub fn config(self) -> crate::shard::MergeConfig {
+        crate::shard::MergeConfig {
             shard_dirs: self.shards,
             out_dir: self.out,
             force: self.force.force,

@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use super::ForceArg;
-use crate::chatter::stock_file::StockSpec;
-use crate::chatter::ChatterOptions;
 use crate::commands::chatter::ChatterConfig;
 use crate::files;
-use crate::milling::ToolDynamics;
+use crate::studies::chatter::stock_file::StockSpec;
+use crate::studies::chatter::ChatterOptions;
+use vmc_machine::milling::ToolDynamics;
 
 /// Arguments of `chatter`.
 #[derive(clap::Args)]

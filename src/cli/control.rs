@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Result};
 
 use super::ForceArg;
-use crate::blade::{ControllerFile, Plant};
 use crate::commands;
 use crate::commands::control::Kind;
+use vmc_machine::blade::{ControllerFile, Plant};
 
 /// Arguments of `control`.
 #[derive(clap::Args)]
@@ -106,7 +106,9 @@ pub fn lobes_config(
 ) -> Result<commands::control::ControlLobesConfig> {
     let file = ControllerFile::load(path)?;
     let speeds_rpm = match rpm {
-        Some(r) => crate::milling::parse_speeds(r).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?,
+        Some(r) => {
+            vmc_machine::milling::parse_speeds(r).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?
+        }
         None => {
             let [lo, hi] = file.plant.speed_band_rpm;
             (0..200)

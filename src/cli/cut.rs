@@ -9,7 +9,7 @@ use crate::commands;
 use crate::dynamics::cut::{CutOptions, MAX_TOOTH_PERIODS};
 use crate::dynamics::params::{validate_immersion, validate_speed};
 use crate::dynamics::{Cut, Milling};
-use crate::milling::ToolDynamics;
+use vmc_machine::milling::ToolDynamics;
 
 /// Fewest tooth periods the verdict needs (four quarters of at least four).
 const MIN_TOOTH_PERIODS: usize = 16;
@@ -68,7 +68,7 @@ impl CutArgs {
         let Some(path) = self.controller.as_deref() else {
             return Ok(None);
         };
-        let file = crate::blade::ControllerFile::load(path)?;
+        let file = vmc_machine::blade::ControllerFile::load(path)?;
         validate_speed(self.rpm).map_err(|e| anyhow!("--rpm: {e}"))?;
         positive("--depth-mm", self.depth_mm, "mm")?;
         positive("--feed-per-tooth-mm", self.feed_per_tooth_mm, "mm")?;

@@ -8,8 +8,8 @@ use super::{ForceArg, RrdArgs};
 use crate::commands::identify::IdentifyConfig;
 use crate::commands::probe_campaign::ProbeCampaignConfig;
 use crate::commands::run_fiveaxis::FiveAxisRunConfig;
-use crate::fiveaxis::run::Sampling;
-use crate::fiveaxis::FiveAxisSpec;
+use vmc_machine::fiveaxis::run::Sampling;
+use vmc_machine::fiveaxis::FiveAxisSpec;
 
 /// Arguments of `probe-campaign`.
 #[derive(clap::Args)]

@@ -7,8 +7,8 @@ use anyhow::{bail, Context, Result};
 
 use super::{control, ForceArg, MillingArg};
 use crate::commands;
-use crate::milling::DEFAULT_TOOL_TOML;
 use crate::shard::{InputFingerprint, Shard};
+use vmc_machine::milling::DEFAULT_TOOL_TOML;
 
 /// Stability method of `lobes --method`.
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -136,7 +136,8 @@ impl LobesArgs {
     /// # Errors
     /// An unreadable or invalid tool file, an immersion outside (0, 1], malformed speeds.
     pub fn config(self) -> Result<commands::lobes::LobesConfig> {
-        let (tool, tool_source) = crate::milling::ToolDynamics::from_option(self.tool.as_deref())?;
+        let (tool, tool_source) =
+            vmc_machine::milling::ToolDynamics::from_option(self.tool.as_deref())?;
         let shard = self.shard_output(|| {
             Ok(match self.tool.as_deref() {
                 Some(path) => InputFingerprint::of(
@@ -152,7 +153,7 @@ impl LobesArgs {
             .map_err(|e| anyhow::anyhow!("--immersion: {e}"))?;
         let rpm = self.rpm.as_deref().unwrap_or("5000:25000:201");
         let speeds_rpm =
-            crate::milling::parse_speeds(rpm).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?;
+            vmc_machine::milling::parse_speeds(rpm).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?;
         Ok(commands::lobes::LobesConfig {
             tool,
             tool_source,

@@ -21,7 +21,7 @@ use clap::{Parser, Subcommand};
 use crate::commands::{self, RrdOutput};
 use crate::predict::predictor::ModelKind;
 use crate::record;
-use crate::sim::{SimConfig, SimConfigError};
+use vmc_machine::sim::{SimConfig, SimConfigError};
 
 pub use campaign::{parse_seeds, CampaignArgs, MergeArgs};
 pub use chatter::ChatterArgs;
@@ -121,7 +121,7 @@ impl MachineArg {
     ///
     /// # Errors
     /// See [`commands::load_machine`].
-    pub fn load(&self, sensors: Option<&SensorsArg>) -> Result<crate::machine::MachineSpec> {
+    pub fn load(&self, sensors: Option<&SensorsArg>) -> Result<vmc_machine::machine::MachineSpec> {
         commands::load_machine(
             self.machine.as_deref(),
             sensors.and_then(|s| s.sensors.as_deref()),
@@ -317,10 +317,10 @@ impl RunArgs {
 }
 
 /// The tool table of `--tools`, or none (the machine's own tool for every number).
-fn load_tool_table(path: Option<&Path>) -> Result<crate::tools::ToolTable> {
+fn load_tool_table(path: Option<&Path>) -> Result<vmc_machine::tools::ToolTable> {
     path.map_or_else(
-        || Ok(crate::tools::ToolTable::default()),
-        crate::tools::ToolTable::load,
+        || Ok(vmc_machine::tools::ToolTable::default()),
+        vmc_machine::tools::ToolTable::load,
     )
 }
 
@@ -586,7 +586,7 @@ impl InterpretArgs {
     pub fn config(self) -> Result<commands::interpret::InterpretConfig> {
         // Subroutine files `<name>.ngc` are looked up next to the program.
         let folder = self.program.parent().unwrap_or(Path::new("")).to_path_buf();
-        let mut interp = crate::interp::InterpConfig {
+        let mut interp = vmc_gcode::interp::InterpConfig {
             subroutine_dirs: vec![folder],
             ..Default::default()
         };

@@ -6,8 +6,8 @@ use std::io::Write;
 use anyhow::Result;
 
 use crate::benchmark;
-use crate::calibration::ThermalCycle;
-use crate::machine::MachineSpec;
+use crate::studies::calibration::ThermalCycle;
+use vmc_machine::machine::MachineSpec;
 
 /// What to measure, validated.
 pub struct BenchConfig {

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::calibration::{self, ThermalCycle};
 use crate::files;
-use crate::machine::MachineSpec;
+use crate::studies::calibration::{self, ThermalCycle};
+use vmc_machine::machine::MachineSpec;
 
 /// What to calibrate, validated.
 pub struct CalibrateConfig {

@@ -7,14 +7,14 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 
 use super::{wrote_recording, RrdOutput, VERSION};
-use crate::calibration::ThermalCycle;
 use crate::files;
-use crate::machine::MachineSpec;
 use crate::predict::predictor::Settings;
 use crate::progress::Progress;
 use crate::record;
 use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
-use crate::study::{self, CampaignReport, ForMachine, TrainedModels, PREDICTORS};
+use crate::studies::calibration::ThermalCycle;
+use crate::studies::campaign::{self, CampaignReport, ForMachine, TrainedModels, PREDICTORS};
+use vmc_machine::machine::MachineSpec;
 
 /// Name of a campaign shard's per-seed results (one JSON object per line,
 /// [`study::SeedResults`]).

@@ -1,5 +1,5 @@
 //! `vmc-twin chatter`: which cutting moves of a milling program will chatter. Reads the program,
-//! the stock and the tool, runs the check of [`crate::chatter`], prints one line per cutting
+//! the stock and the tool, runs the check of [`crate::studies::chatter`], prints one line per cutting
 //! move (line-numbered, as `check` does) and a summary, writes the CSV, and fails when a cut is
 //! unstable.
 
@@ -8,13 +8,13 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::chatter::stock_file::StockSpec;
-use crate::chatter::{self, ChatterOptions, ChatterReport, Cut, Verdict};
 use crate::files;
-use crate::interp::{self, InterpConfig};
-use crate::milling::ToolDynamics;
-use crate::program::ProgramError;
-use crate::tools::TOOL_NUMBERS;
+use crate::studies::chatter::stock_file::StockSpec;
+use crate::studies::chatter::{self, ChatterOptions, ChatterReport, Cut, Verdict};
+use vmc_gcode::interp::{self, InterpConfig};
+use vmc_machine::milling::ToolDynamics;
+use vmc_machine::program::ProgramError;
+use vmc_machine::tools::TOOL_NUMBERS;
 
 /// What to check, validated.
 pub struct ChatterConfig {
@@ -143,9 +143,9 @@ fn diagram(
     Vec<crate::record::chatter::LobeCurve>,
     Vec<crate::record::chatter::CutPoint>,
 )> {
-    use crate::chatter::Engagement;
     use crate::dynamics::{lobes, LobePoint, Method, Milling};
     use crate::record::chatter::{CutPoint, LobeCurve};
+    use crate::studies::chatter::Engagement;
     let judged: Vec<&Cut> = report
         .cuts
         .iter()

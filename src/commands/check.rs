@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use super::wrote_recording;
-use crate::collision::{self, FixtureSpec, Problem, Scene};
-use crate::machine::MachineSpec;
-use crate::program;
 use crate::record;
+use vmc_machine::collision::{self, FixtureSpec, Problem, Scene};
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::program;
 
 /// What to check, validated.
 pub struct CheckConfig {
@@ -25,7 +25,7 @@ pub struct CheckConfig {
     /// Overwrite an existing recording.
     pub force: bool,
     /// The tools `M6` loads (empty: the machine's own tool for every number).
-    pub tools: crate::tools::ToolTable,
+    pub tools: vmc_machine::tools::ToolTable,
 }
 
 /// Checks every move, prints each problem and a summary.

@@ -11,7 +11,6 @@ use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
 use super::lobes::{LobesOutputs, ShardOutput};
-use crate::blade::{ControllerFile, Figures, ModeFigure, Plant, CONTROLLER_FORMAT};
 use crate::dynamics::control::blade::BladePlant;
 use crate::dynamics::control::closed_loop::{
     attenuation, close, lobes_block as closed_lobes_block, open, sampled_model, ClosedLoop, LobeCut,
@@ -24,6 +23,7 @@ use crate::dynamics::control::StateSpace;
 use crate::dynamics::cut::Verdict;
 use crate::dynamics::LobePoint;
 use crate::files;
+use vmc_machine::blade::{ControllerFile, Figures, ModeFigure, Plant, CONTROLLER_FORMAT};
 
 /// Controller type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -315,16 +315,12 @@ fn minimum(points: &[LobePoint]) -> Option<&LobePoint> {
         .min_by(|a, b| a.critical_depth_mm.total_cmp(&b.critical_depth_mm))
 }
 
-/// Open- and closed-loop lobes of the blade; prints both minima and the table, writes the CSV;
-/// with a shard, computes that shard's speeds and writes them for `merge` instead
-/// ([`super::lobes_shard::control_lobes_shard`]).
+/// Open- and closed-loop lobes of the blade; prints both minima and the table, writes the CSV
+/// (a shard of the speeds: [`super::lobes_shard::control_lobes_shard`]).
 ///
 /// # Errors
 /// An unstable loop, an output that may not be written.
 pub fn lobes(cfg: &ControlLobesConfig, out: &mut dyn Write) -> Result<()> {
-    if let Some(target) = &cfg.shard {
-        return super::lobes_shard::control_lobes_shard(cfg, target, out);
-    }
     let outputs = LobesOutputs {
         csv: cfg.out.as_deref(),
         rrd: cfg.rrd.as_deref(),

@@ -11,8 +11,8 @@ use anyhow::Result;
 use crate::dynamics::cut::{simulate_cut, CutOptions, CutSimulation, Verdict};
 use crate::dynamics::{sdm_lowest_critical_depth, BoundaryKind, Cut, LobePoint, Milling};
 use crate::files;
-use crate::milling::{cut_csv, kind_name, ToolDynamics};
 use crate::record;
+use vmc_machine::milling::{cut_csv, kind_name, ToolDynamics};
 
 /// What to simulate, validated.
 pub struct CutConfig {

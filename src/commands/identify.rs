@@ -11,15 +11,15 @@ use nalgebra::Matrix3;
 use serde::Serialize;
 
 use crate::files;
-use crate::fiveaxis::campaign::parse_csv;
-use crate::fiveaxis::heldout::{judge_poses, HeldOut, HeldOutPlan};
-use crate::fiveaxis::{FiveAxisSpec, TrueMachine};
 use vmc_identify::chain::Pose;
 use vmc_identify::design::d_optimal;
 use vmc_identify::errors::ParameterSet;
 use vmc_identify::identify::{
     identify as fit, Identification, IdentifyOptions, Observation, Relation, Status,
 };
+use vmc_machine::fiveaxis::campaign::parse_csv;
+use vmc_machine::fiveaxis::heldout::{judge_poses, HeldOut, HeldOutPlan};
+use vmc_machine::fiveaxis::{FiveAxisSpec, TrueMachine};
 
 /// What to identify, validated.
 pub struct IdentifyConfig {

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::interp::{
+use vmc_gcode::interp::{
     self, CanonKind, CanonMove, InterpConfig, OrientDirection, PauseKind, Plane, SpindleDir,
 };
 
@@ -29,15 +29,15 @@ pub struct InterpretConfig {
 }
 
 /// Tool lengths and diameters, mm, by tool number.
-pub use crate::tools::ToolData;
+pub use vmc_machine::tools::ToolData;
 
 /// Reads a tool table (TOML, see `docs/usage.md`) as (tool number, length in mm) and
 /// (tool number, diameter in mm) pairs, lengths as written (as `rs274` reads its table).
 ///
 /// # Errors
-/// As [`crate::tools::ToolTable::load`].
+/// As [`vmc_machine::tools::ToolTable::load`].
 pub fn load_tools(path: &std::path::Path) -> Result<ToolData> {
-    Ok(crate::tools::ToolTable::load(path)?.absolute_data())
+    Ok(vmc_machine::tools::ToolTable::load(path)?.absolute_data())
 }
 
 /// Interprets the program and prints its canonical calls.
@@ -46,7 +46,7 @@ pub fn load_tools(path: &std::path::Path) -> Result<ToolData> {
 /// An unreadable or invalid program (with line and column).
 pub fn interpret(cfg: &InterpretConfig, out: &mut dyn Write) -> Result<()> {
     let file = cfg.program.display().to_string();
-    let text = crate::files::read_text(&cfg.program)
+    let text = vmc_machine::read::read_text(&cfg.program)
         .with_context(|| format!("{file}: cannot read program"))?;
     let moves = interp::run_program(&text, &cfg.interp).with_context(|| file.clone())?;
     write_calls(&moves, out)?;

@@ -10,8 +10,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::dynamics::{lobes as lobes_of, LobePoint, Method, Milling};
 use crate::files;
-use crate::milling::{kind_name, lobes_csv, ToolDynamics};
 use crate::shard::{InputFingerprint, Shard};
+use vmc_machine::milling::{kind_name, lobes_csv, ToolDynamics};
 
 /// What to compute, validated.
 pub struct LobesConfig {
@@ -100,16 +100,12 @@ pub struct LobesOutputs<'a> {
 /// Most rows printed; longer tables are thinned on screen (every row is in `--out`).
 const MAX_PRINTED_ROWS: usize = 41;
 
-/// Computes the lobes, prints the minimum and the table, writes the CSV and the recording;
-/// with a shard, computes that shard's speeds and writes them for `merge` instead
-/// ([`super::lobes_shard::lobes_shard`]).
+/// Computes the lobes, prints the minimum and the table, writes the CSV and the recording (a
+/// shard of the speeds: [`super::lobes_shard::lobes_shard`]).
 ///
 /// # Errors
 /// An output that may not be written, values the dynamics refuses.
 pub fn lobes(cfg: &LobesConfig, out: &mut dyn Write) -> Result<()> {
-    if let Some(target) = &cfg.shard {
-        return super::lobes_shard::lobes_shard(cfg, target, out);
-    }
     let outputs = LobesOutputs {
         csv: cfg.out.as_deref(),
         rrd: cfg.rrd.as_deref(),

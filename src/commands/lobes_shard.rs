@@ -25,12 +25,12 @@ use serde::{Deserialize, Serialize};
 
 use super::control::{self, ControlLobesConfig, ControlLobesHead};
 use super::lobes::{self as tool_lobes, LobesConfig, LobesHead, LobesOutputs, ShardOutput};
-use super::merge::MergeConfig;
 use super::VERSION;
 use crate::dynamics::lobes::lobes_block;
 use crate::dynamics::milling::TRACE_RUN;
 use crate::dynamics::LobePoint;
 use crate::files;
+use crate::shard::MergeConfig;
 use crate::shard::{InputFingerprint, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
 
 /// Name of the command in a shard's manifest.

@@ -18,24 +18,9 @@ use serde::{Serialize, Serializer};
 use super::campaign::{model_file_names, SEED_RESULTS_FILE};
 use crate::files;
 use crate::record;
+use crate::shard::MergeConfig;
 use crate::shard::{check_set, ShardManifest, MANIFEST_FILE};
-use crate::study::{self, ReportHeader, RunPasses, SeedResults, SummaryBuilder};
-
-/// What to merge, validated.
-pub struct MergeConfig {
-    /// The shard folders (each with its `shard.json`), in any order.
-    pub shard_dirs: Vec<PathBuf>,
-    /// Folder for the merged results.
-    pub out_dir: PathBuf,
-    /// Overwrite existing output files.
-    pub force: bool,
-    /// Print the per-run table too (campaign).
-    pub print_runs: bool,
-    /// A Rerun recording of the fleet's histograms and the summary.
-    pub rrd: Option<PathBuf>,
-    /// A PNG picture of the fleet's histograms.
-    pub png: Option<PathBuf>,
-}
+use crate::studies::campaign::{self, ReportHeader, RunPasses, SeedResults, SummaryBuilder};
 
 /// Reads and checks the shards, then merges them with the command that wrote them.
 ///

@@ -29,9 +29,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 use crate::files;
-use crate::machine::MachineSpec;
-use crate::placement;
 use crate::shard::InputFingerprint;
+use crate::studies::placement;
+use vmc_machine::machine::MachineSpec;
 
 /// The program version written in shard manifests.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -39,7 +39,7 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The fingerprints of what a study embeds rather than reads: the diagonal programs and the
 /// calibration plan of `machine` (names, durations, purposes).
 pub(crate) fn embedded_fingerprints(machine: &MachineSpec) -> Vec<InputFingerprint> {
-    let mut v: Vec<InputFingerprint> = crate::study::DIAGONALS
+    let mut v: Vec<InputFingerprint> = crate::studies::campaign::DIAGONALS
         .iter()
         .map(|(name, text)| {
             InputFingerprint::of(
@@ -49,7 +49,7 @@ pub(crate) fn embedded_fingerprints(machine: &MachineSpec) -> Vec<InputFingerpri
             )
         })
         .collect();
-    let plan: Vec<String> = crate::calibration::ThermalCycle::calibration_plan(machine)
+    let plan: Vec<String> = crate::studies::calibration::ThermalCycle::calibration_plan(machine)
         .iter()
         .map(|c| format!("{} {} {}", c.name, c.duration_s(), c.purpose))
         .collect();
@@ -79,7 +79,7 @@ pub fn input_fingerprints(
         None => InputFingerprint::of(
             "machine",
             "embedded",
-            crate::machine::REFERENCE_TOML.as_bytes(),
+            vmc_machine::machine::REFERENCE_TOML.as_bytes(),
         ),
     }];
     if let Some(p) = sensors {
@@ -91,7 +91,7 @@ pub fn input_fingerprints(
     }
     Ok(v)
 }
-use crate::record::RecordSettings;
+use crate::record::{self, RecordSettings};
 
 /// A Rerun recording to write: where, and how to draw.
 #[derive(Debug, Clone)]
@@ -133,9 +133,9 @@ pub fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<Machi
 /// # Errors
 /// An unreadable file or bad TOML.
 pub fn is_five_axis_machine(path: &Path) -> Result<bool> {
-    let text = crate::machine::read_machine_file(path)?;
+    let text = vmc_machine::machine::read_machine_file(path)?;
     let table: toml::Table =
-        crate::machine::parse_machine_toml(&text, &path.display().to_string())?;
+        vmc_machine::machine::parse_machine_toml(&text, &path.display().to_string())?;
     Ok(table.contains_key("rotary"))
 }
 
@@ -198,4 +198,67 @@ pub fn wrote_recording(
         path.display(),
         bytes as f64 / 1e6
     )
+}
+
+/// `lobes` of a tool: the whole list of speeds, or one shard of it for `merge`.
+///
+/// # Errors
+/// See [`lobes::lobes`] and [`lobes_shard::lobes_shard`].
+pub fn lobes_whole_or_shard(cfg: &lobes::LobesConfig, out: &mut dyn Write) -> Result<()> {
+    match &cfg.shard {
+        Some(target) => lobes_shard::lobes_shard(cfg, target, out),
+        None => lobes::lobes(cfg, out),
+    }
+}
+
+/// `lobes --controller`: the whole list of speeds, or one shard of it for `merge`.
+///
+/// # Errors
+/// See [`control::lobes`] and [`lobes_shard::control_lobes_shard`].
+pub fn control_lobes_whole_or_shard(
+    cfg: &control::ControlLobesConfig,
+    out: &mut dyn Write,
+) -> Result<()> {
+    match &cfg.shard {
+        Some(target) => lobes_shard::control_lobes_shard(cfg, target, out),
+        None => control::lobes(cfg, out),
+    }
+}
+
+/// `select-sensors`: the whole study, or one shard of it for `merge`.
+///
+/// # Errors
+/// See [`select_sensors::select_sensors`] and [`select_shard::select_shard`].
+pub fn select_sensors_whole_or_shard(
+    cfg: &select_sensors::SelectConfig,
+    out: &mut dyn Write,
+) -> Result<()> {
+    match cfg.shard {
+        Some(shard) => {
+            select_sensors::check_count(cfg)?;
+            select_shard::select_shard(cfg, shard, out)
+        }
+        None => select_sensors::select_sensors(cfg, out),
+    }
+}
+
+/// Checks the outputs of a run before any work: the output folder's `samples.csv` and
+/// `summary.json` (their paths), and the recording's path.
+pub(crate) fn prepare_run_outputs(
+    out_dir: Option<&Path>,
+    rrd: Option<&RrdOutput>,
+    force: bool,
+) -> Result<Option<(PathBuf, PathBuf)>> {
+    let out_files = match out_dir {
+        Some(dir) => {
+            let names = ["samples.csv", "summary.json"].map(String::from);
+            let files = files::prepare_output_folder(dir, &names, force)?;
+            Some((files[0].clone(), files[1].clone()))
+        }
+        None => None,
+    };
+    if let Some(rrd) = rrd {
+        record::check_rrd_path(&rrd.path, force)?;
+    }
+    Ok(out_files)
 }

@@ -8,8 +8,8 @@ use anyhow::Result;
 use nalgebra::Vector3;
 
 use crate::files;
-use crate::fiveaxis::probe::VirtualProbe;
-use crate::fiveaxis::{campaign, FiveAxisSpec, TrueMachine};
+use vmc_machine::fiveaxis::probe::VirtualProbe;
+use vmc_machine::fiveaxis::{campaign, FiveAxisSpec, TrueMachine};
 
 /// What to probe, validated.
 pub struct ProbeCampaignConfig {

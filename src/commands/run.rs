@@ -8,18 +8,18 @@ use anyhow::{Context, Result};
 
 use super::{wrote_recording, RrdOutput};
 use crate::files;
-use crate::machine::MachineSpec;
-use crate::motion::Plan;
 use crate::predict::controller::Compensator;
 use crate::predict::guard::Guarded;
 use crate::predict::predictor::{self as model_file, AnyPredictor};
 use crate::predict::provenance::InputRanges;
-use crate::program;
 use crate::progress::Progress;
 use crate::record;
 use crate::report::{self, RunLog, RunSummary};
-use crate::sim::{self, Observer, RunStart, SampleMode, SimConfig};
-use crate::twin::Twin;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::motion::Plan;
+use vmc_machine::program;
+use vmc_machine::sim::{self, Observer, RunStart, SampleMode, SimConfig};
+use vmc_machine::twin::Twin;
 
 /// What to run, validated.
 pub struct RunConfig {
@@ -48,7 +48,7 @@ pub struct RunConfig {
     /// Accept a model calibrated on another machine or realisation (with a note).
     pub allow_other_machine: bool,
     /// The tools `M6` loads (empty: the machine's own tool for every number).
-    pub tools: crate::tools::ToolTable,
+    pub tools: vmc_machine::tools::ToolTable,
 }
 
 /// A run on the machine the file describes.
@@ -74,27 +74,6 @@ pub fn run_target(target: &RunTarget, out: &mut dyn Write) -> Result<()> {
 /// ranges.
 type RunController = Guarded<Compensator<AnyPredictor>>;
 
-/// Checks the outputs of a run before any work: the output folder's `samples.csv` and
-/// `summary.json` (their paths), and the recording's path.
-pub(super) fn prepare_outputs(
-    out_dir: Option<&Path>,
-    rrd: Option<&RrdOutput>,
-    force: bool,
-) -> Result<Option<(PathBuf, PathBuf)>> {
-    let out_files = match out_dir {
-        Some(dir) => {
-            let names = ["samples.csv", "summary.json"].map(String::from);
-            let files = files::prepare_output_folder(dir, &names, force)?;
-            Some((files[0].clone(), files[1].clone()))
-        }
-        None => None,
-    };
-    if let Some(rrd) = rrd {
-        record::check_rrd_path(&rrd.path, force)?;
-    }
-    Ok(out_files)
-}
-
 /// Runs the program and prints the report to `out`.
 ///
 /// # Errors
@@ -104,7 +83,8 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     let machine = &cfg.machine;
     // Check everything the user gave before minutes of simulation: programs and outputs.
     let (warmups, plan) = load_plans(cfg)?;
-    let out_files = prepare_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
+    let out_files =
+        super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let mut controller = match &cfg.model {
         Some(path) => Some(compensator(cfg, path, out)?),
         None => None,

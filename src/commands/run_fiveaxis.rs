@@ -1,6 +1,6 @@
 //! `vmc-twin run` on a five-axis machine: a program with A/C words on the machine's truth, the
 //! tool tip error in the workpiece frame at every point, and with `--identified` the same points
-//! compensated by the identified model (see [`crate::fiveaxis::run`]).
+//! compensated by the identified model (see [`vmc_machine::fiveaxis::run`]).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -9,11 +9,12 @@ use anyhow::{Context, Result};
 
 use super::{wrote_recording, RrdOutput};
 use crate::files;
-use crate::fiveaxis::identified::IdentifiedModel;
-use crate::fiveaxis::run::{self as five, FiveAxisSummary, FivePoint, Sampling};
-use crate::fiveaxis::{FiveAxisSpec, TrueMachine};
 use crate::record;
+use crate::report::fiveaxis::{self as five_report, FiveAxisSummary};
 use vmc_identify::chain::Pose;
+use vmc_machine::fiveaxis::identified::IdentifiedModel;
+use vmc_machine::fiveaxis::run::{self as five, FivePoint, Sampling};
+use vmc_machine::fiveaxis::{FiveAxisSpec, TrueMachine};
 
 /// What to run on a five-axis machine, validated.
 pub struct FiveAxisRunConfig {
@@ -49,10 +50,10 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     let plan = five::plan_program(&text, &name, spec, &cfg.machine_file)?;
     if let Sampling::EveryCycle(dt_s) = cfg.sampling {
         // No thermal steps on this machine: only the number of samples is limited.
-        crate::program::check_run_size(&name, 0.0, 1.0, plan.duration_s(), Some(dt_s))?;
+        vmc_machine::program::check_run_size(&name, 0.0, 1.0, plan.duration_s(), Some(dt_s))?;
     }
     let out_files =
-        super::run::prepare_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
+        super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let geom = spec.geometry();
     let model = match &cfg.identified {
         Some(path) => {
@@ -76,7 +77,7 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     )
     .with_context(|| name.clone())?;
     let identified_name = cfg.identified.as_ref().map(|p| p.display().to_string());
-    let summary = five::summarise(
+    let summary = five_report::summarise(
         &evaluated,
         &name,
         &spec.machine.name,
@@ -110,7 +111,7 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     if let Some((csv, json)) = out_files {
         files::write_atomic(
             &csv,
-            five::samples_csv(&geom, &evaluated).as_bytes(),
+            five_report::samples_csv(&geom, &evaluated).as_bytes(),
             cfg.force,
         )?;
         let text = serde_json::to_string_pretty(&summary)?;
@@ -137,7 +138,7 @@ fn report_text(
         cfg.seed,
         spec.machine.chain
     )?;
-    writeln!(out, "thermal state: {}", five::NO_THERMAL_MODEL)?;
+    writeln!(out, "thermal state: {}", five_report::NO_THERMAL_MODEL)?;
     if let (Some(m), Some(path)) = (model, &cfg.identified) {
         writeln!(
             out,
@@ -152,7 +153,7 @@ fn report_text(
         )?;
     }
     writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; X, Y, Z and the angles are the commanded axes")?;
-    five::write_table(&spec.geometry(), points, &mut out)?;
-    five::write_summary(summary, &mut out)?;
+    five_report::write_table(&spec.geometry(), points, &mut out)?;
+    five_report::write_summary(summary, &mut out)?;
     Ok(String::from_utf8_lossy(&out).to_string())
 }

@@ -7,11 +7,11 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use crate::files;
-use crate::machine::MachineSpec;
-use crate::placement;
-use crate::sensors::SensorSpec;
 use crate::shard::{InputFingerprint, Shard};
-use crate::thermal::AMBIENT_NODE;
+use crate::studies::placement;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::sensors::SensorSpec;
+use vmc_machine::thermal::AMBIENT_NODE;
 
 /// What to select, validated.
 pub struct SelectConfig {
@@ -77,16 +77,13 @@ pub fn parse_candidates(text: &str, machine: &MachineSpec) -> Result<Option<Vec<
     Ok(Some(wanted))
 }
 
-/// Runs the study, prints it and writes the sensor set (and the JSON study if asked); with a
-/// shard, runs that shard instead ([`super::select_shard::select_shard`]).
+/// Runs the study, prints it and writes the sensor set (and the JSON study if asked); one shard
+/// of it: [`super::select_shard::select_shard`].
 ///
 /// # Errors
 /// A count of 0 or above the candidates, outputs that may not be written, study errors.
 pub fn select_sensors(cfg: &SelectConfig, out: &mut dyn Write) -> Result<()> {
     check_count(cfg)?;
-    if let Some(shard) = cfg.shard {
-        return super::select_shard::select_shard(cfg, shard, out);
-    }
     files::check_writable(&cfg.out, cfg.force)?;
     if let Some(j) = &cfg.json {
         files::check_writable(j, cfg.force)?;
@@ -106,7 +103,7 @@ pub fn select_sensors(cfg: &SelectConfig, out: &mut dyn Write) -> Result<()> {
 }
 
 /// Refuses a count of 0 or above the candidates besides ambient.
-fn check_count(cfg: &SelectConfig) -> Result<()> {
+pub(super) fn check_count(cfg: &SelectConfig) -> Result<()> {
     if cfg.count == 0 {
         anyhow::bail!("--count must be at least 1");
     }

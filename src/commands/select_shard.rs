@@ -21,12 +21,12 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 
-use super::merge::MergeConfig;
 use super::select_sensors::{placement_config, sensor_set_toml, SelectConfig};
 use super::VERSION;
 use crate::files;
-use crate::placement::{self, SeedRuns};
+use crate::shard::MergeConfig;
 use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
+use crate::studies::placement::{self, SeedRuns};
 
 /// Name of the command in a shard's manifest.
 pub const COMMAND: &str = "select-sensors";

@@ -6,11 +6,11 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use crate::files;
-use crate::machine::MachineSpec;
 use crate::predict::dataset::Dataset;
 use crate::predict::predictor::{self, ErrorPredictor, ModelKind, Settings, TrainSummary};
 use crate::predict::provenance::TrainedOn;
-use crate::study::{self, ForMachine};
+use crate::studies::campaign::{self, ForMachine};
+use vmc_machine::machine::MachineSpec;
 
 /// What to train, validated.
 pub struct TrainConfig {

@@ -13,15 +13,15 @@
 //!   points exactly (checked);
 //! - `report`: the campaign summary and the table of hybrid runs (markdown).
 
-use crate::calibration::{evaluation_states, run_at_state_observed};
-use crate::machine::MachineSpec;
 use crate::predict::controller::Compensator;
 use crate::predict::predictor::ModelKind;
 use crate::report::norm;
-use crate::sim::CollectPoints;
-use crate::study::{
+use crate::studies::calibration::{evaluation_states, run_at_state_observed};
+use crate::studies::campaign::{
     diagonal_plans, eval_noise_seed, headline, CampaignReport, RunReport, TrainedModels, PREDICTORS,
 };
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::sim::CollectPoints;
 
 use super::{Diagonal, RecordError, RecordSettings, Recorder, RrdFile};
 
@@ -178,7 +178,7 @@ pub fn record_campaign(
         &states[si],
         &plans[di].1,
         Some(&mut ctrl),
-        &mut crate::sim::Tee(&mut recorder, &mut collect),
+        &mut vmc_machine::sim::Tee(&mut recorder, &mut collect),
         Some(settings.history_sample_s),
     )
     .map_err(|e| RecordError::Replay(e.to_string()))?;

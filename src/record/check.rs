@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use crate::collision::{BodySpec, FixtureSpec, Problem};
-use crate::machine::MachineSpec;
-use crate::motion::Plan;
-use crate::sim::{self, EventLevel, Observer, RunStart, SampleMode, SimConfig, SimEvent};
-use crate::twin::Twin;
+use vmc_machine::collision::{BodySpec, FixtureSpec, Problem};
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::motion::Plan;
+use vmc_machine::sim::{self, EventLevel, Observer, RunStart, SampleMode, SimConfig, SimEvent};
+use vmc_machine::twin::Twin;
 
 use super::scene::mm_to_scene;
 use super::{RecordError, RecordSettings, Recorder, RrdFile};

@@ -34,14 +34,14 @@ use rerun::blueprint::{
 use super::layout::framed;
 use super::scene::mm_to_scene;
 use super::{RecordError, RrdFile};
-use crate::fiveaxis::heldout::JudgedPose;
-use crate::fiveaxis::probe::ProbedSphere;
-use crate::fiveaxis::run::{pose_of, FivePoint};
-use crate::fiveaxis::FiveAxisSpec;
-use crate::motion::Plan;
 use vmc_identify::chain::{Axis, Geometry, Pose};
 use vmc_identify::errors::ErrorState;
 use vmc_identify::htm::{parent_from_element, tip_in_workpiece_mm};
+use vmc_machine::fiveaxis::heldout::JudgedPose;
+use vmc_machine::fiveaxis::probe::ProbedSphere;
+use vmc_machine::fiveaxis::run::{pose_of, FivePoint};
+use vmc_machine::fiveaxis::FiveAxisSpec;
+use vmc_machine::motion::Plan;
 
 const GREY: [u8; 3] = [170, 170, 170];
 const RED: [u8; 3] = [230, 60, 50];
@@ -556,7 +556,7 @@ pub fn record_heldout(
     )?;
     for (k, p) in poses.iter().enumerate() {
         rec.set_time_sequence("pose", k as i64);
-        let q = vmc_identify::htm::nominal_linear_axes(
+        let q = vmc_identify::inverse::nominal_linear_axes(
             geom,
             p.rotary_deg,
             Vector3::from(p.target_w_mm),

@@ -1,5 +1,5 @@
 //! The fleet in a recording: a histogram across machines (one per seed) of each fleet quantity
-//! of the hybrid predictor ([`crate::study::fleet::QUANTITIES`]) as a bar chart under
+//! of the hybrid predictor ([`crate::studies::campaign::fleet::QUANTITIES`]) as a bar chart under
 //! `fleet/<quantity>`, and, in a recording of its own (`merge --rrd`), the printed summary as
 //! `report`.
 
@@ -7,7 +7,7 @@ use std::path::Path;
 
 use rerun::blueprint::{BarChartView, Blueprint, Horizontal, TextDocumentView, Vertical};
 
-use crate::study::fleet::FleetSummary;
+use crate::studies::campaign::fleet::FleetSummary;
 
 use super::layout::framed_with;
 use super::{RecordError, RrdFile};

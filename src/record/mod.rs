@@ -1,7 +1,7 @@
 //! Rerun recordings: a run or a whole campaign written headless to an `.rrd` file
 //! that `rerun FILE.rrd` opens with a ready layout.
 //!
-//! The simulation core does not know Rerun: a [`Recorder`] is a [`crate::sim::Observer`]. It
+//! The simulation core does not know Rerun: a [`Recorder`] is a [`vmc_machine::sim::Observer`]. It
 //! turns measurement points, thermal steps, node temperatures (truth, for display only), motion
 //! samples and events into entities:
 //!
@@ -53,8 +53,8 @@ use std::path::{Path, PathBuf};
 use rerun::{RecordingStream, RecordingStreamBuilder};
 use thiserror::Error;
 
-use crate::motion::{Plan, SegmentKind};
 use crate::report::norm;
+use vmc_machine::motion::{Plan, SegmentKind};
 
 pub use recorder::Recorder;
 
@@ -97,7 +97,7 @@ pub enum RecordError {
     Replay(String),
     /// The twin that draws the motion could not be built.
     #[error("recording: {0}")]
-    Twin(#[from] crate::twin::TwinError),
+    Twin(#[from] vmc_machine::twin::TwinError),
 }
 
 /// Checks up front that a recording can be written to `path`: the name ends in `.rrd`, the

@@ -1,4 +1,4 @@
-//! The [`Recorder`]: a [`crate::sim::Observer`] that logs a run into a Rerun stream (entities
+//! The [`Recorder`]: a [`vmc_machine::sim::Observer`] that logs a run into a Rerun stream (entities
 //! and timelines in the [module docs](super)).
 
 use std::path::PathBuf;
@@ -8,8 +8,8 @@ use rerun::RecordingStream;
 use super::scene::{mm_to_scene, screw_counts, temp_rgba, Body, Scene};
 use super::{Diagonal, RecordError, RecordSettings, RrdFile, NODE_TEMP_RANGE_DEGC};
 use crate::report::norm;
-use crate::sensors::SensorReadings;
-use crate::sim::{EventLevel, Observer, PointRecord, RunStart, SimEvent};
+use vmc_machine::sensors::SensorReadings;
+use vmc_machine::sim::{EventLevel, Observer, PointRecord, RunStart, SimEvent};
 
 /// One measurement point as buffered for the error and sensor series.
 #[derive(Debug, Clone)]
@@ -65,7 +65,7 @@ impl Recorder {
     /// A recorder on `file`'s stream for machine `spec`. Logs the static scene at once.
     pub fn new(
         file: &RrdFile,
-        spec: &crate::machine::MachineSpec,
+        spec: &vmc_machine::machine::MachineSpec,
         settings: RecordSettings,
         diagonal: Option<Diagonal>,
     ) -> Result<Self, RecordError> {

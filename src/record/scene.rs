@@ -19,7 +19,7 @@
 //! `<axis>_support`, `<axis>_screw_<k>`, `saddle`, `table`, `bed_top`, `bed_bottom`,
 //! `work_zone`). Nodes with other names are not drawn.
 
-use crate::machine::MachineSpec;
+use vmc_machine::machine::MachineSpec;
 
 /// Converts a position in mm to scene units (m, f32).
 pub fn mm_to_scene(p_mm: [f64; 3]) -> [f32; 3] {
@@ -375,7 +375,7 @@ mod tests {
         // The counts by name agree with the segments each ballscrew nut heats.
         let mut heated = [0; 3];
         for s in &spec.thermal.sources {
-            if let crate::thermal::HeatSourceSpec::BallscrewNut { axis, segments, .. } = s {
+            if let vmc_machine::thermal::HeatSourceSpec::BallscrewNut { axis, segments, .. } = s {
                 heated[axis.index()] += segments.len();
             }
         }

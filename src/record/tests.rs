@@ -1,8 +1,8 @@
 use super::*;
-use crate::machine::MachineSpec;
-use crate::sim::{self, SimConfig};
-use crate::sim::{Observer, PointRecord, RunStart};
-use crate::twin::Twin;
+use vmc_machine::machine::MachineSpec;
+use vmc_machine::sim::{self, SimConfig};
+use vmc_machine::sim::{Observer, PointRecord, RunStart};
+use vmc_machine::twin::Twin;
 
 fn temp_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("vmc-record-{tag}-{}", std::process::id()));
@@ -57,7 +57,7 @@ fn a_diagonal_is_recognised_only_on_a_line() {
     assert!(Diagonal::through(&[[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.1, 0.0]]).is_none());
     assert!(Diagonal::through(&[[1.0; 3]]).is_none());
     assert!(Diagonal::through(&[]).is_none());
-    let plan = crate::program::plan_source(
+    let plan = vmc_machine::program::plan_source(
         include_str!("../../trajectories/diag_ppp.ngc"),
         "diag_ppp.ngc",
         &MachineSpec::reference(),
@@ -91,7 +91,7 @@ fn bad_settings_are_refused() {
 fn a_recording_is_written_atomically_and_an_unfinished_one_leaves_nothing() {
     let d = temp_dir("write");
     let spec = MachineSpec::reference();
-    let plan = crate::program::plan_source(
+    let plan = vmc_machine::program::plan_source(
         include_str!("../../trajectories/diag_xy.ngc"),
         "diag_xy.ngc",
         &spec,

@@ -1,7 +1,11 @@
 //! Helpers shared by the integration tests that run the real binary in a temporary folder.
-#![allow(dead_code)] // each test crate uses its own subset
+#![allow(dead_code, unused_imports)] // each test crate uses its own subset
 
+#[path = "../../crates/vmc-gcode/tests/common/rs274.rs"]
 pub mod rs274;
+#[path = "../../crates/vmc-gcode/tests/common/temp_dir.rs"]
+mod temp_dir;
+pub use temp_dir::TempDir;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -13,36 +17,6 @@ pub const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
 /// A file of the repository (trajectories, test data).
 pub fn repo_file(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
-
-/// A fresh temporary folder, removed when dropped.
-pub struct TempDir(PathBuf);
-
-impl TempDir {
-    /// A new empty folder named after the test crate, `tag`, the process and a counter.
-    pub fn new(tag: &str) -> Self {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-        let dir = std::env::temp_dir().join(format!(
-            "vmc-twin-{}-{tag}-{}-{n}",
-            env!("CARGO_CRATE_NAME"),
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("create temp dir");
-        TempDir(dir)
-    }
-
-    /// The folder.
-    pub fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 /// Runs `vmc-twin <args>` with `cwd` as working folder.

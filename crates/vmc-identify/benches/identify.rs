@@ -6,8 +6,8 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix3, Vector3};
 use vmc_identify::chain::{Chain, Geometry, Pose, RotaryAxis, RotaryGeometry};
 use vmc_identify::errors::ParameterSet;
-use vmc_identify::htm::{linear_axes_for, nominal_linear_axes};
 use vmc_identify::identify::{identify, IdentifyOptions, Observation};
+use vmc_identify::inverse::{linear_axes_for, nominal_linear_axes};
 use vmc_identify::sphere::{default_directions, fit_centre};
 
 fn geometry() -> Geometry {

@@ -13,15 +13,13 @@
 //! `Rot(ε) = R_z(ε_z)·R_y(ε_y)·R_x(ε_x)`. The tool tip relative to the workpiece is
 //! `workpiece_from_bed · bed_from_tip`, read in the workpiece frame.
 //!
-//! A probe touching the reference sphere (the datum) at rotary angles θ reads the linear axes
-//! `q` at which the tip sits at the sphere centre: `tip_in_workpiece(q, θ) = 0`, solved by
-//! Newton iteration with the nominal Jacobian ([`linear_axes_for`]).
+//! The linear axes at which the tip sits at a target (what a probe reads) are solved in
+//! [`crate::inverse`], with this model and the nominal Jacobian.
 
-use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 
 use crate::chain::{Axis, Geometry, LinearAxis, Pose};
 use crate::errors::ErrorState;
-use crate::sensitivity::Frames;
 
 /// Exact rotation `R_z(ε_z)·R_y(ε_y)·R_x(ε_x)` from three angles (rad).
 #[must_use]
@@ -126,115 +124,4 @@ pub fn tip_in_workpiece_mm(geom: &Geometry, pose: &Pose, state: &ErrorState) -> 
     let w = bed_from_workpiece(geom, pose, state);
     let t = bed_from_tip(geom, pose, state);
     (w.inverse() * t).translation.vector
-}
-
-/// Why the exact model could not be solved.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum HtmError {
-    /// Newton iteration did not converge (errors far too large, or a singular configuration).
-    #[error("the linear axes for rotary angles {rotary_deg:?} did not converge (last step {step_mm:e} mm)")]
-    NoConvergence {
-        /// The rotary angles, degrees.
-        rotary_deg: [f64; 2],
-        /// Size of the last Newton step, mm.
-        step_mm: f64,
-    },
-}
-
-/// Linear axes at which the tip sits at `target_w_mm` (workpiece frame) with the rotary axes at
-/// `rotary_deg`, under the pose-dependent error state `errors` (exact model, Newton iteration
-/// with the nominal Jacobian; converges to 1e-10 mm in a few steps for errors of machine size).
-///
-/// # Errors
-/// [`HtmError::NoConvergence`] after 30 steps.
-pub fn linear_axes_for(
-    geom: &Geometry,
-    rotary_deg: [f64; 2],
-    target_w_mm: Vector3<f64>,
-    errors: &dyn Fn(&Pose) -> ErrorState,
-) -> Result<[f64; 3], HtmError> {
-    let mut pose = Pose {
-        linear_mm: [0.0; 3],
-        rotary_deg,
-    };
-    let jq = Frames::new(geom, &pose).jq();
-    let jq_inv = jq.try_inverse().unwrap_or_else(Matrix3::identity);
-    let mut step_mm = f64::INFINITY;
-    for _ in 0..30 {
-        let tip = tip_in_workpiece_mm(geom, &pose, &errors(&pose));
-        let dq = jq_inv * (target_w_mm - tip);
-        for k in 0..3 {
-            pose.linear_mm[k] += dq[k];
-        }
-        step_mm = dq.norm();
-        if step_mm < 1e-10 {
-            return Ok(pose.linear_mm);
-        }
-    }
-    Err(HtmError::NoConvergence {
-        rotary_deg,
-        step_mm,
-    })
-}
-
-/// Nominal linear axes that bring the tip to `target_w_mm` at `rotary_deg` (no errors).
-#[must_use]
-pub fn nominal_linear_axes(
-    geom: &Geometry,
-    rotary_deg: [f64; 2],
-    target_w_mm: Vector3<f64>,
-) -> [f64; 3] {
-    let pose = Pose {
-        linear_mm: [0.0; 3],
-        rotary_deg,
-    };
-    let zero = ErrorState::default();
-    let tip0 = tip_in_workpiece_mm(geom, &pose, &zero);
-    let jq = Frames::new(geom, &pose).jq();
-    // The nominal model is affine in q: one step is exact.
-    let dq = jq.try_inverse().unwrap_or_else(Matrix3::identity) * (target_w_mm - tip0);
-    [dq[0], dq[1], dq[2]]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::errors::tests_support::trunnion;
-
-    const NM: f64 = 1e-6;
-
-    #[test]
-    fn without_errors_the_probe_reads_the_nominal_centre() {
-        let g = trunnion();
-        let zero = |_: &Pose| ErrorState::default();
-        for (c, a) in [(0.0, 0.0), (90.0, -30.0), (215.0, -90.0)] {
-            let q = linear_axes_for(&g, [c, a], Vector3::zeros(), &zero).unwrap();
-            let n = nominal_linear_axes(&g, [c, a], Vector3::zeros());
-            for k in 0..3 {
-                assert!((q[k] - n[k]).abs() < NM);
-            }
-        }
-        // At A = C = 0 the tip meets the datum at q = datum − T.
-        let q = nominal_linear_axes(&g, [0.0, 0.0], Vector3::zeros());
-        assert!((q[0] - 150.0).abs() < NM && q[1].abs() < NM && (q[2] + 200.0).abs() < NM);
-    }
-
-    #[test]
-    fn a_table_turned_by_c_90_carries_the_sphere_a_quarter_turn_clockwise() {
-        // Workpiece-side C turns the table by −90° about z: the sphere at (150, 0) from the C
-        // axis goes to (0, −150).
-        let g = trunnion();
-        let q = nominal_linear_axes(&g, [90.0, 0.0], Vector3::zeros());
-        assert!(
-            q[0].abs() < NM && (q[1] + 150.0).abs() < NM && (q[2] + 200.0).abs() < NM,
-            "{q:?}"
-        );
-        // A = −90 turns the trunnion by +90° about x through z = −500: the sphere 150 mm above
-        // the A axis goes to y = −150, z = −500.
-        let q = nominal_linear_axes(&g, [0.0, -90.0], Vector3::zeros());
-        assert!(
-            (q[0] - 150.0).abs() < NM && (q[1] + 150.0).abs() < NM && (q[2] + 350.0).abs() < NM,
-            "{q:?}"
-        );
-    }
 }

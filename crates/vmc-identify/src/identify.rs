@@ -25,7 +25,7 @@
 //! the same structure).
 //!
 //! **Refinement.** The first-order solution is refined by Gauss–Newton on the exact model
-//! (readings recomputed by [`crate::htm::linear_axes_for`], the first-order operator as the
+//! (readings recomputed by [`crate::inverse::linear_axes_for`], the first-order operator as the
 //! Jacobian: a chord iteration, converging by a factor ~|ε| per step). The largest difference
 //! between exact and first-order readings at the solution is the linearisation error.
 
@@ -34,7 +34,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::chain::{Geometry, Pose};
 use crate::errors::ParameterSet;
-use crate::htm::{linear_axes_for, HtmError};
+use crate::inverse::{linear_axes_for, HtmError};
 use crate::sensitivity::probe_sensitivity;
 
 /// One probed configuration.

@@ -3,7 +3,7 @@
 use super::*;
 use crate::errors::tests_support::trunnion;
 use crate::errors::ErrorState;
-use crate::htm::nominal_linear_axes;
+use crate::inverse::nominal_linear_axes;
 
 /// A small deterministic generator for the tests (SplitMix64 + Box–Muller); the crate itself
 /// draws nothing at random.

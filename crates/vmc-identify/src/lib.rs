@@ -21,5 +21,6 @@ pub mod design;
 pub mod errors;
 pub mod htm;
 pub mod identify;
+pub mod inverse;
 pub mod sensitivity;
 pub mod sphere;

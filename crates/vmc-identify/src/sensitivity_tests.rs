@@ -3,7 +3,7 @@
 use super::*;
 use crate::errors::tests_support::trunnion;
 use crate::errors::Parameter;
-use crate::htm::{linear_axes_for, nominal_linear_axes};
+use crate::inverse::{linear_axes_for, nominal_linear_axes};
 
 fn probe_pose(geom: &Geometry, c_deg: f64, a_deg: f64) -> Pose {
     Pose {

@@ -34,10 +34,10 @@ use std::fmt::Write as _;
 use serde::Deserialize;
 
 use super::{Columns, IdentifyThermalConfig};
-use crate::errors::spec::ThermalTermSpec;
 use crate::predict::rc_identify::{RcFit, BEARING_W_PER_KRPM_N_MM};
 use crate::predict::thermal_fit::Table;
-use crate::thermal::ThermalSpec;
+use vmc_machine::errors::spec::ThermalTermSpec;
+use vmc_machine::thermal::ThermalSpec;
 
 /// Prefix of the fragment's node names (`spindle_fit_0`, `spindle_fit_1`, …).
 pub const NODE_PREFIX: &str = "spindle_fit_";

@@ -1,0 +1,356 @@
+//! A G-code program on the five-axis machine: plan, sample, and the volumetric error at each
+//! sample, before and after compensation with an identified model.
+//!
+//! # Model
+//! - **Program.** `X Y Z` are the linear axes' positions (machine coordinates: all axes at zero
+//!   at machine zero, work offsets G54…G59 from the machine file), `A`, `B`, `C` the rotary
+//!   axes' angles in degrees. There is no tool-centre-point control (RTCP, G43.4): the program
+//!   gives axis positions, as a post-processor for this machine's kinematics writes them.
+//! - **Planning.** [`crate::motion::plan_with_rotary`] with the machine's linear and rotary
+//!   speed and acceleration limits; the linear travel and the rotary travel limits (degrees)
+//!   are checked, the first move beyond one refused with its line.
+//! - **Sampling** as the three-axis `run`: the middle of every dwell (G4), and with
+//!   [`Sampling::EveryCycle`] every interpolation cycle during motion.
+//! - **Error.** At commanded axes `(q, θ)` the commanded tool tip is the nominal chain's
+//!   `p = tip_w(q, θ; 0)` and the error `E = tip_w(q, θ; e(q, θ)) − p`, both in the workpiece
+//!   frame (exact homogeneous transforms, [`vmc_identify::htm`]), `e` the machine's errors at
+//!   the pose.
+//! - **Compensation** (with a model `ê`): the controller keeps `θ` and commands the linear axes
+//!   `q'` that solve `tip_w(q', θ; ê(q', θ)) = p` (Newton, [`vmc_identify::inverse::linear_axes_for`]);
+//!   the error after is `tip_w(q', θ; e(q', θ)) − p`. The controller sees `ê` only.
+//!
+//! There is no thermal model on this machine: the errors are geometric and do not change over
+//! time. Units: mm, degrees; errors in µm.
+
+use nalgebra::Vector3;
+use thiserror::Error;
+
+use crate::machine::MachineError;
+use crate::motion::{self, Plan, SegmentKind};
+use crate::program::ProgramError;
+use vmc_gcode::interp::{self, InterpConfig};
+use vmc_identify::chain::{Geometry, Pose};
+use vmc_identify::errors::ErrorState;
+use vmc_identify::htm::tip_in_workpiece_mm;
+use vmc_identify::inverse::{linear_axes_for, HtmError};
+
+use super::FiveAxisSpec;
+
+/// Why a program cannot be run on the five-axis machine.
+#[derive(Debug, Error)]
+pub enum FiveAxisRunError {
+    /// The program cannot be interpreted or planned, or leaves a travel.
+    #[error(transparent)]
+    Program(#[from] ProgramError),
+    /// The machine file lacks what running needs.
+    #[error(transparent)]
+    Machine(#[from] MachineError),
+    /// The compensation could not be solved at a point.
+    #[error("line {line}: compensation failed: {err}")]
+    Compensation {
+        /// Source line of the point.
+        line: usize,
+        /// The solver's error.
+        err: HtmError,
+    },
+}
+
+/// Where the trajectory is sampled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Sampling {
+    /// The middle of every dwell (G4).
+    Dwells,
+    /// Dwells and every interpolation cycle of this period (s) during motion.
+    EveryCycle(f64),
+}
+
+/// One commanded point of the trajectory.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Commanded {
+    /// Time from the start of the program, s.
+    pub time_s: f64,
+    /// Source line of the segment in effect.
+    pub line: usize,
+    /// Linear axes X, Y, Z, mm.
+    pub q_mm: [f64; 3],
+    /// Rotary axes A, B, C, degrees.
+    pub abc_deg: [f64; 3],
+    /// Whether the point is a dwell point.
+    pub at_dwell: bool,
+}
+
+/// One evaluated point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FivePoint {
+    /// The commanded point.
+    pub commanded: Commanded,
+    /// Commanded tool tip in the workpiece frame (nominal chain), mm.
+    pub tip_w_mm: [f64; 3],
+    /// Error without compensation, workpiece frame, µm.
+    pub error_before_um: [f64; 3],
+    /// Linear axes the compensating controller commands, mm.
+    pub compensated_q_mm: Option<[f64; 3]>,
+    /// Error with compensation, workpiece frame, µm.
+    pub error_after_um: Option<[f64; 3]>,
+}
+
+/// Interprets and plans `text` (named `file` in errors) on `spec` (read from `machine_file`),
+/// checking the linear and rotary travels.
+///
+/// # Errors
+/// Syntax or semantic errors, a machine file without rotary speed limits, a move beyond a
+/// travel limit (with its line).
+pub fn plan_program(
+    text: &str,
+    file: &str,
+    spec: &FiveAxisSpec,
+    machine_file: &str,
+) -> Result<Plan, FiveAxisRunError> {
+    let rotary = spec.rotary_limits(machine_file)?;
+    let start_mm = spec.axes.home_mm;
+    let cfg = InterpConfig {
+        start_mm,
+        work_offsets_mm: spec.axes.work_offsets_mm,
+        ..InterpConfig::default()
+    };
+    let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
+        file: file.to_string(),
+        err,
+    })?;
+    let motion_err = |err| ProgramError::Motion {
+        file: file.to_string(),
+        err,
+    };
+    let plan = motion::plan_with_rotary(&moves, start_mm, [0.0; 3], &spec.motion, &rotary)
+        .map_err(motion_err)?;
+    motion::check_travel(&plan, spec.axes.travel_min_mm, spec.axes.travel_max_mm)
+        .map_err(motion_err)?;
+    motion::check_rotary_travel(&plan, &spec.rotary_travel_abc_deg()).map_err(motion_err)?;
+    Ok(plan)
+}
+
+/// The points where the run measures, in time order (as the three-axis simulation takes them).
+#[must_use]
+pub fn commanded_points(plan: &Plan, sampling: Sampling) -> Vec<Commanded> {
+    let mut out = Vec::new();
+    for seg in plan.segments() {
+        let moving = matches!(
+            seg.kind,
+            SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc
+        );
+        match (seg.kind, sampling) {
+            (SegmentKind::Dwell, _) => out.push(Commanded {
+                time_s: seg.t_start_s + 0.5 * seg.duration_s,
+                line: seg.line,
+                q_mm: seg.end_mm,
+                abc_deg: seg.end_abc_deg,
+                at_dwell: true,
+            }),
+            (_, Sampling::EveryCycle(dt_s)) if moving && seg.duration_s > 0.0 => {
+                let n = (seg.duration_s / dt_s).ceil() as usize;
+                for k in 0..n {
+                    let t_local_s = k as f64 * dt_s;
+                    out.push(Commanded {
+                        time_s: seg.t_start_s + t_local_s,
+                        line: seg.line,
+                        q_mm: seg.position_at_local(t_local_s),
+                        abc_deg: seg.abc_at_local(t_local_s),
+                        at_dwell: false,
+                    });
+                }
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The pose of linear axes `q_mm` and G-code angles `abc_deg` (A, B, C) for `geom`'s rotary
+/// axes.
+#[must_use]
+pub fn pose_of(geom: &Geometry, q_mm: [f64; 3], abc_deg: [f64; 3]) -> Pose {
+    let mut rotary_deg = [0.0; 2];
+    for (i, r) in geom.rotary.iter().enumerate().take(2) {
+        rotary_deg[i] = abc_deg[r.axis.index()];
+    }
+    Pose {
+        linear_mm: q_mm,
+        rotary_deg,
+    }
+}
+
+fn um(v: Vector3<f64>) -> [f64; 3] {
+    [v[0] * 1e3, v[1] * 1e3, v[2] * 1e3]
+}
+
+/// The error at every point: `truth` gives the machine's errors at a pose, `model` (if any) the
+/// compensating controller's.
+///
+/// # Errors
+/// [`FiveAxisRunError::Compensation`] when the controller's equation cannot be solved.
+pub fn evaluate(
+    geom: &Geometry,
+    points: &[Commanded],
+    truth: &dyn Fn(&Pose) -> ErrorState,
+    model: Option<&dyn Fn(&Pose) -> ErrorState>,
+) -> Result<Vec<FivePoint>, FiveAxisRunError> {
+    let zero = ErrorState::default();
+    points
+        .iter()
+        .map(|c| {
+            let pose = pose_of(geom, c.q_mm, c.abc_deg);
+            let tip = tip_in_workpiece_mm(geom, &pose, &zero);
+            let real = |pose: &Pose| tip_in_workpiece_mm(geom, pose, &truth(pose));
+            let before = um(real(&pose) - tip);
+            let (q_comp, after) = match model {
+                Some(m) => {
+                    let q = linear_axes_for(geom, pose.rotary_deg, tip, m)
+                        .map_err(|err| FiveAxisRunError::Compensation { line: c.line, err })?;
+                    let p = Pose {
+                        linear_mm: q,
+                        rotary_deg: pose.rotary_deg,
+                    };
+                    (Some(q), Some(um(real(&p) - tip)))
+                }
+                None => (None, None),
+            };
+            Ok(FivePoint {
+                commanded: *c,
+                tip_w_mm: [tip[0], tip[1], tip[2]],
+                error_before_um: before,
+                compensated_q_mm: q_comp,
+                error_after_um: after,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 1e-6 µm (1 pm): rounding of the exact transforms.
+    const TOL_UM: f64 = 1e-6;
+
+    fn norm_um(v: [f64; 3]) -> f64 {
+        (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    }
+
+    fn spec() -> FiveAxisSpec {
+        FiveAxisSpec::from_toml_str(
+            include_str!("../../../../machines/trunnion-ac.toml"),
+            "trunnion-ac.toml",
+        )
+        .unwrap()
+    }
+
+    fn points(spec: &FiveAxisSpec, sampling: Sampling) -> Vec<Commanded> {
+        let text = "G0 A-30 C90\nG0 X10 Y20 Z-250\nG4 P1\nG1 X-20 A-60 C180 F1000\nG4 P2\nM2\n";
+        let plan = plan_program(text, "t.ngc", spec, "m.toml").unwrap();
+        commanded_points(&plan, sampling)
+    }
+
+    #[test]
+    fn dwell_points_sit_in_the_middle_of_each_dwell_at_the_commanded_axes() {
+        let s = spec();
+        let text = "G0 A-30 C90\nG0 X10 Y20 Z-250\nG4 P1\nG1 X-20 A-60 C180 F1000\nG4 P2\nM2\n";
+        let plan = plan_program(text, "t.ngc", &s, "m.toml").unwrap();
+        let pts = commanded_points(&plan, Sampling::Dwells);
+        assert_eq!(pts.len(), 2);
+        let dwell = &plan.segments()[2];
+        assert_eq!(pts[0].line, 3);
+        assert!((pts[0].time_s - (dwell.t_start_s + 0.5)).abs() < 1e-12);
+        assert_eq!(pts[0].q_mm, [10.0, 20.0, -250.0]);
+        assert_eq!(pts[0].abc_deg, [-30.0, 0.0, 90.0]);
+        assert_eq!(pts[1].q_mm, [-20.0, 20.0, -250.0]);
+        assert_eq!(pts[1].abc_deg, [-60.0, 0.0, 180.0]);
+        // Every cycle: more points, the dwells among them.
+        let all = commanded_points(&plan, Sampling::EveryCycle(0.01));
+        assert!(all.len() > 100);
+        assert_eq!(all.iter().filter(|p| p.at_dwell).count(), 2);
+    }
+
+    #[test]
+    fn without_errors_the_tool_tip_error_is_zero() {
+        let s = spec();
+        let g = s.geometry();
+        let zero = |_: &Pose| ErrorState::default();
+        for p in evaluate(&g, &points(&s, Sampling::EveryCycle(0.01)), &zero, None).unwrap() {
+            assert!(norm_um(p.error_before_um) < TOL_UM, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn a_datum_offset_is_seen_reversed_in_the_workpiece_frame_at_every_pose() {
+        // The workpiece frame moved by δW on the table: the tip relative to it is −δW, whatever
+        // the angles (the workpiece frame turns with the table).
+        let s = spec();
+        let g = s.geometry();
+        let offset = |_: &Pose| ErrorState {
+            workpiece_mm: [0.010, -0.020, 0.005],
+            ..ErrorState::default()
+        };
+        for p in evaluate(&g, &points(&s, Sampling::EveryCycle(0.01)), &offset, None).unwrap() {
+            let e = p.error_before_um;
+            for (k, want) in [-10.0, 20.0, -5.0].into_iter().enumerate() {
+                assert!((e[k] - want).abs() < TOL_UM, "{e:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_stylus_offset_turns_into_the_workpiece_frame_with_the_table() {
+        // δT = 10 µm along bed x. The table turned by −C about z (A = 0): in the workpiece frame
+        // the offset reads R_z(C)·δT, (0, 10, 0) µm at C = 90°.
+        let s = spec();
+        let g = s.geometry();
+        let tool = |_: &Pose| ErrorState {
+            tool_mm: [0.010, 0.0, 0.0],
+            ..ErrorState::default()
+        };
+        let c = Commanded {
+            time_s: 0.0,
+            line: 1,
+            q_mm: [0.0, -150.0, -200.0],
+            abc_deg: [0.0, 0.0, 90.0],
+            at_dwell: true,
+        };
+        let e = evaluate(&g, &[c], &tool, None).unwrap()[0].error_before_um;
+        assert!(
+            e[0].abs() < TOL_UM && (e[1] - 10.0).abs() < TOL_UM && e[2].abs() < TOL_UM,
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn a_model_equal_to_the_machine_compensates_every_point_to_the_solver_tolerance() {
+        let s = spec();
+        let g = s.geometry();
+        let truth = crate::fiveaxis::TrueMachine::new(&s, 3).unwrap();
+        let t = |p: &Pose| truth.state_at(p);
+        let pts = evaluate(&g, &points(&s, Sampling::EveryCycle(0.01)), &t, Some(&t)).unwrap();
+        for p in &pts {
+            assert!(norm_um(p.error_before_um) > 1.0, "{p:?}");
+            // Newton stops below 1e-10 mm; 1e-3 µm leaves room.
+            assert!(norm_um(p.error_after_um.unwrap()) < 1e-3, "{p:?}");
+        }
+        let rms = |f: &dyn Fn(&FivePoint) -> f64| {
+            (pts.iter().map(|p| f(p).powi(2)).sum::<f64>() / pts.len() as f64).sqrt()
+        };
+        let before = rms(&|p| norm_um(p.error_before_um));
+        let after = rms(&|p| norm_um(p.error_after_um.unwrap()));
+        assert!(1.0 - after / before > 0.999_99);
+    }
+
+    #[test]
+    fn a_machine_without_rotary_speed_limits_cannot_run_programs() {
+        let text = include_str!("../../../../machines/trunnion-ac.toml")
+            .replace("max_speed_deg_per_s = 90.0", "");
+        let s = FiveAxisSpec::from_toml_str(&text, "m.toml").unwrap();
+        let e = plan_program("G0 A-10\nM2\n", "t.ngc", &s, "m.toml").unwrap_err();
+        assert!(
+            e.to_string().contains("rotary axis A has no speed limits"),
+            "{e}"
+        );
+    }
+}

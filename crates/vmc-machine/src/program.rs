@@ -1,0 +1,298 @@
+//! From a G-code file to a checked, timed plan: read → interpret → plan → travel check.
+//!
+//! Every error names the file and, where it has one, the line (and column for syntax).
+
+use std::path::Path;
+
+use thiserror::Error;
+
+use crate::machine::MachineSpec;
+use crate::motion::{self, Plan};
+use crate::tools::ToolTable;
+use vmc_gcode::interp::{self, InterpConfig};
+
+/// A program that cannot be run.
+#[derive(Debug, Error)]
+pub enum ProgramError {
+    /// The file could not be read.
+    #[error("{file}: cannot read program: {err}")]
+    Io {
+        /// The file.
+        file: String,
+        /// Why.
+        err: std::io::Error,
+    },
+    /// Syntax or semantics (line and column in the message).
+    #[error("{file}: {err}")]
+    Gcode {
+        /// The file.
+        file: String,
+        /// The interpreter's error.
+        err: interp::GcodeError,
+    },
+    /// The program turns a rotary axis (A, B, C) of a machine that has none.
+    #[error("{file}: line {line}: the program moves the {axis} axis; machine {machine} has no rotary axes")]
+    NoRotaryAxes {
+        /// The file.
+        file: String,
+        /// 1-based line of the first move that turns the axis.
+        line: usize,
+        /// `'A'`, `'B'` or `'C'`.
+        axis: char,
+        /// The machine's name.
+        machine: String,
+    },
+    /// Planning or travel problem (line in the message).
+    #[error("{file}: {err}")]
+    Motion {
+        /// The file.
+        file: String,
+        /// The planner's error.
+        err: motion::MotionError,
+    },
+    /// `M6` loads a tool the tool table does not have.
+    #[error("{file}: line {line}: M6 loads tool {tool}, which is not in the tool table")]
+    UnknownTool {
+        /// The file.
+        file: String,
+        /// Line of the tool change.
+        line: usize,
+        /// The tool number.
+        tool: u32,
+    },
+}
+
+/// The diagonal tests of the campaign (face diagonals XY, YZ, XZ and the four body diagonals
+/// of ISO 230-6): (report name, program text).
+pub const DIAGONALS: [(&str, &str); 7] = [
+    ("XY", include_str!("../../../trajectories/diag_xy.ngc")),
+    ("YZ", include_str!("../../../trajectories/diag_yz.ngc")),
+    ("XZ", include_str!("../../../trajectories/diag_xz.ngc")),
+    ("PPP", include_str!("../../../trajectories/diag_ppp.ngc")),
+    ("NPP", include_str!("../../../trajectories/diag_npp.ngc")),
+    ("PNP", include_str!("../../../trajectories/diag_pnp.ngc")),
+    ("PPN", include_str!("../../../trajectories/diag_ppn.ngc")),
+];
+
+/// Most thermal integration steps one `run` may take (machine time / thermal step).
+pub const MAX_THERMAL_STEPS: f64 = 2.0e7;
+/// Most interpolation samples one `run --every-cycle` may record (program time / cycle).
+pub const MAX_CYCLE_SAMPLES: f64 = 2.0e7;
+
+/// A run whose size (machine time over step) would take hours or exhaust memory.
+#[derive(Debug, Error)]
+#[error("{file}: {duration_s:.0} s of machine time at {what} {step_s:e} s is {steps:.3e} steps, above the limit of {max:.0e}: use a larger {option}")]
+pub struct RunTooLarge {
+    /// The program (the last one counted).
+    pub file: String,
+    /// Machine time counted (s).
+    pub duration_s: f64,
+    /// Which step (`thermal step` or `interpolation cycle`).
+    pub what: &'static str,
+    /// The step (s).
+    pub step_s: f64,
+    /// Steps it would take.
+    pub steps: f64,
+    /// The limit.
+    pub max: f64,
+    /// The command-line option to change.
+    pub option: &'static str,
+}
+
+/// Refuses runs of more than [`MAX_THERMAL_STEPS`] thermal steps over `duration_s` of machine
+/// time, or, with `interp_cycle_s`, more than [`MAX_CYCLE_SAMPLES`] recorded samples over the
+/// measured program's `program_s`.
+pub fn check_run_size(
+    file: &str,
+    duration_s: f64,
+    thermal_step_s: f64,
+    program_s: f64,
+    interp_cycle_s: Option<f64>,
+) -> Result<(), RunTooLarge> {
+    let steps = duration_s / thermal_step_s;
+    if steps > MAX_THERMAL_STEPS {
+        return Err(RunTooLarge {
+            file: file.to_string(),
+            duration_s,
+            what: "thermal step",
+            step_s: thermal_step_s,
+            steps,
+            max: MAX_THERMAL_STEPS,
+            option: "--thermal-step-s",
+        });
+    }
+    if let Some(dt_s) = interp_cycle_s {
+        let samples = program_s / dt_s;
+        if samples > MAX_CYCLE_SAMPLES {
+            return Err(RunTooLarge {
+                file: file.to_string(),
+                duration_s: program_s,
+                what: "interpolation cycle",
+                step_s: dt_s,
+                steps: samples,
+                max: MAX_CYCLE_SAMPLES,
+                option: "--interp-cycle-ms (or drop --every-cycle)",
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Largest angle, degrees, at which a rotary axis of a machine without rotary axes counts as
+/// not moved (1e-9°: float rounding of offsets that cancel, e.g. `G92 A5` then `G0 A5`).
+pub const ROTARY_STILL_DEG: f64 = 1e-9;
+
+/// Refuses a program that turns a rotary axis on a machine without rotary axes (every
+/// machine description today: X, Y, Z only). The axes start at 0°; words that leave them there
+/// (`A0`, or angles cancelled by offsets) are accepted, as they move nothing.
+///
+/// # Errors
+/// [`ProgramError::NoRotaryAxes`] naming the first move (line) and axis that turn.
+pub fn refuse_rotary(
+    moves: &[interp::CanonMove],
+    file: &str,
+    machine: &str,
+) -> Result<(), ProgramError> {
+    for m in moves {
+        let (interp::CanonKind::Traverse { end_abc_deg, .. }
+        | interp::CanonKind::Feed { end_abc_deg, .. }
+        | interp::CanonKind::Arc { end_abc_deg, .. }) = &m.kind
+        else {
+            continue;
+        };
+        if let Some(i) = (0..3).find(|&i| end_abc_deg[i].abs() > ROTARY_STILL_DEG) {
+            return Err(ProgramError::NoRotaryAxes {
+                file: file.to_string(),
+                line: m.line,
+                axis: ['A', 'B', 'C'][i],
+                machine: machine.to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Reads, interprets, plans and travel-checks a program file with the machine's own tool for
+/// every tool number (see [`crate::tools`]).
+pub fn load_plan(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
+    load_plan_with_tools(path, machine, start_mm, &ToolTable::default())
+}
+
+/// [`load_plan`] with a tool table.
+pub fn load_plan_with_tools(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<Plan, ProgramError> {
+    let (file, text) = read_program(path)?;
+    plan_source_with_tools(&text, &file, machine, start_mm, tools)
+}
+
+/// The program file's display name and text.
+fn read_program(path: &Path) -> Result<(String, String), ProgramError> {
+    let file = path.display().to_string();
+    match crate::read::read_text(path) {
+        Ok(text) => Ok((file, text)),
+        Err(err) => Err(ProgramError::Io { file, err }),
+    }
+}
+
+/// Reads, interprets and plans a program file without the travel check (for `check`, which
+/// reports every travel violation instead of stopping at the first), with a tool table.
+pub fn load_plan_unchecked(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<Plan, ProgramError> {
+    let (file, text) = read_program(path)?;
+    plan_source_unchecked_with_tools(&text, &file, machine, start_mm, tools)
+}
+
+/// Interprets and plans program text, without the travel check; `file` names it in errors.
+pub fn plan_source_unchecked(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
+    plan_source_unchecked_with_tools(text, file, machine, start_mm, &ToolTable::default())
+}
+
+/// [`plan_source_unchecked`] with a tool table (lengths relative to the machine's own tool,
+/// see [`crate::tools`]).
+pub fn plan_source_unchecked_with_tools(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<Plan, ProgramError> {
+    let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
+    let cfg = InterpConfig {
+        start_mm,
+        work_offsets_mm: machine.axes.work_offsets_mm,
+        tool_lengths_mm,
+        tool_diameters_mm,
+        ..InterpConfig::default()
+    };
+    let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
+        file: file.to_string(),
+        err,
+    })?;
+    refuse_rotary(&moves, file, &machine.machine.name)?;
+    let plan =
+        motion::plan(&moves, start_mm, &machine.motion).map_err(|err| ProgramError::Motion {
+            file: file.to_string(),
+            err,
+        })?;
+    for seg in plan.segments() {
+        if let motion::SegmentKind::ToolChange { tool } = seg.kind {
+            if tools.loaded(tool, machine).is_none() {
+                return Err(ProgramError::UnknownTool {
+                    file: file.to_string(),
+                    line: seg.line,
+                    tool,
+                });
+            }
+        }
+    }
+    Ok(plan)
+}
+
+/// Interprets, plans and travel-checks program text; `file` names it in errors.
+pub fn plan_source(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+) -> Result<Plan, ProgramError> {
+    plan_source_with_tools(text, file, machine, start_mm, &ToolTable::default())
+}
+
+/// [`plan_source`] with a tool table.
+pub fn plan_source_with_tools(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<Plan, ProgramError> {
+    let plan = plan_source_unchecked_with_tools(text, file, machine, start_mm, tools)?;
+    let motion_err = |err| ProgramError::Motion {
+        file: file.to_string(),
+        err,
+    };
+    motion::check_travel(
+        &plan,
+        machine.axes.travel_min_mm,
+        machine.axes.travel_max_mm,
+    )
+    .map_err(motion_err)?;
+    Ok(plan)
+}
