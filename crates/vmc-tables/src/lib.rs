@@ -1,0 +1,4 @@
+//! Compensation tables for real controllers (crate doc: README).
+pub mod cec;
+pub mod linuxcnc;
+pub mod number;
