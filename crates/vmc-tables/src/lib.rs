@@ -2,3 +2,7 @@
 pub mod cec;
 pub mod linuxcnc;
 pub mod number;
+pub mod sample;
+
+#[cfg(test)]
+mod testmodel;
