@@ -1,7 +1,9 @@
 //! Compensation tables for real controllers (crate doc: README).
 pub mod cec;
+pub mod export;
 pub mod linuxcnc;
 pub mod number;
+pub mod readings;
 pub mod sample;
 
 #[cfg(test)]
