@@ -193,7 +193,9 @@ pub enum CecError {
     #[error("the program sets no compensation table")]
     NoTables,
     /// A table index without any assignment between used indices.
-    #[error("table {table} is missing (tables {table_count_hint} are set, indices must run from 0)")]
+    #[error(
+        "table {table} is missing (tables {table_count_hint} are set, indices must run from 0)"
+    )]
     TableIndexGap {
         /// The missing table index.
         table: usize,
@@ -402,7 +404,10 @@ pub fn write_cec_program(program: &CecProgram) -> Result<String, CecError> {
         return Err(invalid("channel", "channels count from 1".into()));
     }
     if program.tables.is_empty() {
-        return Err(invalid("tables", "a program needs at least one table".into()));
+        return Err(invalid(
+            "tables",
+            "a program needs at least one table".into(),
+        ));
     }
     if let Some(c) = program
         .comment_lines
@@ -430,10 +435,19 @@ fn write_table(s: &mut String, t: usize, table: &CecTable) {
         s.push_str(&format!("$AN_CEC[{t},{n}]={}\n", short_mm(*v, 0)));
     }
     s.push_str(&format!("$AN_CEC_INPUT_AXIS[{t}]=({})\n", table.input_axis));
-    s.push_str(&format!("$AN_CEC_OUTPUT_AXIS[{t}]=({})\n", table.output_axis));
-    s.push_str(&format!("$AN_CEC_STEP[{t}]={}\n", short_mm(table.step_mm, 1)));
+    s.push_str(&format!(
+        "$AN_CEC_OUTPUT_AXIS[{t}]=({})\n",
+        table.output_axis
+    ));
+    s.push_str(&format!(
+        "$AN_CEC_STEP[{t}]={}\n",
+        short_mm(table.step_mm, 1)
+    ));
     s.push_str(&format!("$AN_CEC_MIN[{t}]={}\n", short_mm(table.min_mm, 1)));
-    s.push_str(&format!("$AN_CEC_MAX[{t}]={}\n", short_mm(table.max_mm(), 1)));
+    s.push_str(&format!(
+        "$AN_CEC_MAX[{t}]={}\n",
+        short_mm(table.max_mm(), 1)
+    ));
     s.push_str(&format!(
         "$AN_CEC_DIRECTION[{t}]={}\n",
         table.direction.number()

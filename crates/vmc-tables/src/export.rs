@@ -134,8 +134,7 @@ pub fn linuxcnc_files(
     provenance: &Provenance,
 ) -> Result<Vec<OutputFile>, ExportError> {
     let j = opts.joints;
-    if j.iter().any(|&n| n >= MAX_LINUXCNC_JOINTS) || j[0] == j[1] || j[0] == j[2] || j[1] == j[2]
-    {
+    if j.iter().any(|&n| n >= MAX_LINUXCNC_JOINTS) || j[0] == j[1] || j[0] == j[2] || j[1] == j[2] {
         return Err(ExportError::BadOption {
             field: "joints",
             reason: format!("{j:?} (three different joint numbers below {MAX_LINUXCNC_JOINTS})"),
@@ -151,12 +150,16 @@ pub fn linuxcnc_files(
                 opts.file_type.number(),
                 match opts.file_type {
                     CompFileType::Trims => "trims in mm added to the commanded joint position",
-                    CompFileType::MeasuredPositions => "positions reached, mm; trim = nominal - value",
+                    CompFileType::MeasuredPositions =>
+                        "positions reached, mm; trim = nominal - value",
                 }
             ),
             format!("model: {}", provenance.model),
             format!("thermal state: {}", provenance.thermal_state),
-            format!("axes not sampled held at {}", position_text(set.reference_mm)),
+            format!(
+                "axes not sampled held at {}",
+                position_text(set.reference_mm)
+            ),
             format!(
                 "over the volume the model's error reaches {} um (max |E| X/Y/Z); these tables \
                  leave {} um: a joint table carries its axis's own error only",
@@ -212,16 +215,30 @@ pub fn cec_program(
         let g = own.grid;
         let name = &names[k];
         let mut push = |values: &[f64], dir: CecDirection, what: String| -> Result<(), CecError> {
-            tables.push(CecTable::new(name, name, g.start_mm, g.step_mm, values, dir)?);
+            tables.push(CecTable::new(
+                name, name, g.start_mm, g.step_mm, values, dir,
+            )?);
             described.push(format!("table {}: {what}", tables.len() - 1));
             Ok(())
         };
         let axis = AXIS_NAMES[k];
         if own.forward_mm == own.reverse_mm {
-            push(&own.forward_mm, CecDirection::Both, format!("{axis} along {axis}, both directions"))?;
+            push(
+                &own.forward_mm,
+                CecDirection::Both,
+                format!("{axis} along {axis}, both directions"),
+            )?;
         } else {
-            push(&own.forward_mm, CecDirection::Positive, format!("{axis} along {axis}, positive direction"))?;
-            push(&own.reverse_mm, CecDirection::Negative, format!("{axis} along {axis}, negative direction"))?;
+            push(
+                &own.forward_mm,
+                CecDirection::Positive,
+                format!("{axis} along {axis}, positive direction"),
+            )?;
+            push(
+                &own.reverse_mm,
+                CecDirection::Negative,
+                format!("{axis} along {axis}, negative direction"),
+            )?;
         }
         if opts.cross_tables {
             for t in set.cross.iter().filter(|t| t.output_axis == k) {
@@ -253,7 +270,10 @@ pub fn cec_program(
         "vmc-twin interpolatory compensation tables: compensation values in mm".to_string(),
         format!("model: {}", ascii(&provenance.model)),
         format!("thermal state: {}", ascii(&provenance.thermal_state)),
-        format!("axes not sampled held at {}", position_text(set.reference_mm)),
+        format!(
+            "axes not sampled held at {}",
+            position_text(set.reference_mm)
+        ),
         format!(
             "model max |E| X/Y/Z {} um; left by these tables {} um",
             triple(v.model_max_abs_um),
@@ -296,12 +316,22 @@ pub fn report_text(set: &TableSet, provenance: &Provenance) -> String {
         position_text(set.reference_mm),
         triple(set.reversal_shift_mm.map(|r| r * 1e3)),
     );
-    let mut row = |label: String, g: crate::sample::Grid, values: &[f64], check: crate::sample::InterpolationCheck| {
+    let mut row = |label: String,
+                   g: crate::sample::Grid,
+                   values: &[f64],
+                   check: crate::sample::InterpolationCheck| {
         let lo = values.iter().copied().fold(f64::INFINITY, f64::min) * 1e3;
         let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max) * 1e3;
         s.push_str(&format!(
             "{label:<16} {:>6} {:>8.3}  {:>8.3} … {:<8.3} {:>8.3} … {:<8.3}  {:.4} ({:.3})\n",
-            g.points, g.step_mm, g.start_mm, g.end_mm(), lo, hi, check.max_abs_um, check.at_mm
+            g.points,
+            g.step_mm,
+            g.start_mm,
+            g.end_mm(),
+            lo,
+            hi,
+            check.max_abs_um,
+            check.at_mm
         ));
     };
     for t in &set.own {
@@ -310,7 +340,10 @@ pub fn report_text(set: &TableSet, provenance: &Provenance) -> String {
     }
     for t in &set.cross {
         row(
-            format!("{} along {}", AXIS_NAMES[t.output_axis], AXIS_NAMES[t.input_axis]),
+            format!(
+                "{} along {}",
+                AXIS_NAMES[t.output_axis], AXIS_NAMES[t.input_axis]
+            ),
             t.grid,
             &t.correction_mm,
             t.check,

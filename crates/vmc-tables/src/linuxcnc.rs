@@ -271,9 +271,10 @@ impl JointCompTable {
                 CompFileType::Trims => (p.forward_trim_mm, p.reverse_trim_mm),
                 // The loader stores nominal − value: write the position it turns back into
                 // this trim.
-                CompFileType::MeasuredPositions => {
-                    (p.nominal_mm - p.forward_trim_mm, p.nominal_mm - p.reverse_trim_mm)
-                }
+                CompFileType::MeasuredPositions => (
+                    p.nominal_mm - p.forward_trim_mm,
+                    p.nominal_mm - p.reverse_trim_mm,
+                ),
             };
             s.push_str(&fixed_mm(p.nominal_mm));
             s.push(' ');
@@ -398,6 +399,7 @@ fn read_rows(text: &str) -> Result<Vec<[f64; 3]>, CompFileError> {
         if let Some(blank) = blank_at {
             return Err(CompFileError::BlankLine { line: blank });
         }
+        let row = read_row(line, trimmed)?;
         if rows.len() == MAX_COMP_POINTS {
             let count = text.lines().filter(|l| !l.trim().is_empty()).count();
             return Err(CompFileError::TooManyPoints {
@@ -406,7 +408,6 @@ fn read_rows(text: &str) -> Result<Vec<[f64; 3]>, CompFileError> {
                 line,
             });
         }
-        let row = read_row(line, trimmed)?;
         if let Some(prev) = rows.last() {
             check_ascending(line, row[0], prev[0])?;
         }

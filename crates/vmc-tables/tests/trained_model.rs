@@ -24,7 +24,10 @@ struct Noise(u64);
 
 impl Noise {
     fn next_um(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.1
     }
 }
@@ -149,7 +152,11 @@ fn the_tables_of_a_loaded_hybrid_carry_its_reversal_and_its_error() {
             let e = model.predict_error_mm(q)[k];
             let fwd = table.trim_mm(q[k], Direction::Positive);
             let rev = table.trim_mm(q[k], Direction::Negative);
-            assert!((fwd + e).abs() <= tol_mm, "axis {k} at {q:?}: {fwd} vs {}", -e);
+            assert!(
+                (fwd + e).abs() <= tol_mm,
+                "axis {k} at {q:?}: {fwd} vs {}",
+                -e
+            );
             assert!((rev - fwd + shift[k]).abs() <= 1e-6, "axis {k} at {q:?}");
         }
     }
@@ -179,14 +186,27 @@ fn the_cec_tables_of_a_loaded_hybrid_agree_with_the_live_compensator_on_the_axis
         let up = (1..=40).map(|i| lo + (hi - lo) * i as f64 / 40.0);
         let down = (0..40).rev().map(|i| lo + (hi - lo) * i as f64 / 40.0);
         for (n, x) in up.chain(down).enumerate() {
-            let motion = if n < 40 { Direction::Positive } else { Direction::Negative };
+            let motion = if n < 40 {
+                Direction::Positive
+            } else {
+                Direction::Negative
+            };
             let mut p = set.reference_mm;
             p[k] = x;
             let q = comp.axis_command_mm(p);
-            let dir_of = |a: &str| if a == names[k] { motion } else { Direction::Positive };
+            let dir_of = |a: &str| {
+                if a == names[k] {
+                    motion
+                } else {
+                    Direction::Positive
+                }
+            };
             for j in 0..3 {
-                let table_mm =
-                    program.total_compensation_mm(names[j], |a| p[names.iter().position(|b| *b == a).unwrap()], dir_of);
+                let table_mm = program.total_compensation_mm(
+                    names[j],
+                    |a| p[names.iter().position(|b| *b == a).unwrap()],
+                    dir_of,
+                );
                 let diff_um = (table_mm - (q[j] - p[j])) * 1e3;
                 // Interpolation, the 1 nm print and the fixed point's second order (< 1 nm).
                 assert!(

@@ -161,10 +161,9 @@ fn assign(line: usize, stmt: &str, tables: &mut BTreeMap<usize, Parts>) -> Resul
         "$AN_CEC_MIN" => set(&mut parts.min, read_mm(line, lhs, rhs)?, line, lhs),
         "$AN_CEC_MAX" => set(&mut parts.max, read_mm(line, lhs, rhs)?, line, lhs),
         "$AN_CEC_DIRECTION" => {
-            let d = read_int(line, lhs, rhs, "-1, 0 or 1")
-                .and_then(|n| {
-                    CecDirection::from_number(n).ok_or_else(|| bad_int(line, lhs, rhs, "-1, 0 or 1"))
-                })?;
+            let d = read_int(line, lhs, rhs, "-1, 0 or 1").and_then(|n| {
+                CecDirection::from_number(n).ok_or_else(|| bad_int(line, lhs, rhs, "-1, 0 or 1"))
+            })?;
             set(&mut parts.direction, d, line, lhs)
         }
         "$AN_CEC_MULT_BY_TABLE" => {

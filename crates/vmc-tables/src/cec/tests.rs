@@ -115,7 +115,14 @@ fn an_end_position_that_is_not_min_plus_step_times_points_is_refused() {
     let wrong = with_line(&text, "$AN_CEC_MAX[0]=200.0", "$AN_CEC_MAX[0]=250.0");
     let err = parse_cec_program(&wrong).unwrap_err();
     assert!(
-        matches!(err, CecError::EndPositionMismatch { table: 0, points: 3, .. }),
+        matches!(
+            err,
+            CecError::EndPositionMismatch {
+                table: 0,
+                points: 3,
+                ..
+            }
+        ),
         "{err:?}"
     );
 }
@@ -128,7 +135,11 @@ fn unknown_unsupported_and_duplicate_statements_are_refused_with_their_line() {
         parse_cec_program(&ncu).unwrap_err(),
         CecError::Unsupported { line: 26, .. }
     ));
-    let mult = with_line(&text, "$AN_CEC_MULT_BY_TABLE[0]=0", "$AN_CEC_MULT_BY_TABLE[0]=2");
+    let mult = with_line(
+        &text,
+        "$AN_CEC_MULT_BY_TABLE[0]=0",
+        "$AN_CEC_MULT_BY_TABLE[0]=2",
+    );
     assert!(matches!(
         parse_cec_program(&mult).unwrap_err(),
         CecError::Unsupported { line: 13, .. }
@@ -189,7 +200,10 @@ fn spaces_around_the_equals_sign_and_trailing_comments_are_read() {
     let text = write_cec_program(&program())
         .unwrap()
         .replace("]=", "] = ")
-        .replace("$AN_CEC_MIN[0] = 0.0", "$AN_CEC_MIN[0] = 0.0 ; compensation starts at 0 mm");
+        .replace(
+            "$AN_CEC_MIN[0] = 0.0",
+            "$AN_CEC_MIN[0] = 0.0 ; compensation starts at 0 mm",
+        );
     assert_eq!(parse_cec_program(&text).unwrap(), program());
 }
 

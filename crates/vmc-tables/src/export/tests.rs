@@ -24,7 +24,12 @@ fn the_linuxcnc_files_are_three_checked_joint_tables_and_their_ini_lines() {
     let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(
         names,
-        ["joint0-x.comp", "joint1-y.comp", "joint2-z.comp", "comp-tables.ini"]
+        [
+            "joint0-x.comp",
+            "joint1-y.comp",
+            "joint2-z.comp",
+            "comp-tables.ini"
+        ]
     );
     for (k, f) in files[..3].iter().enumerate() {
         let summary = check_comp_file(&f.contents).unwrap();
@@ -33,12 +38,18 @@ fn the_linuxcnc_files_are_three_checked_joint_tables_and_their_ini_lines() {
         for x in [0.0, 13.7, 199.99, 400.0, -300.0] {
             for dir in [Direction::Positive, Direction::Negative] {
                 let want = set.own_correction_mm(k, x, dir);
-                assert!((back.trim_mm(x, dir) - want).abs() < 1e-12, "axis {k} at {x}");
+                assert!(
+                    (back.trim_mm(x, dir) - want).abs() < 1e-12,
+                    "axis {k} at {x}"
+                );
             }
         }
     }
     let ini = &files[3].contents;
-    assert!(ini.contains("[JOINT_1]\nCOMP_FILE = joint1-y.comp\nCOMP_FILE_TYPE = 1\n"), "{ini}");
+    assert!(
+        ini.contains("[JOINT_1]\nCOMP_FILE = joint1-y.comp\nCOMP_FILE_TYPE = 1\n"),
+        "{ini}"
+    );
     // Every line is a comment, a section header or a key = value line: nothing a user pastes
     // breaks the INI file, and the thermal state's line break did not escape its comment.
     for line in ini.lines() {
@@ -47,7 +58,10 @@ fn the_linuxcnc_files_are_three_checked_joint_tables_and_their_ini_lines() {
             "{line:?}"
         );
     }
-    assert!(ini.contains("# thermal state: readings T=24 °C steady\n"), "{ini}");
+    assert!(
+        ini.contains("# thermal state: readings T=24 °C steady\n"),
+        "{ini}"
+    );
 }
 
 #[test]
@@ -59,7 +73,9 @@ fn joints_can_be_renumbered_but_not_repeated() {
     };
     let files = linuxcnc_files(&set, &opts, &provenance()).unwrap();
     assert_eq!(files[0].name, "joint2-x.comp");
-    assert!(files[3].contents.contains("[JOINT_2]\nCOMP_FILE = joint2-x.comp\nCOMP_FILE_TYPE = 0\n"));
+    assert!(files[3]
+        .contents
+        .contains("[JOINT_2]\nCOMP_FILE = joint2-x.comp\nCOMP_FILE_TYPE = 0\n"));
     let back = parse_comp_file(&files[0].contents, CompFileType::MeasuredPositions).unwrap();
     let want = set.own_correction_mm(0, 123.4, Direction::Positive);
     assert!((back.trim_mm(123.4, Direction::Positive) - want).abs() < 1e-12);
@@ -70,7 +86,10 @@ fn joints_can_be_renumbered_but_not_repeated() {
         };
         assert!(matches!(
             linuxcnc_files(&set, &opts, &provenance()).unwrap_err(),
-            ExportError::BadOption { field: "joints", .. }
+            ExportError::BadOption {
+                field: "joints",
+                ..
+            }
         ));
     }
 }
@@ -85,12 +104,22 @@ fn a_model_with_reversal_gets_direction_dependent_cec_tables_for_its_own_axes() 
     assert_eq!(d, [1, -1, 0, 0, 1, -1, 0, 0, 1, -1, 0, 0]);
     assert_eq!(p.tables[2].input_axis(), "AX2");
     assert_eq!(p.tables[2].output_axis(), "AX1");
-    assert!(p.comment_lines.contains(&"table 3: X along Z, both directions, zero at the reference".to_string()));
-    assert!(p.comment_lines.iter().any(|c| c == "thermal state: readings T=24 degC steady"));
+    assert!(p
+        .comment_lines
+        .contains(&"table 3: X along Z, both directions, zero at the reference".to_string()));
+    assert!(p
+        .comment_lines
+        .iter()
+        .any(|c| c == "thermal state: readings T=24 degC steady"));
 
     let mut no_reversal = Analytic::at(24.0);
     no_reversal.shift_mm = [0.0; 3];
-    let p = cec_program(&set_of(&mut no_reversal), &CecExport::default(), &provenance()).unwrap();
+    let p = cec_program(
+        &set_of(&mut no_reversal),
+        &CecExport::default(),
+        &provenance(),
+    )
+    .unwrap();
     assert_eq!(p.tables.len(), 9);
     let own_only = CecExport {
         cross_tables: false,
@@ -127,7 +156,11 @@ fn the_cec_program_read_back_compensates_the_model_along_each_axis_line() {
             for dir in [Direction::Positive, Direction::Negative] {
                 for j in 0..3 {
                     let c = program.total_compensation_mm(names[j], |a| q[axis(a)], |_| dir);
-                    let reversal = if dir == Direction::Negative { m.shift_mm[j] } else { 0.0 };
+                    let reversal = if dir == Direction::Negative {
+                        m.shift_mm[j]
+                    } else {
+                        0.0
+                    };
                     let residual_um = (c + e[j] + reversal) * 1e3;
                     assert!(
                         residual_um.abs() <= worst_um + 2e-3,
@@ -149,7 +182,10 @@ fn bad_cec_options_are_refused() {
         };
         assert!(matches!(
             cec_program(&set, &opts, &provenance()).unwrap_err(),
-            ExportError::BadOption { field: "axis_names", .. }
+            ExportError::BadOption {
+                field: "axis_names",
+                ..
+            }
         ));
     }
     let opts = CecExport {
@@ -164,7 +200,18 @@ fn the_report_lists_every_table_and_the_volume_check() {
     let set = set_of(&mut Analytic::at(24.0));
     let text = report_text(&set, &provenance());
     assert_eq!(text.lines().filter(|l| l.contains(" along ")).count(), 9);
-    assert!(text.contains("reversal (negative minus positive approach) X/Y/Z: 0.500 / -0.600 / 0.400 um"), "{text}");
-    assert!(text.contains("left by the own-axis tables (LinuxCNC) max 4.8"), "{text}");
-    assert!(text.contains("left by own-axis and cross tables (CEC) max 0.56"), "{text}");
+    assert!(
+        text.contains(
+            "reversal (negative minus positive approach) X/Y/Z: 0.500 / -0.600 / 0.400 um"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("left by the own-axis tables (LinuxCNC) max 4.8"),
+        "{text}"
+    );
+    assert!(
+        text.contains("left by own-axis and cross tables (CEC) max 0.56"),
+        "{text}"
+    );
 }

@@ -61,7 +61,10 @@ fn the_trim_is_interpolated_on_the_commanded_position_and_held_beyond_the_ends()
 
 #[test]
 fn a_header_line_is_refused_with_its_line_number() {
-    let text = format!("# X axis trims\n{}", table().to_comp_file(CompFileType::Trims));
+    let text = format!(
+        "# X axis trims\n{}",
+        table().to_comp_file(CompFileType::Trims)
+    );
     let err = check_comp_file(&text).unwrap_err();
     assert_eq!(
         err,
@@ -215,7 +218,10 @@ fn the_ini_lines_name_the_joint_the_file_and_its_type() {
 
 #[test]
 fn the_file_type_numbers_are_0_and_1() {
-    assert_eq!(CompFileType::from_number(0), Some(CompFileType::MeasuredPositions));
+    assert_eq!(
+        CompFileType::from_number(0),
+        Some(CompFileType::MeasuredPositions)
+    );
     assert_eq!(CompFileType::from_number(1), Some(CompFileType::Trims));
     assert_eq!(CompFileType::from_number(2), None);
     assert_eq!(CompFileType::Trims.number(), 1);

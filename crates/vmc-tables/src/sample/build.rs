@@ -44,7 +44,10 @@ pub fn sample_tables<P: ErrorPredictor + ?Sized>(
             if j == k {
                 forward_mm.clone()
             } else {
-                e_line.iter().map(|e| quantise_mm(-(e[j] - e_ref[j]))).collect()
+                e_line
+                    .iter()
+                    .map(|e| quantise_mm(-(e[j] - e_ref[j])))
+                    .collect()
             }
         });
         let checks = check_line(model, spec, *grid, k, q_ref, e_ref, &corrections)?;
@@ -128,7 +131,10 @@ fn along(mut q: [f64; 3], k: usize, x_mm: f64) -> [f64; 3] {
     q
 }
 
-fn predict<P: ErrorPredictor + ?Sized>(model: &mut P, q_mm: [f64; 3]) -> Result<[f64; 3], SampleError> {
+fn predict<P: ErrorPredictor + ?Sized>(
+    model: &mut P,
+    q_mm: [f64; 3],
+) -> Result<[f64; 3], SampleError> {
     let e_mm = model.predict_error_mm(q_mm);
     if e_mm.iter().all(|e| e.is_finite()) {
         Ok(e_mm)

@@ -122,7 +122,15 @@ fn unusable_specifications_are_refused() {
     s.spacing = Spacing::MaxStepMm(1.0);
     let err = sample_tables(&mut Analytic::at(20.0), &s).unwrap_err();
     assert!(
-        matches!(err, SampleError::PointCount { axis: "X", points: 561, max: 256, .. }),
+        matches!(
+            err,
+            SampleError::PointCount {
+                axis: "X",
+                points: 561,
+                max: 256,
+                ..
+            }
+        ),
         "{err:?}"
     );
     let mut s = spec();
