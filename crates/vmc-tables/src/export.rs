@@ -9,7 +9,7 @@ use thiserror::Error;
 use crate::cec::{write_cec_program, CecDirection, CecError, CecProgram, CecTable};
 use crate::linuxcnc::{ini_lines, CompFileError, CompFileType, CompPoint, JointCompTable};
 use crate::number::is_plain_name;
-use crate::sample::{TableSet, AXIS_NAMES};
+use crate::sample::{OwnAxisTable, TableSet, AXIS_NAMES};
 
 /// Name of the Siemens program file (the program `%_N_NC_CEC_INI`).
 pub const CEC_FILE_NAME: &str = "NC_CEC.INI";
@@ -210,53 +210,25 @@ pub fn cec_program(
         });
     }
     let mut tables = Vec::new();
-    let mut described = Vec::new();
-    for (k, own) in set.own.iter().enumerate() {
-        let g = own.grid;
-        let name = &names[k];
-        let mut push = |values: &[f64], dir: CecDirection, what: String| -> Result<(), CecError> {
-            tables.push(CecTable::new(
-                name, name, g.start_mm, g.step_mm, values, dir,
-            )?);
-            described.push(format!("table {}: {what}", tables.len() - 1));
-            Ok(())
-        };
-        let axis = AXIS_NAMES[k];
-        if own.forward_mm == own.reverse_mm {
-            push(
-                &own.forward_mm,
-                CecDirection::Both,
-                format!("{axis} along {axis}, both directions"),
-            )?;
-        } else {
-            push(
-                &own.forward_mm,
-                CecDirection::Positive,
-                format!("{axis} along {axis}, positive direction"),
-            )?;
-            push(
-                &own.reverse_mm,
-                CecDirection::Negative,
-                format!("{axis} along {axis}, negative direction"),
-            )?;
-        }
+    for k in 0..3 {
+        tables.extend(own_cec_tables(&set.own[k], &names[k])?);
         if opts.cross_tables {
             for t in set.cross.iter().filter(|t| t.output_axis == k) {
                 let g = t.grid;
+                let what = format!(
+                    "{} along {}, both directions, zero at the reference",
+                    AXIS_NAMES[k], AXIS_NAMES[t.input_axis]
+                );
                 let input = &names[t.input_axis];
-                tables.push(CecTable::new(
+                let table = CecTable::new(
                     input,
-                    name,
+                    &names[k],
                     g.start_mm,
                     g.step_mm,
                     &t.correction_mm,
                     CecDirection::Both,
-                )?);
-                described.push(format!(
-                    "table {}: {axis} along {}, both directions, zero at the reference",
-                    tables.len() - 1,
-                    AXIS_NAMES[t.input_axis]
-                ));
+                )?;
+                tables.push((table, what));
             }
         }
     }
@@ -280,11 +252,43 @@ pub fn cec_program(
             triple(residual)
         ),
     ];
-    comment_lines.extend(described);
+    let (tables, described): (Vec<CecTable>, Vec<String>) = tables.into_iter().unzip();
+    comment_lines.extend(
+        described
+            .iter()
+            .enumerate()
+            .map(|(t, what)| format!("table {t}: {what}")),
+    );
     Ok(CecProgram {
         channel: opts.channel,
         comment_lines,
         tables,
+    })
+}
+
+/// The CEC table(s) of an axis's own error, with their descriptions: one for both directions
+/// when the reversal is zero, else one per direction (positive first, as in the manual's
+/// direction-dependent example).
+fn own_cec_tables(own: &OwnAxisTable, name: &str) -> Result<Vec<(CecTable, String)>, CecError> {
+    let g = own.grid;
+    let axis = AXIS_NAMES[own.axis];
+    let table = |values: &[f64], dir| CecTable::new(name, name, g.start_mm, g.step_mm, values, dir);
+    Ok(if own.forward_mm == own.reverse_mm {
+        vec![(
+            table(&own.forward_mm, CecDirection::Both)?,
+            format!("{axis} along {axis}, both directions"),
+        )]
+    } else {
+        vec![
+            (
+                table(&own.forward_mm, CecDirection::Positive)?,
+                format!("{axis} along {axis}, positive direction"),
+            ),
+            (
+                table(&own.reverse_mm, CecDirection::Negative)?,
+                format!("{axis} along {axis}, negative direction"),
+            ),
+        ]
     })
 }
 

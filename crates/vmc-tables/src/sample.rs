@@ -321,7 +321,7 @@ pub struct CrossTable {
 }
 
 /// Residual `E + c` of a set of tables over the volume grid, per component X, Y, Z.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Residual {
     /// Largest |residual|, µm.
     pub max_abs_um: [f64; 3],
@@ -330,7 +330,7 @@ pub struct Residual {
 }
 
 /// What the tables remove of the model's error over the working volume (positive approach).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct VolumeCheck {
     /// Grid points compared.
     pub points: usize,

@@ -76,19 +76,7 @@ pub fn sample_tables<P: ErrorPredictor + ?Sized>(
         reversal_shift_mm: shift,
         own,
         cross,
-        volume: VolumeCheck {
-            points: 0,
-            model_max_abs_um: [0.0; 3],
-            model_rms_um: [0.0; 3],
-            own_axis_only: Residual {
-                max_abs_um: [0.0; 3],
-                rms_um: [0.0; 3],
-            },
-            own_and_cross: Residual {
-                max_abs_um: [0.0; 3],
-                rms_um: [0.0; 3],
-            },
-        },
+        volume: VolumeCheck::default(),
     };
     set.volume = check_volume(model, spec, &set)?;
     Ok(set)
