@@ -1,4 +1,5 @@
-//! Compensation tables for real controllers (crate doc: README).
+#![doc = include_str!("../README.md")]
+
 pub mod cec;
 pub mod export;
 pub mod linuxcnc;
