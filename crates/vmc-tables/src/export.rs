@@ -384,10 +384,15 @@ fn clean(text: &str) -> String {
         .collect()
 }
 
+/// Longest text put into a CEC comment line, characters (NC program lines are limited; a
+/// provenance string can be long).
+const MAX_CEC_COMMENT_CHARS: usize = 160;
+
 /// An ASCII copy of `text` for a controller's file: `°` → `deg`, `µ` → `u`, other non-ASCII
-/// characters and control characters → `?` and space.
+/// characters and control characters → `?` and space, at most [`MAX_CEC_COMMENT_CHARS`]
+/// characters (cut with `...`).
 fn ascii(text: &str) -> String {
-    clean(text)
+    let s: String = clean(text)
         .chars()
         .map(|c| match c {
             '°' => "deg".to_string(),
@@ -395,7 +400,12 @@ fn ascii(text: &str) -> String {
             c if c.is_ascii() => c.to_string(),
             _ => "?".to_string(),
         })
-        .collect()
+        .collect();
+    if s.len() > MAX_CEC_COMMENT_CHARS {
+        format!("{}...", &s[..MAX_CEC_COMMENT_CHARS - 3])
+    } else {
+        s
+    }
 }
 
 fn comment_block(prefix: &str, lines: &[String]) -> String {

@@ -138,22 +138,43 @@ fn assign(line: usize, stmt: &str, tables: &mut BTreeMap<usize, Parts>) -> Resul
     let name = lhs[..open].trim();
     let index = lhs[open + 1..].strip_suffix(']').ok_or_else(unknown)?;
     if name == "$AN_CEC" {
-        let (t, n) = index.split_once(',').ok_or_else(|| bad_index(line, lhs))?;
-        let t = read_index(line, lhs, t, MAX_CEC_TABLES_READ)?;
-        let n = read_index(line, lhs, n, MAX_CEC_POINTS_READ)?;
-        let v = read_mm(line, lhs, rhs)?;
-        let parts = tables.entry(t).or_default();
-        if let Some((_, first_line)) = parts.values.get(&n) {
-            return Err(duplicate(line, lhs, *first_line));
-        }
-        parts.values.insert(n, (v, line));
-        return Ok(());
+        return assign_value(line, lhs, index, rhs, tables);
     }
     if !name.starts_with("$AN_CEC") {
         return Err(unknown());
     }
     let t = read_index(line, lhs, index, MAX_CEC_TABLES_READ)?;
+    assign_parameter(line, name, lhs, rhs, tables.entry(t).or_default())
+}
+
+/// `$AN_CEC[t,n] = value`.
+fn assign_value(
+    line: usize,
+    lhs: &str,
+    index: &str,
+    rhs: &str,
+    tables: &mut BTreeMap<usize, Parts>,
+) -> Result<(), CecError> {
+    let (t, n) = index.split_once(',').ok_or_else(|| bad_index(line, lhs))?;
+    let t = read_index(line, lhs, t, MAX_CEC_TABLES_READ)?;
+    let n = read_index(line, lhs, n, MAX_CEC_POINTS_READ)?;
+    let v = read_mm(line, lhs, rhs)?;
     let parts = tables.entry(t).or_default();
+    if let Some((_, first_line)) = parts.values.get(&n) {
+        return Err(duplicate(line, lhs, *first_line));
+    }
+    parts.values.insert(n, (v, line));
+    Ok(())
+}
+
+/// `$AN_CEC_<name>[t] = value` of table `t`'s `parts`.
+fn assign_parameter(
+    line: usize,
+    name: &str,
+    lhs: &str,
+    rhs: &str,
+    parts: &mut Parts,
+) -> Result<(), CecError> {
     match name {
         "$AN_CEC_INPUT_AXIS" => set(&mut parts.input, read_axis(line, lhs, rhs)?, line, lhs),
         "$AN_CEC_OUTPUT_AXIS" => set(&mut parts.output, read_axis(line, lhs, rhs)?, line, lhs),

@@ -127,6 +127,16 @@ fn a_model_with_reversal_gets_direction_dependent_cec_tables_for_its_own_axes() 
     };
     let p = cec_program(&set_of(&mut no_reversal), &own_only, &provenance()).unwrap();
     assert_eq!(p.tables.len(), 3);
+    let long = Provenance {
+        model: "m".repeat(500),
+        thermal_state: "µ°".into(),
+    };
+    let p = cec_program(&set_of(&mut no_reversal), &own_only, &long).unwrap();
+    assert!(p
+        .comment_lines
+        .iter()
+        .all(|c| c.len() <= 7 + 160 && c.is_ascii()));
+    assert!(p.comment_lines.contains(&"thermal state: udeg".to_string()));
 }
 
 #[test]
