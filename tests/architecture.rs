@@ -13,7 +13,7 @@ fn repo(rel: &str) -> PathBuf {
 
 /// The workspace's crates, each with the workspace crates it may depend on (normal
 /// dependencies) — the drawing of docs/architecture.md.
-const CRATE_GRAPH: [(&str, &[&str]); 6] = [
+const CRATE_GRAPH: [(&str, &[&str]); 7] = [
     ("vmc-gcode", &[]),
     ("vmc-predict", &[]),
     ("vmc-identify", &[]),
@@ -22,6 +22,7 @@ const CRATE_GRAPH: [(&str, &[&str]); 6] = [
         "vmc-machine",
         &["vmc-dynamics", "vmc-gcode", "vmc-identify", "vmc-predict"],
     ),
+    ("vmc-tables", &["vmc-predict"]),
     (
         "vmc-twin",
         &[
