@@ -54,7 +54,7 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
         &ThermalCycle::calibration_plan(spec),
         &CampaignConfig::new(1),
     )?;
-    let settings = study::fit_to_data(
+    let settings = campaign::fit_to_data(
         Settings {
             seed: 1,
             ..Settings::for_machine(spec)
@@ -182,7 +182,7 @@ pub fn campaign_with(
 ) -> Result<(f64, usize), EvalError> {
     let t = Instant::now();
     let (rep, _) =
-        study::run_campaign_with_cycles(spec, seeds, &Settings::for_machine(spec), cycles, &())?;
+        campaign::run_campaign_with_cycles(spec, seeds, &Settings::for_machine(spec), cycles, &())?;
     Ok((t.elapsed().as_secs_f64(), rep.runs.len()))
 }
 

@@ -3,13 +3,16 @@
 //! Every file the tool writes goes through [`write_atomic`] (temporary file in the same folder,
 //! then rename), and an existing file is never replaced unless the caller allows it (`--force`).
 //! Outputs are checked with [`check_writable`] / [`prepare_output_folder`] before any
-//! simulation starts, so a wrong path costs no minutes of work. Reading is
-//! `vmc_machine::read`.
+//! simulation starts, so a wrong path costs no minutes of work.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use thiserror::Error;
+
+/// Reading text inputs is the machine crate's (`vmc_machine::read`); the commands read and
+/// write through this one module.
+pub use vmc_machine::read::{one_line_toml_error, read_named, read_text, ReadError};
 
 /// A file could not be written.
 #[derive(Debug, Error)]

@@ -17,7 +17,7 @@ use crate::studies::campaign::{self, CampaignReport, ForMachine, TrainedModels, 
 use vmc_machine::machine::MachineSpec;
 
 /// Name of a campaign shard's per-seed results (one JSON object per line,
-/// [`study::SeedResults`]).
+/// [`campaign::SeedResults`]).
 pub const SEED_RESULTS_FILE: &str = "seeds.jsonl";
 
 /// What to run, validated.
@@ -78,12 +78,12 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
     let settings = settings_of(cfg);
     let progress = Progress::new(0, "units");
     let (rep, models) =
-        study::run_campaign_with_progress(&cfg.machine, &cfg.seeds, &settings, &progress)?;
+        campaign::run_campaign_with_progress(&cfg.machine, &cfg.seeds, &settings, &progress)?;
     progress.finish();
-    let summary = study::Summary::of(rep.header(), &rep.runs);
-    study::write_summary(&summary, out)?;
+    let summary = campaign::Summary::of(rep.header(), &rep.runs);
+    campaign::write_summary(&summary, out)?;
     if cfg.print_runs {
-        study::write_run_table(&rep, out)?;
+        campaign::write_run_table(&rep, out)?;
     }
     if let Some(rrd) = &cfg.rrd {
         write_recording(cfg, rrd, &rep, &models, &summary.fleet, out)?;
@@ -91,7 +91,7 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(dir) = out_dir {
         let path = dir.join("report.json");
         files::write_atomic_with(&path, cfg.force, |w| {
-            study::write_report_json(&rep.header(), &rep.training, &rep.runs, w)
+            campaign::write_report_json(&rep.header(), &rep.training, &rep.runs, w)
                 .map_err(std::io::Error::other)
         })?;
         write_models(&dir, &models, cfg.force)?;
@@ -148,7 +148,7 @@ fn campaign_shard(cfg: &CampaignConfig, shard: Shard, out: &mut dyn Write) -> Re
     files::prepare_output_folder(dir, &names, cfg.force)?;
     let settings = settings_of(cfg);
     let cal_cycles = ThermalCycle::calibration_plan(&cfg.machine);
-    let header = study::campaign_header(&cfg.machine, &cfg.seeds, &settings, &cal_cycles);
+    let header = campaign::campaign_header(&cfg.machine, &cfg.seeds, &settings, &cal_cycles);
     let manifest = ShardManifest {
         format: MANIFEST_FORMAT,
         command: "campaign".into(),
@@ -162,7 +162,7 @@ fn campaign_shard(cfg: &CampaignConfig, shard: Shard, out: &mut dyn Write) -> Re
     };
     let progress = Progress::new(0, "units");
     let (rep, models) =
-        study::run_campaign_with_progress(&cfg.machine, seeds, &settings, &progress)?;
+        campaign::run_campaign_with_progress(&cfg.machine, seeds, &settings, &progress)?;
     progress.finish();
     files::write_atomic_with(&dir.join(SEED_RESULTS_FILE), cfg.force, |w| {
         for r in rep.by_seed(seeds) {
@@ -212,7 +212,7 @@ fn write_recording(
     rrd: &RrdOutput,
     rep: &CampaignReport,
     models: &[TrainedModels],
-    fleet: &study::fleet::FleetSummary,
+    fleet: &campaign::fleet::FleetSummary,
     out: &mut dyn Write,
 ) -> Result<()> {
     let seeds: Vec<String> = cfg.seeds.iter().map(|s| s.to_string()).collect();

@@ -99,7 +99,7 @@ fn merge_campaign(
             files: &results,
             digest: &digest,
         };
-        study::write_report_json(&header, training, runs, w).map_err(std::io::Error::other)
+        campaign::write_report_json(&header, training, runs, w).map_err(std::io::Error::other)
     })?;
     for (dir, name) in dirs
         .iter()
@@ -130,20 +130,20 @@ fn merge_campaign(
     }
     let digest = digest.finish();
     let mut summary = Vec::new();
-    study::write_summary(&digest, &mut summary)?;
+    campaign::write_summary(&digest, &mut summary)?;
     out.write_all(&summary)?;
     if cfg.print_runs {
-        study::write_run_table_head(out)?;
+        campaign::write_run_table_head(out)?;
         results.for_each(
             |r| {
                 r.runs
                     .iter()
-                    .try_for_each(|run| study::write_run_row(run, out))
+                    .try_for_each(|run| campaign::write_run_row(run, out))
                     .map_err(anyhow::Error::from)
             },
             |e| e,
         )?;
-        study::write_run_table_foot(out)?;
+        campaign::write_run_table_foot(out)?;
     }
     writeln!(out, "wrote {} and the trained models", path.display())?;
     if let Some(png) = &cfg.png {
@@ -251,18 +251,18 @@ impl Serialize for RunStream<'_> {
 /// Writes the fleet's histograms as a PNG picture and says what each panel spans.
 fn write_png(
     path: &Path,
-    fleet: &study::fleet::FleetSummary,
+    fleet: &campaign::fleet::FleetSummary,
     force: bool,
     out: &mut dyn Write,
 ) -> Result<()> {
-    let panels = study::fleet_png::panels(fleet);
-    let bytes = study::fleet_png::encode_png(&study::fleet_png::raster(&panels))?;
+    let panels = campaign::fleet_png::panels(fleet);
+    let bytes = campaign::fleet_png::encode_png(&campaign::fleet_png::raster(&panels))?;
     files::write_atomic(path, &bytes, force)?;
     writeln!(
         out,
         "wrote {} (histograms across machines, {} bins; red line: the goal):",
         path.display(),
-        study::fleet::BINS
+        campaign::fleet::BINS
     )?;
     for (pos, (name, (hist, _))) in ["top left", "top right", "bottom left", "bottom right"]
         .iter()

@@ -46,8 +46,8 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
     if cfg.spindle_speed {
         settings = settings.with_spindle_speed_input();
     }
-    let settings = study::fit_to_data(settings, &data);
-    if cfg.kind == ModelKind::Hybrid && !study::uses_axis_feeds(&data) {
+    let settings = campaign::fit_to_data(settings, &data);
+    if cfg.kind == ModelKind::Hybrid && !campaign::uses_axis_feeds(&data) {
         writeln!(
             out,
             "note: {name} has no axis-feed columns (x_feed_mm_per_min, y_feed_mm_per_min, \

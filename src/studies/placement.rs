@@ -401,7 +401,7 @@ pub fn selection_stage(
         .map_err(EvalError::from)?;
     let selection = selection::select_sensors(&data, &cfg.selection)?;
     let typical = typical_part(spec, &data);
-    let plans = study::diagonal_plans(&cand_spec)?;
+    let plans = campaign::diagonal_plans(&cand_spec)?;
     let states = validation_states(cfg.seed);
     let mut validation: Vec<SetResult> = Vec::new();
     for p in &selection.proposals {
@@ -526,8 +526,8 @@ fn evaluate_set(
         .filter_map(|n| candidates.iter().find(|c| &c.name == n).cloned())
         .collect();
     let set_spec = with_sensors(cand_spec, sensors)?;
-    let settings = study::fit_to_data(
-        study::with_history_features(
+    let settings = campaign::fit_to_data(
+        campaign::with_history_features(
             Settings {
                 seed,
                 sensors: names.to_vec(),
@@ -539,7 +539,7 @@ fn evaluate_set(
     );
     let (hybrid, _) =
         predictor::train_hybrid(data, &set_spec.geometry(), &settings).map_err(EvalError::from)?;
-    Ok(study::evaluate_predictor(
+    Ok(campaign::evaluate_predictor(
         &set_spec,
         seed,
         ModelKind::Hybrid,
@@ -557,7 +557,7 @@ pub fn summarise(label: &str, names: &[String], runs: &[RunReport]) -> SetResult
         label: label.to_string(),
         sensors: names.to_vec(),
         runs: runs.len(),
-        median_reduction: study::median(&mut red).unwrap_or(f64::NAN),
+        median_reduction: campaign::median(&mut red).unwrap_or(f64::NAN),
         worst_reduction: runs
             .iter()
             .map(|r| r.reduction)

@@ -167,7 +167,7 @@ fn invalid(path: &str, field: impl Into<String>, msg: impl Into<String>) -> Mach
 ///
 /// # Errors
 /// [`MachineError::Io`].
-pub(crate) fn read_machine_file(path: &Path) -> Result<String, MachineError> {
+pub fn read_machine_file(path: &Path) -> Result<String, MachineError> {
     crate::read::read_text(path).map_err(|err| MachineError::Io {
         path: path.display().to_string(),
         err,
@@ -178,7 +178,7 @@ pub(crate) fn read_machine_file(path: &Path) -> Result<String, MachineError> {
 ///
 /// # Errors
 /// [`MachineError::Parse`] with the TOML error on one line.
-pub(crate) fn parse_machine_toml<T: serde::de::DeserializeOwned>(
+pub fn parse_machine_toml<T: serde::de::DeserializeOwned>(
     text: &str,
     path: &str,
 ) -> Result<T, MachineError> {

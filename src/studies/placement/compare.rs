@@ -36,7 +36,7 @@ pub fn compare_seeds(
 ) -> Result<Vec<SeedRuns>, PlacementError> {
     let cand_spec = &stage.cand_spec;
     let cal = ThermalCycle::calibration_plan(cand_spec);
-    let plans = study::diagonal_plans(cand_spec)?;
+    let plans = campaign::diagonal_plans(cand_spec)?;
     // One calibration dataset per seed, with every candidate logged; each set trains on its
     // columns. The selection seed's typical cycles are part of the selection data.
     let datasets: Vec<Dataset> = seeds
