@@ -247,7 +247,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
     let mut d = Decoded::default();
     // (group id, first word) for conflict messages.
     let mut seen: Vec<(u32, Word)> = Vec::new();
-    let mut claim = |group: u32, w: &Word| -> Result<(), GcodeError> {
+    let claim = |seen: &mut Vec<(u32, Word)>, group: u32, w: &Word| -> Result<(), GcodeError> {
         if let Some((_, prev)) = seen.iter().find(|(g, _)| *g == group) {
             return Err(GcodeError::invalid(
                 block.line,
@@ -267,7 +267,23 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'G' => {
                 let code = code_of(block, w)?;
                 let (group, action) = g_action(code).map_err(|e| e.at(block.line, w))?;
-                claim(group, w)?;
+                if let GAction::Motion(m) = action {
+                    // G80 beside another motion code gives way to it, in either order (a
+                    // Fanuc-style safe-start line `G0 G17 G21 G40 G49 G80 G90`), as LinuxCNC
+                    // does; two other motion codes still conflict.
+                    match (d.motion, m) {
+                        (Some(_), Motion::Cancel) => continue,
+                        (Some((Motion::Cancel, _)), _) => {
+                            if let Some(entry) = seen.iter_mut().find(|(g, _)| *g == group) {
+                                entry.1 = *w;
+                            }
+                            d.motion = Some((m, w.col));
+                            continue;
+                        }
+                        _ => {}
+                    }
+                }
+                claim(&mut seen, group, w)?;
                 match action {
                     GAction::Motion(m) => d.motion = Some((m, w.col)),
                     GAction::NonModal(n) => d.non_modal = Some((n, w.col)),
@@ -331,7 +347,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     }
                     _ => return Err(m_unsupported(code).at(block.line, w)),
                 };
-                claim(100 + group, w)?;
+                claim(&mut seen, 100 + group, w)?;
             }
             'X' => d.axes[0] = Some(*w),
             'Y' => d.axes[1] = Some(*w),
@@ -534,6 +550,39 @@ mod tests {
         let e = dec("G0 G2 X1 R1").unwrap_err();
         assert_eq!((e.line, e.col, e.kind), (4, 4, GcodeErrorKind::Invalid));
         assert!(e.msg.contains("G0") && e.msg.contains("G2"), "{e}");
+    }
+
+    #[test]
+    fn g80_gives_way_to_another_motion_code_in_either_order() {
+        // rs274: `G80 G0 X1 Y2` and `G0 G80 X1` traverse, `G1 G80 X1 F100` feeds,
+        // `G80 G2 X2 I1 F100` arcs, `G80 G81 G80 X1 Z-1 R1 F10` drills.
+        for (text, motion, col) in [
+            ("G00 G17 G21 G40 G49 G80 G90", Motion::Rapid, 1),
+            ("G80 G0 X1 Y2", Motion::Rapid, 5),
+            ("G1 G80 X1 F100", Motion::Linear, 1),
+            ("G80 G2 X2 I1", Motion::Arc { clockwise: true }, 5),
+            ("G80 G81 G80 X1 Z-1 R1", Motion::Cycle(Cycle::G81), 5),
+        ] {
+            let d = dec(text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert_eq!(d.motion, Some((motion, col)), "{text}");
+        }
+        assert_eq!(
+            dec("G80 G80").unwrap().motion.map(|m| m.0),
+            Some(Motion::Cancel)
+        );
+    }
+
+    #[test]
+    fn two_motion_codes_beside_g80_still_conflict() {
+        // rs274: "Two g codes used from same modal group" for both.
+        for text in ["G0 G80 G1 X1", "G80 G0 G1 X1"] {
+            let e = dec(text).unwrap_err();
+            assert_eq!(
+                (e.col, e.kind),
+                (text.rfind("G1").unwrap() + 1, GcodeErrorKind::Invalid)
+            );
+            assert!(e.msg.starts_with("G0 and G1 "), "{text}: {e}");
+        }
     }
 
     #[test]

@@ -74,7 +74,9 @@
 //!   start from it); M6, plane, tool length and work offset changes, G28/G30, G53, G92 and
 //!   I/O M codes are refused, as LinuxCNC refuses them. An arc as the entry move is
 //!   unsupported.
-//! - G80 (cancel motion mode).
+//! - G80 (cancel motion mode). Beside another motion code in the same block (a Fanuc-style
+//!   safe-start line `G0 G17 G21 G40 G49 G80 G90`) it gives way to that code, in either order,
+//!   as LinuxCNC does; two G80 are one; two other motion codes still conflict.
 //!
 //! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
