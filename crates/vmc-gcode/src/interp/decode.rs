@@ -2,7 +2,7 @@
 //! carries. Checks what can be checked without the modal state: known codes, at most one code
 //! per modal group (RS274/NGC / LinuxCNC modal groups).
 
-use super::{Plane, SpindleDir};
+use super::{Plane, ProbeKind, SpindleDir};
 use crate::syntax::{Block, GcodeError, Word};
 
 /// Group 1: motion mode.
@@ -18,6 +18,8 @@ pub(super) enum Motion {
     Cancel,
     /// G73, G74, G81–G89: a canned cycle (see `cycles`).
     Cycle(Cycle),
+    /// G38.2–G38.5: a straight probe move (see `probe`).
+    Probe(ProbeKind),
 }
 
 /// The canned cycles (group 1).
@@ -432,6 +434,13 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         870 => (1, A::Motion(Motion::Cycle(Cycle::G87))),
         880 => (1, A::Motion(Motion::Cycle(Cycle::G88))),
         890 => (1, A::Motion(Motion::Cycle(Cycle::G89))),
+        382..=385 => (
+            1,
+            A::Motion(Motion::Probe(ProbeKind {
+                toward: code <= 383,
+                error_on_no_contact: code.is_multiple_of(2),
+            })),
+        ),
         980 => (10, A::Retract(Retract::InitialLevel)),
         990 => (10, A::Retract(Retract::RPlane)),
         930 => (5, A::FeedMode(FeedMode::InverseTime)),
@@ -483,7 +492,6 @@ fn g_unsupported(code: u32) -> Rejected {
         70 | 80 => "lathe diameter/radius mode",
         171 | 181 | 191 => "UVW plane",
         330 | 331 => "spindle-synchronised motion",
-        382..=385 => "probing",
         432 => "additional tool length offset",
         700 | 710..=712 | 720..=722 | 760 => "lathe cycle",
         960 | 970 => "spindle speed mode",
@@ -597,7 +605,7 @@ mod tests {
 
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
-        for text in ["G43.2", "G76 Z1", "G33", "M98", "G38.2"] {
+        for text in ["G43.2", "G76 Z1", "G33", "M98", "G5.2"] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
             assert!(

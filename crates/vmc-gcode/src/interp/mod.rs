@@ -98,16 +98,27 @@ mod flow;
 #[cfg(test)]
 mod flow_tests;
 #[cfg(test)]
+mod location_tests;
+mod probe;
+#[cfg(test)]
+mod probe_tests;
+mod program_run;
+#[cfg(test)]
 mod rotary_tests;
 mod sub_files;
 #[cfg(test)]
 mod tests;
 
-pub use crate::syntax::{GcodeError, GcodeErrorKind};
+pub use crate::syntax::{CallSite, ErrorIn, GcodeError, GcodeErrorKind};
 pub use cycles::{MAX_REPEATS, PECK_CLEARANCE_MM};
 pub use exec::Interpreter;
 pub use expr::NUM_PARAMS;
 pub use flow::{MAX_CALL_DEPTH, MAX_ITERATIONS};
+pub use probe::{
+    straight_probe_call, ProbeKind, ProbeOutcome, ProbeParams, ProbeRequest, PROBE_PARAM_FIRST,
+    STANDALONE_BACKOFF_MM,
+};
+pub use program_run::{ProgramRun, RunEvent};
 
 /// Largest P (turn count) accepted on G2/G3: guards against programs that would expand to
 /// absurd paths (and hangs downstream).
@@ -170,7 +181,12 @@ impl Default for InterpConfig {
 /// # Ok::<(), vmc_gcode::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
-    flow::run(src, cfg)
+    let mut run = ProgramRun::new(src, cfg)?;
+    let mut out = Vec::new();
+    while let RunEvent::Probe(_) = run.resume(&mut out)? {
+        run.probe_result(ProbeOutcome::Standalone)?;
+    }
+    Ok(out)
 }
 
 /// Active plane for arcs (G17 / G18 / G19).
@@ -241,6 +257,20 @@ pub enum CanonKind {
         direction: OrientDirection,
         /// Q: how long to wait for the orientation to complete, s (`None`: no wait).
         timeout_s: Option<f64>,
+    },
+    /// G38.2 / G38.3 / G38.4 / G38.5 straight probe move toward `end_mm` (the rotary axes
+    /// toward `end_abc_deg`): the machine stops where the probe input changes state, at the
+    /// target at the latest, and reports where (see [`ProbeOutcome`]); the interpreter goes
+    /// on from there. The next move starts where the machine says the tool came to rest.
+    Probe {
+        end_mm: [f64; 3],
+        /// A, B, C at the target, machine coordinates, degrees.
+        end_abc_deg: [f64; 3],
+        /// As for [`CanonKind::Feed`]: mm/min along the XYZ path, deg/min for a move of the
+        /// rotary axes alone.
+        feed_mm_per_min: f64,
+        /// Which of G38.2 … G38.5.
+        kind: ProbeKind,
     },
     /// M6 tool change to tool `tool`.
     ToolChange { tool: u32 },
