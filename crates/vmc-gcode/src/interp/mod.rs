@@ -16,7 +16,7 @@
 //! Execution order inside a block (RS274/NGC §3.8): G93/G94/G95, F, S, T, M6, M3/M4/M5,
 //! M7/M8/M9, M70–M73, G4, G17–G19, G20/G21, G40/G41/G42, G43/G49, G54–G59, G61/G61.1/G64,
 //! G90/G91, G90.1/G91.1, G10/G28/G30/G28.1/G30.1/G92/G92.1/G92.2/G92.3, G98/G99, motion (G0–G3,
-//! G53, canned cycles), M0/M1/M60/M2/M30.
+//! G38.2–G38.5, G53, canned cycles), M0/M1/M60/M2/M30.
 //! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
 //! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
 //! |value| ≤ 1e9 so that all results stay finite.
@@ -74,6 +74,10 @@
 //!   start from it); M6, plane, tool length and work offset changes, G28/G30, G53, G92 and
 //!   I/O M codes are refused, as LinuxCNC refuses them. An arc as the entry move is
 //!   unsupported.
+//! - G38.2 / G38.3 / G38.4 / G38.5 probe moves ([`CanonKind::Probe`], see `probe`): the
+//!   result comes from outside ([`ProgramRun`], [`Interpreter::probe_result`]); LinuxCNC's
+//!   refusals (zero feed, cutter compensation on, G95, a G38.2/G38.4 of no length); G93 is
+//!   unsupported. The motion mode persists like G1's.
 //! - G80 (cancel motion mode). Beside another motion code in the same block (a Fanuc-style
 //!   safe-start line `G0 G17 G21 G40 G49 G80 G90`) it gives way to that code, in either order,
 //!   as LinuxCNC does; two G80 are one; two other motion codes still conflict.
@@ -164,7 +168,8 @@ impl Default for InterpConfig {
 }
 
 /// Interprets a whole program: parse, run every block until M2/M30 or the end of the text.
-/// Stops at the first error.
+/// Stops at the first error. Probe moves get the stand-alone outcome of LinuxCNC's `rs274`
+/// ([`ProbeOutcome::Standalone`]); use [`ProgramRun`] to give them a machine's results.
 ///
 /// ```
 /// use vmc_gcode::interp::{run_program, CanonKind, InterpConfig};
