@@ -30,6 +30,7 @@ pub const MAX_ITERATIONS: u64 = 1_000_000;
 pub const MAX_CALL_DEPTH: usize = 64;
 
 /// A parsed program: its lines and the syntax error that ended parsing, if any.
+#[derive(Debug)]
 pub(super) struct Program {
     pub(super) lines: Vec<Line>,
     pub(super) tail_error: Option<GcodeError>,
@@ -79,6 +80,7 @@ impl Program {
 }
 
 /// One active call.
+#[derive(Debug)]
 pub(super) struct Frame {
     return_to: usize,
     /// `#1…#30` of the caller (O-word calls; Fanuc-style calls share all parameters).
@@ -227,6 +229,7 @@ fn kw(k: OKind) -> &'static str {
 }
 
 /// Execution state around the modal interpreter.
+#[derive(Debug)]
 pub(super) struct Runner {
     pub(super) interp: Interpreter,
     params: Params,

@@ -16,6 +16,8 @@
 //! Units: machine coordinates in mm (spindle positions, the tool length included, as every
 //! [`CanonKind`](super::CanonKind) move), angles in degrees, feeds in mm/min.
 
+use super::XYZ_STILL_MM;
+
 /// Which of G38.2 … G38.5 a probe move is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ProbeKind {
@@ -67,11 +69,12 @@ pub struct ProbeRequest {
 impl ProbeRequest {
     /// Where `rs274` leaves the tool after the move: [`STANDALONE_BACKOFF_MM`] back from the
     /// target along the straight XYZ path toward the start (the target itself if X, Y and Z
-    /// do not move); A, B, C at the target.
+    /// do not move, that is by at most [`XYZ_STILL_MM`]: the rounding of the coordinate
+    /// transforms must not give the back-off a direction); A, B, C at the target.
     pub fn standalone_rest_mm(&self) -> [f64; 3] {
         let d = [0, 1, 2].map(|a| self.start_mm[a] - self.end_mm[a]);
         let length_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if length_mm == 0.0 {
+        if length_mm <= XYZ_STILL_MM {
             return self.end_mm;
         }
         [0, 1, 2].map(|a| self.end_mm[a] + STANDALONE_BACKOFF_MM * d[a] / length_mm)
@@ -157,8 +160,11 @@ mod tests {
         let rest = request([0.0; 3], [5.0, 0.0, -2.0]).standalone_rest_mm();
         assert!((rest[0] - 4.7642).abs() < 5e-5 && (rest[2] + 1.9057).abs() < 5e-5);
         assert_eq!(rest[1], 0.0);
-        // A move of the rotary axes alone keeps X, Y, Z.
+        // A move of the rotary axes alone keeps X, Y, Z, even with the rounding of a rotated
+        // frame in its target.
         assert_eq!(request([1.0; 3], [1.0; 3]).standalone_rest_mm(), [1.0; 3]);
+        let end = [1.0, 1.0 + 1e-14, 1.0];
+        assert_eq!(request([1.0; 3], end).standalone_rest_mm(), end);
     }
 
     #[test]

@@ -165,6 +165,26 @@ fn probes_are_refused_where_linuxcnc_refuses_them() {
 }
 
 #[test]
+fn a_probe_of_no_length_in_a_rotated_frame_stays_of_no_length() {
+    // rs274: "Start point too close to probe point"; `G91 G38.3 Z0` then `G91 G1 X1` →
+    // STRAIGHT_FEED(2.1, 2.3, 3): no back-off, whatever the rounding of the rotation.
+    let rotated = "G10 L2 P1 X10 Y20 R30\nG0 X1.1 Y2.3 Z3\n";
+    let e = err(&format!("{rotated}G38.2 Z3 F10\nM2"));
+    assert_eq!(
+        (e.line, e.msg.as_str()),
+        (3, "Start point too close to probe point")
+    );
+    let p = points(&format!("{rotated}G91 G38.3 Z0 F10\nG91 G1 X1\nM2"));
+    let (sin, cos) = 30f64.to_radians().sin_cos();
+    let expected = [
+        10.0 + 2.1 * cos - 2.3 * sin,
+        20.0 + 2.1 * sin + 2.3 * cos,
+        3.0,
+    ];
+    assert!(close(p[2], expected, 1e-9), "{p:?}");
+}
+
+#[test]
 fn g38_3_and_g38_5_accept_a_move_of_no_length_and_a_rotary_probe_feeds_in_degrees() {
     assert_eq!(points("G38.3 Z0 F10\nG38.5 Z0\nM2").len(), 2);
     let moves = run_program("G20\nG38.3 A10 F10\nM2", &InterpConfig::default()).unwrap();

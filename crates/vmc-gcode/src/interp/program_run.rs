@@ -54,6 +54,7 @@ enum State {
 /// assert!(matches!(moves[1].kind, CanonKind::Traverse { end_mm: [0.0, 0.0, 2.0], .. }));
 /// # Ok::<(), vmc_gcode::GcodeError>(())
 /// ```
+#[derive(Debug)]
 pub struct ProgramRun {
     prog: Program,
     runner: Runner,

@@ -4,7 +4,7 @@
 
 use super::super::decode::{CompMode, Decoded, FeedMode};
 use super::super::probe::{ProbeKind, ProbeOutcome, ProbeParams, ProbeRequest};
-use super::super::CanonKind;
+use super::super::{CanonKind, XYZ_STILL_MM};
 use super::Interpreter;
 use crate::syntax::{Block, GcodeError};
 
@@ -71,7 +71,9 @@ impl Interpreter {
 
     /// The probe move of a block from the current point to (`end_mm`, `end_abc_deg`), left
     /// pending until [`Interpreter::probe_result`]. G38.2 and G38.4 refuse a move to where the
-    /// tool already is (LinuxCNC's check; G38.3 and G38.5 accept it).
+    /// tool already is (LinuxCNC's check, on its program coordinates; here X, Y, Z within
+    /// [`XYZ_STILL_MM`], the rounding of a rotated frame, and A, B, C equal; G38.3 and G38.5
+    /// accept it).
     pub(super) fn probe_move(
         &mut self,
         block: &Block,
@@ -79,7 +81,12 @@ impl Interpreter {
         kind: ProbeKind,
         (end_mm, end_abc_deg): ([f64; 3], [f64; 3]),
     ) -> Result<CanonKind, GcodeError> {
-        if kind.error_on_no_contact && end_mm == self.pos_mm && end_abc_deg == self.rotary.pos_deg {
+        let travel_mm = (0..3)
+            .map(|a| (end_mm[a] - self.pos_mm[a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let still = travel_mm <= XYZ_STILL_MM && end_abc_deg == self.rotary.pos_deg;
+        if kind.error_on_no_contact && still {
             return Err(GcodeError::invalid(
                 block.line,
                 col,
