@@ -500,7 +500,7 @@ fn compensated_contour(rng: &mut Rng, st: &mut State, out: &mut String) {
 /// (which leaves from the compensated point as the exit move does).
 fn exit(rng: &mut Rng) -> &'static str {
     if rng.chance(0.15) {
-        *rng.pick(&["G40 G38.3", "G40 G38.5"])
+        rng.pick::<&str>(&["G40 G38.3", "G40 G38.5"])
     } else {
         "G40 G1"
     }
