@@ -200,6 +200,17 @@ impl Interpreter {
             next.spindle.1,
             next.scale(),
         );
+        if let Some(p) = next.probe.as_mut() {
+            // The request carries the feed as the move does (deg/min for the rotary axes alone).
+            for kind in &kinds {
+                if let CanonKind::Probe {
+                    feed_mm_per_min, ..
+                } = kind
+                {
+                    p.request.feed_mm_per_min = *feed_mm_per_min;
+                }
+            }
+        }
         next.comp.finish_block(block.line, kinds, next.ended, out);
         *self = next;
         Ok(self.pending_probe())

@@ -187,7 +187,15 @@ fn a_probe_of_no_length_in_a_rotated_frame_stays_of_no_length() {
 #[test]
 fn g38_3_and_g38_5_accept_a_move_of_no_length_and_a_rotary_probe_feeds_in_degrees() {
     assert_eq!(points("G38.3 Z0 F10\nG38.5 Z0\nM2").len(), 2);
-    let moves = run_program("G20\nG38.3 A10 F10\nM2", &InterpConfig::default()).unwrap();
+    let mut run = ProgramRun::new("G20\nG38.3 A10 F10\nM2", &InterpConfig::default()).unwrap();
+    let mut moves = Vec::new();
+    let RunEvent::Probe(request) = run.resume(&mut moves).unwrap() else {
+        panic!("a probe move")
+    };
+    assert!(
+        (request.feed_mm_per_min - 10.0).abs() < 1e-12,
+        "{request:?}"
+    );
     assert!(
         matches!(
             moves[0].kind,
