@@ -14,8 +14,9 @@ pub enum RunEvent {
     /// The program is over (M2, M30, an M99 in the main program, or the end of the text):
     /// every canonical action has been emitted.
     Ended,
-    /// A probe move was emitted (last in the output so far, before any stop of its block):
-    /// give its result with [`ProgramRun::probe_result`], then resume.
+    /// A probe move was emitted: it is the last move in the output so far (only a stop of
+    /// its own block — M0, M1, M60, M2, M30 — may follow it). Give its result with
+    /// [`ProgramRun::probe_result`], then resume.
     Probe(ProbeRequest),
 }
 
