@@ -4,6 +4,6 @@ pub mod interp;
 pub mod syntax;
 
 pub use interp::{
-    run_program, CanonKind, CanonMove, GcodeError, GcodeErrorKind, InterpConfig, Interpreter,
-    Plane, SpindleDir,
+    run_program, CallSite, CanonKind, CanonMove, GcodeError, GcodeErrorKind, InterpConfig,
+    Interpreter, Plane, ProbeKind, ProbeOutcome, ProbeRequest, ProgramRun, RunEvent, SpindleDir,
 };

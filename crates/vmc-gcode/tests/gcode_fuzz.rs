@@ -21,7 +21,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use common::rs274::{compare, fixture_config, ours, parse_expected, rs274_binary, run_rs274};
-use vmc_gcode::interp::run_program;
+use vmc_gcode::interp::{run_program, CanonKind};
 
 /// The seed of every generated program (program `i` is `generator::program(SEED, i)`).
 const SEED: u64 = 0x5EED_2025;
@@ -35,8 +35,8 @@ fn stored_path() -> PathBuf {
 /// How one program fared in both interpreters.
 #[derive(Debug)]
 enum Outcome {
-    /// Both accept it and the moves agree.
-    Matched,
+    /// Both accept it and the moves agree: how many were probe moves.
+    Matched { probes: usize },
     /// Both refuse it.
     BothRefuse,
     /// Both accept it, the moves differ.
@@ -51,7 +51,12 @@ fn judge(text: &str, reference: &Result<String, String>) -> Outcome {
     let mine = run_program(text, &fixture_config());
     match (mine, reference) {
         (Ok(moves), Ok(calls)) => match compare(&ours(&moves), &parse_expected(calls)) {
-            None => Outcome::Matched,
+            None => Outcome::Matched {
+                probes: moves
+                    .iter()
+                    .filter(|m| matches!(m.kind, CanonKind::Probe { .. }))
+                    .count(),
+            },
             Some(diff) => Outcome::Mismatch(diff),
         },
         (Err(_), Err(_)) => Outcome::BothRefuse,
@@ -64,15 +69,27 @@ fn judge(text: &str, reference: &Result<String, String>) -> Outcome {
 #[derive(Default)]
 struct Tally {
     matched: usize,
+    /// Programs both accept whose moves agree and hold probe moves; those probe moves.
+    matched_probing: usize,
+    probe_moves: usize,
+    /// Programs (judged) with G80 beside another motion code in a block.
+    g80_beside_motion: usize,
     both_refuse: usize,
     failures: Vec<String>,
     we_refuse: Vec<String>,
 }
 
 impl Tally {
-    fn add(&mut self, index: u64, outcome: Outcome) {
+    fn add(&mut self, index: u64, text: &str, outcome: Outcome) {
+        if text.lines().any(g80_beside_motion) {
+            self.g80_beside_motion += 1;
+        }
         match outcome {
-            Outcome::Matched => self.matched += 1,
+            Outcome::Matched { probes } => {
+                self.matched += 1;
+                self.matched_probing += usize::from(probes > 0);
+                self.probe_moves += probes;
+            }
             Outcome::BothRefuse => self.both_refuse += 1,
             Outcome::Mismatch(d) => self
                 .failures
@@ -86,11 +103,16 @@ impl Tally {
 
     fn report_and_check(&self, what: &str) {
         println!(
-            "{what}: both accept and agree {}, both refuse {}, only we refuse {}, failures {}",
+            "{what}: both accept and agree {} (with probe moves {}, {} probe moves), both \
+             refuse {}, only we refuse {}, failures {}; programs with G80 beside a motion \
+             code {}",
             self.matched,
+            self.matched_probing,
+            self.probe_moves,
             self.both_refuse,
             self.we_refuse.len(),
-            self.failures.len()
+            self.failures.len(),
+            self.g80_beside_motion
         );
         for f in self.failures.iter().chain(&self.we_refuse).take(20) {
             println!("  {f}");
@@ -103,6 +125,21 @@ impl Tally {
         );
         assert!(self.matched > 0, "{what}: no program accepted by both");
     }
+}
+
+/// True if a line has G80 and another motion code (G0–G3, G38.x, a canned cycle).
+fn g80_beside_motion(line: &str) -> bool {
+    let codes: Vec<&str> = line
+        .split_whitespace()
+        .filter(|w| w.starts_with('G'))
+        .collect();
+    let motion = |c: &&str| {
+        matches!(
+            *c,
+            "G0" | "G1" | "G2" | "G3" | "G73" | "G81" | "G82" | "G83" | "G85" | "G89"
+        ) || c.starts_with("G38.")
+    };
+    codes.contains(&"G80") && codes.iter().any(motion)
 }
 
 /// The stored outputs: one entry per program, `Ok(calls)` or `Err(message)`.
@@ -136,6 +173,7 @@ fn kept(call: &str) -> bool {
         "STRAIGHT_TRAVERSE(",
         "STRAIGHT_FEED(",
         "ARC_FEED(",
+        "STRAIGHT_PROBE(",
         "PROGRAM_END(",
     ]
     .iter()
@@ -166,7 +204,7 @@ fn stored_rs274_outputs_agree() {
     let mut tally = Tally::default();
     for (i, reference) in stored.iter().enumerate() {
         let text = generator::program(SEED, i as u64);
-        tally.add(i as u64, judge(&text, reference));
+        tally.add(i as u64, &text, judge(&text, reference));
     }
     tally.report_and_check("stored rs274 outputs");
 }
@@ -197,17 +235,17 @@ fn generated_programs_move_as_rs274_does() {
     let mut tally = Tally::default();
     for i in first..first + count {
         let reference = rs274_of(&bin, dir.path(), i);
-        let outcome = judge(&generator::program(SEED, i), &reference);
+        let text = generator::program(SEED, i);
+        let outcome = judge(&text, &reference);
         if let (
             Some(keep),
             Outcome::Mismatch(_) | Outcome::OnlyRs274Refuses(_) | Outcome::OnlyWeRefuse(_),
         ) = (&keep, &outcome)
         {
             std::fs::create_dir_all(keep).expect("create VMC_FUZZ_KEEP folder");
-            std::fs::write(keep.join(format!("{i}.ngc")), generator::program(SEED, i))
-                .expect("write kept program");
+            std::fs::write(keep.join(format!("{i}.ngc")), &text).expect("write kept program");
         }
-        tally.add(i, outcome);
+        tally.add(i, &text, outcome);
     }
     tally.report_and_check(&format!("{count} programs against rs274"));
 }

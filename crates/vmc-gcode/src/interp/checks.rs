@@ -176,6 +176,7 @@ pub(super) fn motion_name(m: Motion) -> &'static str {
         Motion::Arc { clockwise: false } => "G3",
         Motion::Cancel => "G80",
         Motion::Cycle(c) => super::decode::cycle_name(c),
+        Motion::Probe(k) => k.code(),
     }
 }
 

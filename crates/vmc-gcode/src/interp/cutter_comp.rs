@@ -175,6 +175,11 @@ impl CutterComp {
         Ok(())
     }
 
+    /// The compensated tool position while it differs from the programmed one (machine mm).
+    pub fn tool_position(&self) -> Option<[f64; 3]> {
+        self.tool_mm
+    }
+
     /// A tool change re-reads the machine position: the compensated point left by the last
     /// compensated move (if any) becomes the programmed one. Returns it.
     pub fn take_tool_position(&mut self) -> Option<[f64; 3]> {

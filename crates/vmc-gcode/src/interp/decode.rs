@@ -2,7 +2,7 @@
 //! carries. Checks what can be checked without the modal state: known codes, at most one code
 //! per modal group (RS274/NGC / LinuxCNC modal groups).
 
-use super::{Plane, SpindleDir};
+use super::{Plane, ProbeKind, SpindleDir};
 use crate::syntax::{Block, GcodeError, Word};
 
 /// Group 1: motion mode.
@@ -18,6 +18,8 @@ pub(super) enum Motion {
     Cancel,
     /// G73, G74, G81–G89: a canned cycle (see `cycles`).
     Cycle(Cycle),
+    /// G38.2–G38.5: a straight probe move (see `probe`).
+    Probe(ProbeKind),
 }
 
 /// The canned cycles (group 1).
@@ -247,7 +249,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
     let mut d = Decoded::default();
     // (group id, first word) for conflict messages.
     let mut seen: Vec<(u32, Word)> = Vec::new();
-    let mut claim = |group: u32, w: &Word| -> Result<(), GcodeError> {
+    let claim = |seen: &mut Vec<(u32, Word)>, group: u32, w: &Word| -> Result<(), GcodeError> {
         if let Some((_, prev)) = seen.iter().find(|(g, _)| *g == group) {
             return Err(GcodeError::invalid(
                 block.line,
@@ -267,7 +269,23 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
             'G' => {
                 let code = code_of(block, w)?;
                 let (group, action) = g_action(code).map_err(|e| e.at(block.line, w))?;
-                claim(group, w)?;
+                if let GAction::Motion(m) = action {
+                    // G80 beside another motion code gives way to it, in either order (a
+                    // Fanuc-style safe-start line `G0 G17 G21 G40 G49 G80 G90`), as LinuxCNC
+                    // does; two other motion codes still conflict.
+                    match (d.motion, m) {
+                        (Some(_), Motion::Cancel) => continue,
+                        (Some((Motion::Cancel, _)), _) => {
+                            if let Some(entry) = seen.iter_mut().find(|(g, _)| *g == group) {
+                                entry.1 = *w;
+                            }
+                            d.motion = Some((m, w.col));
+                            continue;
+                        }
+                        _ => {}
+                    }
+                }
+                claim(&mut seen, group, w)?;
                 match action {
                     GAction::Motion(m) => d.motion = Some((m, w.col)),
                     GAction::NonModal(n) => d.non_modal = Some((n, w.col)),
@@ -331,7 +349,7 @@ pub(super) fn decode(block: &Block) -> Result<Decoded, GcodeError> {
                     }
                     _ => return Err(m_unsupported(code).at(block.line, w)),
                 };
-                claim(100 + group, w)?;
+                claim(&mut seen, 100 + group, w)?;
             }
             'X' => d.axes[0] = Some(*w),
             'Y' => d.axes[1] = Some(*w),
@@ -416,6 +434,13 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         870 => (1, A::Motion(Motion::Cycle(Cycle::G87))),
         880 => (1, A::Motion(Motion::Cycle(Cycle::G88))),
         890 => (1, A::Motion(Motion::Cycle(Cycle::G89))),
+        382..=385 => (
+            1,
+            A::Motion(Motion::Probe(ProbeKind {
+                toward: code <= 383,
+                error_on_no_contact: code.is_multiple_of(2),
+            })),
+        ),
         980 => (10, A::Retract(Retract::InitialLevel)),
         990 => (10, A::Retract(Retract::RPlane)),
         930 => (5, A::FeedMode(FeedMode::InverseTime)),
@@ -467,7 +492,6 @@ fn g_unsupported(code: u32) -> Rejected {
         70 | 80 => "lathe diameter/radius mode",
         171 | 181 | 191 => "UVW plane",
         330 | 331 => "spindle-synchronised motion",
-        382..=385 => "probing",
         432 => "additional tool length offset",
         700 | 710..=712 | 720..=722 | 760 => "lathe cycle",
         960 | 970 => "spindle speed mode",
@@ -537,6 +561,39 @@ mod tests {
     }
 
     #[test]
+    fn g80_gives_way_to_another_motion_code_in_either_order() {
+        // rs274: `G80 G0 X1 Y2` and `G0 G80 X1` traverse, `G1 G80 X1 F100` feeds,
+        // `G80 G2 X2 I1 F100` arcs, `G80 G81 G80 X1 Z-1 R1 F10` drills.
+        for (text, motion, col) in [
+            ("G00 G17 G21 G40 G49 G80 G90", Motion::Rapid, 1),
+            ("G80 G0 X1 Y2", Motion::Rapid, 5),
+            ("G1 G80 X1 F100", Motion::Linear, 1),
+            ("G80 G2 X2 I1", Motion::Arc { clockwise: true }, 5),
+            ("G80 G81 G80 X1 Z-1 R1", Motion::Cycle(Cycle::G81), 5),
+        ] {
+            let d = dec(text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert_eq!(d.motion, Some((motion, col)), "{text}");
+        }
+        assert_eq!(
+            dec("G80 G80").unwrap().motion.map(|m| m.0),
+            Some(Motion::Cancel)
+        );
+    }
+
+    #[test]
+    fn two_motion_codes_beside_g80_still_conflict() {
+        // rs274: "Two g codes used from same modal group" for both.
+        for text in ["G0 G80 G1 X1", "G80 G0 G1 X1"] {
+            let e = dec(text).unwrap_err();
+            assert_eq!(
+                (e.col, e.kind),
+                (text.rfind("G1").unwrap() + 1, GcodeErrorKind::Invalid)
+            );
+            assert!(e.msg.starts_with("G0 and G1 "), "{text}: {e}");
+        }
+    }
+
+    #[test]
     fn two_spindle_m_codes_are_invalid() {
         assert_eq!(dec("M3 M5").unwrap_err().kind, GcodeErrorKind::Invalid);
     }
@@ -548,7 +605,7 @@ mod tests {
 
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
-        for text in ["G43.2", "G76 Z1", "G33", "M98", "G38.2"] {
+        for text in ["G43.2", "G76 Z1", "G33", "M98", "G5.2"] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
             assert!(

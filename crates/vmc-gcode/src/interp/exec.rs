@@ -10,6 +10,7 @@ use super::decode::{
 };
 use super::expr::Params;
 use super::feed;
+use super::probe::ProbeRequest;
 use super::{CanonKind, CanonMove, InterpConfig, OrientDirection, PauseKind, Plane, SpindleDir};
 use crate::syntax::{Block, GcodeError};
 
@@ -18,6 +19,8 @@ use block_checks::motion_col;
 mod frame;
 pub(super) use frame::COORD_SYSTEMS;
 mod modal_state;
+mod probing;
+use probing::PendingProbe;
 mod rotary;
 mod tool_table;
 
@@ -68,6 +71,8 @@ pub struct Interpreter {
     comp: CutterComp,
     /// A, B, C: position, offsets and stored positions, degrees.
     rotary: rotary::RotaryState,
+    /// The probe move of the last block while its result is still to come.
+    probe: Option<PendingProbe>,
 }
 
 /// What the motion step of a block will do.
@@ -109,6 +114,7 @@ impl Interpreter {
             contexts: modal_state::Contexts::default(),
             comp: CutterComp::default(),
             rotary: rotary::RotaryState::new(cfg.start_abc_deg),
+            probe: None,
         }
     }
 
@@ -164,13 +170,24 @@ impl Interpreter {
 
     /// Executes one block, appending its canonical actions to `out`. On error nothing of the
     /// block has been executed (the state is unchanged and nothing is appended).
+    ///
+    /// A block with a probe move (G38.2 … G38.5) returns its [`ProbeRequest`]: the move's
+    /// result must come back through [`Self::probe_result`] before the next block, which is
+    /// refused until then.
     pub fn execute_block(
         &mut self,
         block: &Block,
         out: &mut Vec<CanonMove>,
-    ) -> Result<(), GcodeError> {
+    ) -> Result<Option<ProbeRequest>, GcodeError> {
+        if let Some(p) = self.probe {
+            let msg = format!(
+                "the probe move of line {} awaits its result (Interpreter::probe_result)",
+                p.request.line
+            );
+            return Err(GcodeError::invalid(block.line, block.first_col, msg));
+        }
         if self.ended {
-            return Ok(());
+            return Ok(None);
         }
         let mut next = self.clone();
         let mut kinds = Vec::new();
@@ -183,9 +200,20 @@ impl Interpreter {
             next.spindle.1,
             next.scale(),
         );
+        if let Some(p) = next.probe.as_mut() {
+            // The request carries the feed as the move does (deg/min for the rotary axes alone).
+            for kind in &kinds {
+                if let CanonKind::Probe {
+                    feed_mm_per_min, ..
+                } = kind
+                {
+                    p.request.feed_mm_per_min = *feed_mm_per_min;
+                }
+            }
+        }
         next.comp.finish_block(block.line, kinds, next.ended, out);
         *self = next;
-        Ok(())
+        Ok(self.pending_probe())
     }
 
     /// Releases the output held back by cutter radius compensation (end of the program).
@@ -400,6 +428,12 @@ impl Interpreter {
                 Motion::Arc { clockwise } => {
                     Some(self.arc(block, &d, (end_mm, end_abc_deg), clockwise)?)
                 }
+                Motion::Probe(kind) => Some(self.probe_move(
+                    block,
+                    motion_col(block, &d),
+                    kind,
+                    (end_mm, end_abc_deg),
+                )?),
                 Motion::Cycle(cycle) => {
                     let first = previous_motion != Some(m);
                     for kind in self.canned_cycle(block, &d, cycle, first)? {

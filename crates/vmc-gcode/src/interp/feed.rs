@@ -72,6 +72,12 @@ pub(super) fn apply(
                 end_mm,
                 end_abc_deg,
                 feed_mm_per_min,
+            }
+            | CanonKind::Probe {
+                end_mm,
+                end_abc_deg,
+                feed_mm_per_min,
+                ..
             } => {
                 if super::rotary_only(pos, *end_mm, abc, *end_abc_deg) {
                     let unscale = match mode {

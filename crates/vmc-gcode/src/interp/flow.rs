@@ -19,8 +19,10 @@
 use std::collections::HashMap;
 
 use super::expr::{Params, Target, CALL_PARAMS};
+use super::probe::{ProbeOutcome, ProbeRequest, PROBE_PARAM_FIRST};
+use super::sub_files::SubFile;
 use super::{CanonKind, CanonMove, InterpConfig, Interpreter};
-use crate::syntax::{Block, GcodeError, Line, OKind, OName, OWord, Word};
+use crate::syntax::{Block, CallSite, GcodeError, Line, OKind, OName, OWord, Word};
 
 /// Most loop iterations (all loops of a run together).
 pub const MAX_ITERATIONS: u64 = 1_000_000;
@@ -28,17 +30,58 @@ pub const MAX_ITERATIONS: u64 = 1_000_000;
 pub const MAX_CALL_DEPTH: usize = 64;
 
 /// A parsed program: its lines and the syntax error that ended parsing, if any.
-struct Program {
-    lines: Vec<Line>,
-    tail_error: Option<GcodeError>,
+#[derive(Debug)]
+pub(super) struct Program {
+    pub(super) lines: Vec<Line>,
+    pub(super) tail_error: Option<GcodeError>,
     /// For each line index: the index of its partner (see [`pair`]).
     partner: Vec<Option<usize>>,
     /// Subroutine name → index of its `sub` line.
     subs: HashMap<String, usize>,
+    /// The subroutine files whose definitions follow the program's own lines.
+    pub(super) files: Vec<SubFile>,
+}
+
+/// An O-word structure error: (the index from which execution meets it, the index of the
+/// offending line — `None` for the main program's syntax error that cut it short — the error).
+pub(super) type StructureError = (usize, Option<usize>, GcodeError);
+
+impl Program {
+    /// Parses `src`, reads the subroutine files it needs and pairs its O-words. The structure
+    /// error, if any, is returned for the caller to report when execution reaches it.
+    pub(super) fn new(
+        src: &str,
+        cfg: &InterpConfig,
+    ) -> Result<(Self, Option<StructureError>), GcodeError> {
+        let mut lines = Vec::new();
+        let mut tail_error = None;
+        for line in crate::syntax::parse_program(src) {
+            match line {
+                Ok(l) => lines.push(l),
+                Err(e) => tail_error = Some(e),
+            }
+        }
+        let files = super::sub_files::load(&mut lines, cfg)?;
+        let mut prog = Program {
+            partner: vec![None; lines.len()],
+            lines,
+            tail_error,
+            subs: HashMap::new(),
+            files,
+        };
+        let structure_error = pair(&mut prog).err();
+        Ok((prog, structure_error))
+    }
+
+    /// The subroutine file of line index `i` (`None`: the main program).
+    pub(super) fn file_of(&self, i: usize) -> Option<&std::path::PathBuf> {
+        super::sub_files::file_of(&self.files, i)
+    }
 }
 
 /// One active call.
-struct Frame {
+#[derive(Debug)]
+pub(super) struct Frame {
     return_to: usize,
     /// `#1…#30` of the caller (O-word calls; Fanuc-style calls share all parameters).
     saved: Option<[f64; CALL_PARAMS]>,
@@ -46,80 +89,14 @@ struct Frame {
     fanuc: Option<(usize, i64)>,
 }
 
-/// Runs a whole program (see the parent module).
-pub(super) fn run(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
-    let mut lines = Vec::new();
-    let mut tail_error = None;
-    for line in crate::syntax::parse_program(src) {
-        match line {
-            Ok(l) => lines.push(l),
-            Err(e) => tail_error = Some(e),
-        }
-    }
-    super::sub_files::load(&mut lines, cfg)?;
-    let mut prog = Program {
-        partner: vec![None; lines.len()],
-        lines,
-        tail_error,
-        subs: HashMap::new(),
-    };
-    // A structure error is reported when execution reaches it; pairing stops there.
-    let structure_error = pair(&mut prog).err();
-    let mut runner = Runner {
-        interp: Interpreter::new(cfg.clone()),
-        params: Params::new(),
-        frames: Vec::new(),
-        repeats: HashMap::new(),
-        iterations: 0,
-        block_delete: cfg.block_delete,
-        main_m99_end: None,
-    };
-    runner.interp.sync_params_out(&mut runner.params);
-    let mut out = Vec::new();
-    let mut pc = 0;
-    while pc < prog.lines.len() {
-        if let Some((at, e)) = &structure_error {
-            if pc >= *at {
-                return Err(e.clone());
-            }
-        }
-        pc = runner.step(&prog, pc, &mut out)?;
-        if let Some(line) = runner.main_m99_end {
-            runner.interp.flush(&mut out);
-            out.push(CanonMove {
-                line,
-                kind: CanonKind::ProgramEnd,
-            });
-            return Ok(out);
-        }
-        if runner.interp.is_ended() {
-            return Ok(out);
-        }
-    }
-    if let Some((_, e)) = structure_error {
-        return Err(e);
-    }
-    match prog.tail_error {
-        Some(e) => Err(e),
-        None => {
-            runner.interp.flush(&mut out);
-            Ok(out)
-        }
-    }
-}
-
 fn key(name: &OName) -> String {
     name.to_string()
 }
 
-fn err_at(l: &Line, o: &OWord, msg: impl Into<String>) -> (usize, GcodeError) {
-    (0, GcodeError::invalid(l.line, o.col, msg))
-}
-
 /// Pairs O-word statements by name and nesting: `if`/`elseif`/`else` → next branch,
 /// `while`/`do`/`repeat` → their end, ends → their head, `break`/`continue` → their loop's
-/// head, `sub` → `endsub`. On error: (index of the offending line, error).
-fn pair(prog: &mut Program) -> Result<(), (usize, GcodeError)> {
+/// head, `sub` → `endsub`. On error see [`StructureError`].
+fn pair(prog: &mut Program) -> Result<(), StructureError> {
     let mut stack: Vec<usize> = Vec::new();
     for i in 0..prog.lines.len() {
         let l = &prog.lines[i];
@@ -127,10 +104,8 @@ fn pair(prog: &mut Program) -> Result<(), (usize, GcodeError)> {
             continue;
         };
         let first_open = stack.first().copied().unwrap_or(i).min(i);
-        let fail = |msg: String| {
-            let (_, e) = err_at(l, o, msg);
-            Err((first_open, e))
-        };
+        let fail =
+            |msg: String| Err((first_open, Some(i), GcodeError::invalid(l.line, o.col, msg)));
         let open = stack
             .last()
             .map(|&j| (j, prog.lines[j].oword.as_ref().expect("stacked O-word")));
@@ -218,16 +193,16 @@ fn pair(prog: &mut Program) -> Result<(), (usize, GcodeError)> {
     }
     if let Some(&j) = stack.first() {
         // An open structure: the syntax error that cut the program short explains it best.
-        let l = &prog.lines[stack[stack.len() - 1]];
+        let last = stack[stack.len() - 1];
+        let l = &prog.lines[last];
         let o = l.oword.as_ref().expect("stacked O-word");
-        let e = prog.tail_error.clone().unwrap_or_else(|| {
-            GcodeError::invalid(
-                l.line,
-                o.col,
-                format!("{} {} is never closed", o.name, kw(o.kind)),
-            )
+        return Err(match prog.tail_error.clone() {
+            Some(e) => (j, None, e),
+            None => {
+                let msg = format!("{} {} is never closed", o.name, kw(o.kind));
+                (j, Some(last), GcodeError::invalid(l.line, o.col, msg))
+            }
         });
-        return Err((j, e));
     }
     Ok(())
 }
@@ -254,8 +229,9 @@ fn kw(k: OKind) -> &'static str {
 }
 
 /// Execution state around the modal interpreter.
-struct Runner {
-    interp: Interpreter,
+#[derive(Debug)]
+pub(super) struct Runner {
+    pub(super) interp: Interpreter,
     params: Params,
     frames: Vec<Frame>,
     /// Remaining iterations of active `repeat` loops, by the index of their `repeat` line.
@@ -263,12 +239,52 @@ struct Runner {
     iterations: u64,
     block_delete: bool,
     /// Line of an M99 in the main program, which ends it.
-    main_m99_end: Option<usize>,
+    pub(super) main_m99_end: Option<usize>,
+    /// The probe move of the last block executed, while its result is still to come.
+    pub(super) probe: Option<ProbeRequest>,
 }
 
 impl Runner {
+    /// A runner at the start of a program, in LinuxCNC's start-up state.
+    pub(super) fn new(cfg: &InterpConfig) -> Self {
+        let mut runner = Runner {
+            interp: Interpreter::new(cfg.clone()),
+            params: Params::new(),
+            frames: Vec::new(),
+            repeats: HashMap::new(),
+            iterations: 0,
+            block_delete: cfg.block_delete,
+            main_m99_end: None,
+            probe: None,
+        };
+        runner.interp.sync_params_out(&mut runner.params);
+        runner
+    }
+
+    /// The calls active now, innermost first (see [`GcodeError::calls`]).
+    pub(super) fn call_sites(&self, prog: &Program) -> Vec<CallSite> {
+        self.frames
+            .iter()
+            .rev()
+            .map(|f| CallSite {
+                file: prog.file_of(f.return_to - 1).cloned(),
+                line: prog.lines[f.return_to - 1].line,
+            })
+            .collect()
+    }
+
+    /// Gives the pending probe move its result and writes #5061…#5070.
+    pub(super) fn probe_result(&mut self, outcome: ProbeOutcome) -> Result<(), GcodeError> {
+        let values = self.interp.probe_result(outcome)?;
+        self.probe = None;
+        for (i, v) in values.into_iter().enumerate() {
+            self.params.set(PROBE_PARAM_FIRST + i, v);
+        }
+        Ok(())
+    }
+
     /// Executes line `pc`; returns the index of the next line.
-    fn step(
+    pub(super) fn step(
         &mut self,
         prog: &Program,
         pc: usize,
@@ -333,7 +349,7 @@ impl Runner {
                 first_col: l.first_col,
             };
             self.interp.sync_params_in(&self.params);
-            self.interp.execute_block(&block, out)?;
+            self.probe = self.interp.execute_block(&block, out)?;
             self.interp.sync_params_out(&mut self.params);
             if self.interp.is_ended() {
                 return Ok(pc + 1);

@@ -16,7 +16,7 @@
 //! Execution order inside a block (RS274/NGC §3.8): G93/G94/G95, F, S, T, M6, M3/M4/M5,
 //! M7/M8/M9, M70–M73, G4, G17–G19, G20/G21, G40/G41/G42, G43/G49, G54–G59, G61/G61.1/G64,
 //! G90/G91, G90.1/G91.1, G10/G28/G30/G28.1/G30.1/G92/G92.1/G92.2/G92.3, G98/G99, motion (G0–G3,
-//! G53, canned cycles), M0/M1/M60/M2/M30.
+//! G38.2–G38.5, G53, canned cycles), M0/M1/M60/M2/M30.
 //! A rejected block has no effect: it runs on a copy of the state that is kept only on success.
 //! Arc centres and tolerances follow LinuxCNC exactly (see `arc`); every number must satisfy
 //! |value| ≤ 1e9 so that all results stay finite.
@@ -74,7 +74,13 @@
 //!   start from it); M6, plane, tool length and work offset changes, G28/G30, G53, G92 and
 //!   I/O M codes are refused, as LinuxCNC refuses them. An arc as the entry move is
 //!   unsupported.
-//! - G80 (cancel motion mode).
+//! - G38.2 / G38.3 / G38.4 / G38.5 probe moves ([`CanonKind::Probe`], see `probe`): the
+//!   result comes from outside ([`ProgramRun`], [`Interpreter::probe_result`]); LinuxCNC's
+//!   refusals (zero feed, cutter compensation on, G95, a G38.2/G38.4 of no length); G93 is
+//!   unsupported. The motion mode persists like G1's.
+//! - G80 (cancel motion mode). Beside another motion code in the same block (a Fanuc-style
+//!   safe-start line `G0 G17 G21 G40 G49 G80 G90`) it gives way to that code, in either order,
+//!   as LinuxCNC does; two G80 are one; two other motion codes still conflict.
 //!
 //! Anything else outside the subset is a [`GcodeErrorKind::Unsupported`] error, never
 //! silently skipped. Execution stops after M2/M30 (LinuxCNC reads no further).
@@ -96,16 +102,27 @@ mod flow;
 #[cfg(test)]
 mod flow_tests;
 #[cfg(test)]
+mod location_tests;
+mod probe;
+#[cfg(test)]
+mod probe_tests;
+mod program_run;
+#[cfg(test)]
 mod rotary_tests;
 mod sub_files;
 #[cfg(test)]
 mod tests;
 
-pub use crate::syntax::{GcodeError, GcodeErrorKind};
+pub use crate::syntax::{CallSite, ErrorIn, GcodeError, GcodeErrorKind};
 pub use cycles::{MAX_REPEATS, PECK_CLEARANCE_MM};
 pub use exec::Interpreter;
 pub use expr::NUM_PARAMS;
 pub use flow::{MAX_CALL_DEPTH, MAX_ITERATIONS};
+pub use probe::{
+    straight_probe_call, ProbeKind, ProbeOutcome, ProbeParams, ProbeRequest, PROBE_PARAM_FIRST,
+    STANDALONE_BACKOFF_MM,
+};
+pub use program_run::{ProgramRun, RunEvent};
 
 /// Largest P (turn count) accepted on G2/G3: guards against programs that would expand to
 /// absurd paths (and hangs downstream).
@@ -151,7 +168,8 @@ impl Default for InterpConfig {
 }
 
 /// Interprets a whole program: parse, run every block until M2/M30 or the end of the text.
-/// Stops at the first error.
+/// Stops at the first error. Probe moves get the stand-alone outcome of LinuxCNC's `rs274`
+/// ([`ProbeOutcome::Standalone`]); use [`ProgramRun`] to give them a machine's results.
 ///
 /// ```
 /// use vmc_gcode::interp::{run_program, CanonKind, InterpConfig};
@@ -168,7 +186,12 @@ impl Default for InterpConfig {
 /// # Ok::<(), vmc_gcode::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
-    flow::run(src, cfg)
+    let mut run = ProgramRun::new(src, cfg)?;
+    let mut out = Vec::new();
+    while let RunEvent::Probe(_) = run.resume(&mut out)? {
+        run.probe_result(ProbeOutcome::Standalone)?;
+    }
+    Ok(out)
 }
 
 /// Active plane for arcs (G17 / G18 / G19).
@@ -239,6 +262,20 @@ pub enum CanonKind {
         direction: OrientDirection,
         /// Q: how long to wait for the orientation to complete, s (`None`: no wait).
         timeout_s: Option<f64>,
+    },
+    /// G38.2 / G38.3 / G38.4 / G38.5 straight probe move toward `end_mm` (the rotary axes
+    /// toward `end_abc_deg`): the machine stops where the probe input changes state, at the
+    /// target at the latest, and reports where (see [`ProbeOutcome`]); the interpreter goes
+    /// on from there. The next move starts where the machine says the tool came to rest.
+    Probe {
+        end_mm: [f64; 3],
+        /// A, B, C at the target, machine coordinates, degrees.
+        end_abc_deg: [f64; 3],
+        /// As for [`CanonKind::Feed`]: mm/min along the XYZ path, deg/min for a move of the
+        /// rotary axes alone.
+        feed_mm_per_min: f64,
+        /// Which of G38.2 … G38.5.
+        kind: ProbeKind,
     },
     /// M6 tool change to tool `tool`.
     ToolChange { tool: u32 },

@@ -319,6 +319,39 @@ fn preamble_codes_that_confirm_our_state_are_accepted() {
 }
 
 #[test]
+fn g80_beside_a_motion_code_leaves_that_motion_mode_in_effect() {
+    // Outputs of rs274 on the same programs: the safe-start line traverses to where the tool
+    // is (G0 without axis words); the motion code, not G80, stays modal for the next block.
+    let kinds = run("N1 G00 G17 G21 G40 G49 G80 G90\nX1\nM2");
+    assert_eq!(ends(&kinds), vec![[0.0; 3], [1.0, 0.0, 0.0]]);
+    assert!(matches!(kinds[0], CanonKind::Traverse { .. }));
+    assert!(matches!(kinds[1], CanonKind::Traverse { .. }));
+    let kinds = run("G1 G80 X1 F100\nX3\nM2");
+    assert_eq!(ends(&kinds), vec![[1.0, 0.0, 0.0], [3.0, 0.0, 0.0]]);
+    assert!(kinds[..2]
+        .iter()
+        .all(|k| matches!(k, CanonKind::Feed { .. })));
+    let (end, centre, ..) = the_arc("G80 G2 X2 I1 F100\nM2");
+    assert_close(end, [2.0, 0.0, 0.0]);
+    assert_close(centre, [1.0, 0.0, 0.0]);
+    // A cycle beside G80 drills: R plane, hole, retract (G99 to R).
+    let kinds = run("G80 G81 G80 X1 Z-1 R1 F10\nM2");
+    assert_eq!(
+        ends(&kinds),
+        vec![
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 0.0, -1.0],
+            [1.0, 0.0, 1.0]
+        ]
+    );
+    // G80 alone still cancels: axis words then have no motion to use them.
+    assert!(err("G0 X1\nG80 X2")
+        .msg
+        .contains("G80 cancels the motion mode"));
+}
+
+#[test]
 fn a_failed_block_leaves_the_interpreter_unchanged() {
     let mut it = Interpreter::new(InterpConfig::default());
     let mut out = Vec::new();

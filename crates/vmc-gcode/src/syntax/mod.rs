@@ -30,63 +30,14 @@
 //! G and M numbers are kept exactly as integers ×10 ([`Word::code_x10`]: `G91.1` → 911), so
 //! comparisons never depend on float rounding.
 
+mod error;
 mod expr;
 mod lexer;
 mod value;
 
+pub use error::{CallSite, ErrorIn, GcodeError, GcodeErrorKind};
 pub use expr::{Assign, BinOp, Expr, ExprWord, Func, Line, OKind, OName, OWord, Param};
 pub use lexer::parse_line;
-
-/// Why a program was rejected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum GcodeErrorKind {
-    /// Valid RS274/NGC (LinuxCNC dialect) that this interpreter deliberately does not implement.
-    Unsupported,
-    /// Malformed or semantically wrong input (also wrong for LinuxCNC).
-    Invalid,
-}
-
-/// A rejected program: where and why. Display: `line 12, column 5: G2 needs I/J/K or R`.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("line {line}, column {col}: {msg}")]
-pub struct GcodeError {
-    /// 1-based physical line in the source text.
-    pub line: usize,
-    /// 1-based character column of the offending word (or of the block when no single word is
-    /// to blame).
-    pub col: usize,
-    /// Unsupported (outside our subset) or invalid (wrong).
-    pub kind: GcodeErrorKind,
-    /// Human-readable reason, naming the word.
-    pub msg: String,
-}
-
-impl GcodeError {
-    /// An error for input that is valid RS274/NGC but outside the implemented subset.
-    pub fn unsupported(line: usize, col: usize, msg: impl Into<String>) -> Self {
-        Self {
-            line,
-            col: col.max(1),
-            kind: GcodeErrorKind::Unsupported,
-            msg: msg.into(),
-        }
-    }
-
-    /// An error for malformed or semantically wrong input.
-    pub fn invalid(line: usize, col: usize, msg: impl Into<String>) -> Self {
-        Self {
-            line: line.max(1),
-            col: col.max(1),
-            kind: GcodeErrorKind::Invalid,
-            msg: msg.into(),
-        }
-    }
-
-    /// True if the program is valid RS274/NGC that we do not implement.
-    pub fn is_unsupported(&self) -> bool {
-        self.kind == GcodeErrorKind::Unsupported
-    }
-}
 
 /// One word: a letter and its number, e.g. `X-12.5` or `G91.1`.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,8 +1,8 @@
 //! Comparison of our canonical moves with the output of LinuxCNC's stand-alone interpreter
-//! `rs274 -g` (the corpus fixtures and the differential fuzzing test): its calls are parsed,
-//! turned from its program coordinates into machine coordinates (work offset, G92, XY
-//! rotation, tool length), and compared move for move within 1e-4 of the program's unit (it
-//! prints 4 decimals). The rotary axes A, B, C (degrees, program coordinates plus the A, B, C
+//! `rs274 -g` (the corpus fixtures and the differential fuzzing test): its calls (traverses,
+//! feeds, arcs and probe moves) are parsed, turned from its program coordinates into machine
+//! coordinates (work offset, G92, XY rotation, tool length), and compared move for move within
+//! 1e-4 of the program's unit (it prints 4 decimals). The rotary axes A, B, C (degrees, program coordinates plus the A, B, C
 //! of its G5x and G92 offsets) are compared with the same tolerance (at least 1e-4°).
 
 use std::path::{Path, PathBuf};
@@ -17,6 +17,8 @@ pub enum RefMove {
     Traverse([f64; 6]),
     /// X, Y, Z (mm), A, B, C (degrees).
     Feed([f64; 6]),
+    /// A probe move's target: X, Y, Z (mm), A, B, C (degrees).
+    Probe([f64; 6]),
     /// first_end, second_end, first_centre, second_centre, axis_end (mm), A, B, C (degrees),
     /// rotation, plane.
     Arc([f64; 8], i64, Plane),
@@ -144,7 +146,10 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
             plane = Plane::Zx;
         } else if line.contains("SELECT_PLANE(CANON_PLANE_YZ)") {
             plane = Plane::Yz;
-        } else if line.contains("STRAIGHT_TRAVERSE(") || line.contains("STRAIGHT_FEED(") {
+        } else if line.contains("STRAIGHT_TRAVERSE(")
+            || line.contains("STRAIGHT_FEED(")
+            || line.contains("STRAIGHT_PROBE(")
+        {
             let a = args(line);
             let p_mm = [a[0], a[1], a[2]].map(|v| v * mm_per_unit);
             let tol = frame.tolerance_mm(tol, p_mm);
@@ -153,6 +158,8 @@ pub fn parse_expected(text: &str) -> Vec<Tolerant> {
             let p = [p[0], p[1], p[2], abc[0], abc[1], abc[2]];
             let m = if line.contains("STRAIGHT_TRAVERSE(") {
                 RefMove::Traverse(p)
+            } else if line.contains("STRAIGHT_PROBE(") {
+                RefMove::Probe(p)
             } else {
                 RefMove::Feed(p)
             };
@@ -194,6 +201,11 @@ pub fn ours(moves: &[CanonMove]) -> Vec<RefMove> {
                 end_abc_deg: a,
                 ..
             } => Some(RefMove::Feed([p[0], p[1], p[2], a[0], a[1], a[2]])),
+            CanonKind::Probe {
+                end_mm: p,
+                end_abc_deg: a,
+                ..
+            } => Some(RefMove::Probe([p[0], p[1], p[2], a[0], a[1], a[2]])),
             CanonKind::Arc {
                 end_mm,
                 end_abc_deg: a,
@@ -230,9 +242,9 @@ pub fn ours(moves: &[CanonMove]) -> Vec<RefMove> {
 pub fn same(ours: &RefMove, reference: &Tolerant) -> bool {
     let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= reference.1);
     match (ours, &reference.0) {
-        (RefMove::Traverse(a), RefMove::Traverse(b)) | (RefMove::Feed(a), RefMove::Feed(b)) => {
-            close(a, b)
-        }
+        (RefMove::Traverse(a), RefMove::Traverse(b))
+        | (RefMove::Feed(a), RefMove::Feed(b))
+        | (RefMove::Probe(a), RefMove::Probe(b)) => close(a, b),
         (RefMove::Arc(a, ra, pa), RefMove::Arc(b, rb, pb)) => ra == rb && pa == pb && close(a, b),
         _ => false,
     }

@@ -7,7 +7,11 @@
 //! arc side, the entry and exit moves well longer than the radius), expressions with
 //! parameters and functions, and O-word `sub`/`call`/`if`/`while`/`repeat`; rotary words
 //! A, B, C on lines (also `G53`) and arcs, in work offsets (`G10 L2/L20`), `G92`, `G52` and
-//! `G28`/`G30`, and now and then on a canned cycle (which both must refuse).
+//! `G28`/`G30`, and now and then on a canned cycle (which both must refuse); `G80` in the
+//! same block as G0/G1 or a canned cycle (the other code wins); probe moves G38.2–G38.5
+//! (absolute or incremental, with rotary words now and then, some of no length, one as the
+//! exit move after G40) followed by moves that start from where the probe left the tool or
+//! read #5061–#5063 and #5070.
 //!
 //! Deterministic: program `i` of seed `s` is the same text on every machine (SplitMix64, no
 //! dependency whose stream could change). Numbers are written with at most 3 decimals.
@@ -116,7 +120,10 @@ pub fn program(seed: u64, index: u64) -> String {
     let mut subs = String::new();
     let units = if rng.chance(0.3) { "G20" } else { "G21" };
     st.unit_mm = if units == "G20" { 25.4 } else { 1.0 };
-    let _ = writeln!(out, "G17 {units} G90 G94 G40 G49 G80");
+    // Now and then a Fanuc-style safe-start line: G0 beside G80 (a traverse to where the tool
+    // is).
+    let safe_start = if rng.chance(0.2) { "G0 " } else { "" };
+    let _ = writeln!(out, "{safe_start}G17 {units} G90 G94 G40 G49 G80");
     // The tool change comes before any rotation: after M6 the stand-alone rs274 reads the
     // position back from its canonical layer without the rotation (a quirk of that layer; a
     // machine reports its real position).
@@ -194,8 +201,9 @@ fn rotary(rng: &mut Rng, p: f64, span_deg: f64) -> String {
 }
 
 fn step(rng: &mut Rng, st: &mut State, out: &mut String, subs: &mut String) {
-    match rng.below(17) {
+    match rng.below(18) {
         0..=2 => lines(rng, st, out),
+        17 => probe(rng, st, out),
         3..=5 => arc(rng, st, out),
         6 => offsets(rng, st, out),
         7 => g92(rng, st, out),
@@ -210,9 +218,19 @@ fn step(rng: &mut Rng, st: &mut State, out: &mut String, subs: &mut String) {
     }
 }
 
+/// A motion code, now and then with a G80 beside it (before or after) that gives way to it.
+fn with_g80(rng: &mut Rng, g: &str) -> String {
+    match rng.below(10) {
+        0 => format!("G80 {g}"),
+        1 => format!("{g} G80"),
+        _ => g.to_string(),
+    }
+}
+
 fn lines(rng: &mut Rng, st: &mut State, out: &mut String) {
     for _ in 0..1 + rng.below(4) {
         let g = *rng.pick(&["G0", "G1"]);
+        let g = with_g80(rng, g);
         let inc = rng.chance(0.3);
         let dist = if inc { "G91" } else { "G90" };
         let mut words = String::new();
@@ -375,14 +393,15 @@ fn g92(rng: &mut Rng, st: &mut State, out: &mut String) {
 fn cycle(rng: &mut Rng, st: &mut State, out: &mut String) {
     let start = anchor(rng, st, out);
     let code = *rng.pick(&["G81", "G82", "G83", "G73", "G85", "G89"]);
+    let code = with_g80(rng, code);
     let ret = *rng.pick(&["G98", "G99"]);
     let r = round3(start[2] - st.len(rng.range(0.0, 8.0)));
     let z = round3(r - st.len(rng.range(1.0, 15.0)));
     let mut words = String::new();
-    if matches!(code, "G82" | "G89") {
+    if code.contains("G82") || code.contains("G89") {
         let _ = write!(words, " P{}", n(rng.range(0.0, 1.0)));
     }
-    if matches!(code, "G83" | "G73") {
+    if code.contains("G83") || code.contains("G73") {
         let _ = write!(words, " Q{}", n(st.len(rng.range(1.0, 5.0))));
     }
     let x = st.len(rng.range(-60.0, 60.0));
@@ -460,7 +479,7 @@ fn compensated_contour(rng: &mut Rng, st: &mut State, out: &mut String) {
         }
         let _ = writeln!(out, "G1 Y{}", n(y0));
         let _ = writeln!(out, "X{}", n(x0));
-        let _ = writeln!(out, "G40 G1 X{} Y{}", n(x0 - away), n(y0 - away));
+        let _ = writeln!(out, "{} X{} Y{}", exit(rng), n(x0 - away), n(y0 - away));
     } else {
         // Counter-clockwise: right along the bottom, up, left along the top (an arc), down.
         let _ = writeln!(out, "G42{d} G1 X{} Y{}", n(x0), n(y0));
@@ -472,8 +491,78 @@ fn compensated_contour(rng: &mut Rng, st: &mut State, out: &mut String) {
             let _ = writeln!(out, "X{}", n(x0));
         }
         let _ = writeln!(out, "G1 Y{}", n(y0));
-        let _ = writeln!(out, "G40 G1 X{} Y{}", n(x0 - away), n(y0 - away));
+        let _ = writeln!(out, "{} X{} Y{}", exit(rng), n(x0 - away), n(y0 - away));
     }
+    st.known = None;
+}
+
+/// The codes of a compensated contour's exit move: a feed, or now and then a probe move
+/// (which leaves from the compensated point as the exit move does).
+fn exit(rng: &mut Rng) -> &'static str {
+    if rng.chance(0.15) {
+        rng.pick::<&str>(&["G40 G38.3", "G40 G38.5"])
+    } else {
+        "G40 G1"
+    }
+}
+
+/// A probe move from an anchored point (the stand-alone `rs274` backs the tool off from the
+/// target toward the point its canonical layer last moved to, which the anchor makes the
+/// interpreter's), then a move that depends on where it left the tool or on #5061….
+fn probe(rng: &mut Rng, st: &mut State, out: &mut String) {
+    let start = anchor(rng, st, out);
+    let code = *rng.pick(&["G38.2", "G38.3", "G38.4", "G38.5"]);
+    let inc = rng.chance(0.3);
+    let mut words = String::new();
+    for (i, (axis, span)) in [('X', 30.0), ('Y', 30.0), ('Z', 15.0)]
+        .into_iter()
+        .enumerate()
+    {
+        if rng.chance(0.5) || (i == 2 && words.is_empty()) {
+            let d = st.len(rng.range(-span, span));
+            let v = if inc { d } else { start[i] + d };
+            let _ = write!(words, " {axis}{}", n(v));
+        }
+    }
+    if rng.chance(0.15) {
+        words += &rotary(rng, 0.5, 90.0);
+    }
+    if rng.chance(0.05) {
+        // To where the tool is: refused for G38.2/G38.4, a move of no length for .3/.5.
+        words = if inc {
+            " Z0".to_string()
+        } else {
+            format!(" Z{}", n(start[2]))
+        };
+    }
+    let dist = if inc { "G91" } else { "G90" };
+    let _ = writeln!(out, "{dist} {}{words}", with_g80(rng, code));
+    match rng.below(4) {
+        0 => {
+            let _ = writeln!(
+                out,
+                "G91 G1 X{} Y{}",
+                n(st.len(rng.range(-5.0, 5.0))),
+                n(st.len(rng.range(-5.0, 5.0)))
+            );
+        }
+        1 => {
+            let _ = writeln!(out, "G90 G1 Y{}", n(st.len(rng.range(-40.0, 40.0))));
+        }
+        2 => {
+            let _ = writeln!(
+                out,
+                "G90 G0 X[#5061 + {}] Y#5062 Z[#5063 + {}]",
+                n(st.len(rng.range(-5.0, 5.0))),
+                n(st.len(rng.range(0.0, 5.0)))
+            );
+        }
+        _ => {
+            let _ = writeln!(out, "#7 = #5070");
+            let _ = writeln!(out, "G90 G0 Z[#5063 + #7 + {}]", n(st.len(2.0)));
+        }
+    }
+    st.incremental = false;
     st.known = None;
 }
 

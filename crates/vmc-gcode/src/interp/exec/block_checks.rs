@@ -17,6 +17,9 @@ impl Interpreter {
         check_values(block, d)?;
         let step = self.motion_step(block, d)?;
         self.check_word_users(block, d, step)?;
+        if let MotionStep::Move(Motion::Probe(kind)) = step {
+            self.check_probe(block, d, motion_col(block, d), kind)?;
+        }
         if let MotionStep::Move(m @ (Motion::Linear | Motion::Arc { .. } | Motion::Cycle(_))) = step
         {
             let col = d
@@ -113,6 +116,14 @@ impl Interpreter {
         Ok(match explicit {
             // G0/G1 alone: a move to where the tool is (LinuxCNC emits it too).
             Some(m @ (Motion::Arc { .. } | Motion::Rapid | Motion::Linear)) => MotionStep::Move(m),
+            Some(Motion::Probe(kind)) => {
+                // LinuxCNC: "All axes missing with motion code".
+                let msg = format!(
+                    "{} needs an axis word (X, Y, Z, A, B, C): the point to probe toward",
+                    kind.code()
+                );
+                return Err(GcodeError::invalid(block.line, motion_col(block, d), msg));
+            }
             _ => MotionStep::None,
         })
     }

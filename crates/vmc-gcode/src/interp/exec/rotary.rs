@@ -40,7 +40,7 @@ impl RotaryState {
 
 impl Interpreter {
     /// Program-to-machine offset of rotary axis `axis` (0 = A), degrees.
-    fn rotary_offset_deg(&self, axis: usize) -> f64 {
+    pub(super) fn rotary_offset_deg(&self, axis: usize) -> f64 {
         self.rotary.g5x_deg[self.coord_index][axis] + self.rotary.g92_deg[axis]
     }
 

@@ -1,0 +1,199 @@
+//! A whole program run block by block, pausing at each probe move until the machine's result
+//! comes back ([`ProgramRun`]); [`run_program`](super::run_program) drives one with the
+//! stand-alone outcome. Errors are located here: the subroutine file a line belongs to and
+//! the calls that led to it ([`GcodeError::file`], [`GcodeError::calls`]).
+
+use super::flow::{Program, Runner, StructureError};
+use super::probe::{ProbeOutcome, ProbeRequest};
+use super::{CanonKind, CanonMove, InterpConfig};
+use crate::syntax::GcodeError;
+
+/// Where a [`ProgramRun`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RunEvent {
+    /// The program is over (M2, M30, an M99 in the main program, or the end of the text):
+    /// every canonical action has been emitted.
+    Ended,
+    /// A probe move was emitted: it is the last move in the output so far (only a stop of
+    /// its own block — M0, M1, M60, M2, M30 — may follow it). Give its result with
+    /// [`ProgramRun::probe_result`], then resume.
+    Probe(ProbeRequest),
+}
+
+#[derive(Debug)]
+enum State {
+    Running,
+    Probing(ProbeRequest),
+    Ended,
+    Failed(GcodeError),
+}
+
+/// A program being interpreted, resumable: [`Self::resume`] runs blocks until the program
+/// ends or a probe move needs the machine's result (the machine simulator supplies the trip
+/// point of its own geometry; [`super::run_program`] takes LinuxCNC's stand-alone `rs274`
+/// convention, [`ProbeOutcome::Standalone`]).
+///
+/// ```
+/// use vmc_gcode::interp::{CanonKind, InterpConfig, ProbeOutcome, ProgramRun, RunEvent};
+/// let program = "G21 F100\nG38.2 Z-10\nG0 Z[#5063 + 5]\nM2";
+/// let mut run = ProgramRun::new(program, &InterpConfig::default())?;
+/// let mut moves = Vec::new();
+/// while let RunEvent::Probe(request) = run.resume(&mut moves)? {
+///     // The machine found the surface 3 mm down and stopped 0.1 mm further.
+///     let mut trip_mm = request.start_mm;
+///     trip_mm[2] -= 3.0;
+///     let mut rest_mm = trip_mm;
+///     rest_mm[2] -= 0.1;
+///     run.probe_result(ProbeOutcome::Tripped {
+///         trip_mm,
+///         trip_abc_deg: request.end_abc_deg,
+///         rest_mm,
+///         rest_abc_deg: request.end_abc_deg,
+///     })?;
+/// }
+/// // #5063 was the trip point's Z: 5 mm above the surface.
+/// assert!(matches!(moves[1].kind, CanonKind::Traverse { end_mm: [0.0, 0.0, 2.0], .. }));
+/// # Ok::<(), vmc_gcode::GcodeError>(())
+/// ```
+#[derive(Debug)]
+pub struct ProgramRun {
+    prog: Program,
+    runner: Runner,
+    pc: usize,
+    structure_error: Option<StructureError>,
+    state: State,
+    /// Line index of the last probe block.
+    probe_index: usize,
+}
+
+impl ProgramRun {
+    /// Parses `src` and reads the subroutine files it calls (from
+    /// [`InterpConfig::subroutine_dirs`]); nothing runs yet.
+    ///
+    /// # Errors
+    /// A subroutine file that cannot be read, lacks its definition or has a syntax error.
+    /// (Errors of the program itself come from [`Self::resume`], when execution reaches them.)
+    pub fn new(src: &str, cfg: &InterpConfig) -> Result<Self, GcodeError> {
+        let (prog, structure_error) = Program::new(src, cfg)?;
+        Ok(Self {
+            prog,
+            runner: Runner::new(cfg),
+            pc: 0,
+            structure_error,
+            state: State::Running,
+            probe_index: 0,
+        })
+    }
+
+    /// Runs blocks, appending their canonical actions to `out`, until the program ends or a
+    /// probe move waits for its result. After [`RunEvent::Ended`] it returns `Ended` again.
+    ///
+    /// # Errors
+    /// The first error of the program (then every later call returns it again), or a probe
+    /// move still without its result.
+    pub fn resume(&mut self, out: &mut Vec<CanonMove>) -> Result<RunEvent, GcodeError> {
+        match &self.state {
+            State::Running => {}
+            State::Ended => return Ok(RunEvent::Ended),
+            State::Failed(e) => return Err(e.clone()),
+            State::Probing(r) => {
+                let msg = "the run was resumed before the probe move got its result \
+                           (ProgramRun::probe_result)";
+                return Err(GcodeError::invalid(r.line, 1, msg));
+            }
+        }
+        match self.run_until_event(out) {
+            Ok(event) => {
+                self.state = match event {
+                    RunEvent::Ended => State::Ended,
+                    RunEvent::Probe(r) => State::Probing(r),
+                };
+                Ok(event)
+            }
+            Err(e) => {
+                self.state = State::Failed(e.clone());
+                Err(e)
+            }
+        }
+    }
+
+    /// Gives the probe move the run stopped at its result (see [`ProbeOutcome`]): #5061…#5070
+    /// are set and the tool continues from where it came to rest.
+    ///
+    /// # Errors
+    /// No probe move waits; G38.2/G38.4 without contact; a point that is not finite. The run
+    /// is then over (every later [`Self::resume`] returns the error).
+    pub fn probe_result(&mut self, outcome: ProbeOutcome) -> Result<(), GcodeError> {
+        if !matches!(self.state, State::Probing(_)) {
+            return Err(GcodeError::invalid(
+                1,
+                1,
+                "a probe result was given, but no probe move awaits one",
+            ));
+        }
+        match self.runner.probe_result(outcome) {
+            Ok(()) => {
+                self.state = State::Running;
+                Ok(())
+            }
+            Err(e) => {
+                let e = self.locate(e, Some(self.probe_index));
+                self.state = State::Failed(e.clone());
+                Err(e)
+            }
+        }
+    }
+
+    fn run_until_event(&mut self, out: &mut Vec<CanonMove>) -> Result<RunEvent, GcodeError> {
+        loop {
+            if let Some(line) = self.runner.main_m99_end.take() {
+                self.runner.interp.flush(out);
+                out.push(CanonMove {
+                    line,
+                    kind: CanonKind::ProgramEnd,
+                });
+                return Ok(RunEvent::Ended);
+            }
+            if self.runner.interp.is_ended() {
+                return Ok(RunEvent::Ended);
+            }
+            if self.pc >= self.prog.lines.len() {
+                break;
+            }
+            if let Some((at, index, e)) = &self.structure_error {
+                if self.pc >= *at {
+                    return Err(self.locate(e.clone(), *index));
+                }
+            }
+            let pc = self.pc;
+            self.pc = match self.runner.step(&self.prog, pc, out) {
+                Ok(next) => next,
+                Err(e) => return Err(self.locate(e, Some(pc))),
+            };
+            if let Some(request) = self.runner.probe {
+                self.probe_index = pc;
+                return Ok(RunEvent::Probe(request));
+            }
+        }
+        if let Some((_, index, e)) = self.structure_error.take() {
+            return Err(self.locate(e, index));
+        }
+        if let Some(e) = &self.prog.tail_error {
+            return Err(e.clone());
+        }
+        self.runner.interp.flush(out);
+        Ok(RunEvent::Ended)
+    }
+
+    /// Places an error of line index `index` (`None`: the main program) in its file, with the
+    /// calls active now. Errors located already (those of reading a subroutine file) and the
+    /// main program's syntax error are left as they are.
+    fn locate(&self, mut e: GcodeError, index: Option<usize>) -> GcodeError {
+        if e.file.is_some() || !e.calls.is_empty() || self.prog.tail_error.as_ref() == Some(&e) {
+            return e;
+        }
+        e.file = index.and_then(|i| self.prog.file_of(i).cloned());
+        e.calls = self.runner.call_sites(&self.prog);
+        e
+    }
+}
