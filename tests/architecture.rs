@@ -31,6 +31,7 @@ const CRATE_GRAPH: [(&str, &[&str]); 7] = [
             "vmc-identify",
             "vmc-machine",
             "vmc-predict",
+            "vmc-tables",
         ],
     ),
 ];

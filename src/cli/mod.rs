@@ -8,6 +8,7 @@ mod campaign;
 mod chatter;
 mod control;
 mod cut;
+mod export;
 mod fiveaxis;
 mod identify_thermal;
 mod lobes;
@@ -27,6 +28,7 @@ pub use campaign::{parse_seeds, CampaignArgs, MergeArgs};
 pub use chatter::ChatterArgs;
 pub use control::{ControlAction, ControlArgs};
 pub use cut::CutArgs;
+pub use export::{ExportArgs, FormatArg};
 pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
 pub use identify_thermal::IdentifyThermalArgs;
 pub use lobes::{LobesArgs, MethodArg};
@@ -93,6 +95,10 @@ pub enum Command {
     /// engagement from a Z-map of the stock, the critical depth at its speed and immersion, the
     /// margin and a verdict; exit status 1 if a cut is unstable.
     Chatter(ChatterArgs),
+    /// Write the compensation tables a controller loads (LinuxCNC per-joint COMP_FILEs, Siemens
+    /// 840D sl CEC) from a trained model at a thermal state (readings or a warm-up on the twin),
+    /// with what each table loses against the model.
+    Export(ExportArgs),
     /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
     /// `rs274`, to compare with a controller.
     Interpret(InterpretArgs),

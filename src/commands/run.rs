@@ -10,7 +10,7 @@ use super::{wrote_recording, RrdOutput};
 use crate::files;
 use crate::predict::controller::Compensator;
 use crate::predict::guard::Guarded;
-use crate::predict::predictor::{self as model_file, AnyPredictor};
+use crate::predict::predictor::AnyPredictor;
 use crate::predict::provenance::InputRanges;
 use crate::progress::Progress;
 use crate::record;
@@ -161,69 +161,15 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
     Ok((warmups, plan))
 }
 
-/// The model of `path` as a compensator for the run's machine (retooled to the machine's tool
-/// offset when it is a hybrid model, which `out` is told), guarded by its trained ranges. A model
-/// of other kinematics is refused; one calibrated on another machine or realisation is refused
-/// unless `allow_other_machine`.
+/// The model of `path` as a compensator for the run's machine (see
+/// [`super::model::load_for_machine`]), guarded by its trained ranges.
 fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunController> {
     let machine = &cfg.machine;
-    // A read error and a content error alike are named by the file, once.
-    let (model, trained_on) = files::read_text(path)
-        .map_err(anyhow::Error::new)
-        .and_then(|text| {
-            let model = AnyPredictor::from_json_str(&text)?;
-            Ok((model, model_file::file::trained_on(&text)?))
-        })
-        .with_context(|| path.display().to_string())?;
-    let does_not_fit = || {
-        format!(
-            "{}: model does not fit machine {}",
-            path.display(),
-            machine.machine.name
-        )
-    };
-    let trained_tool_mm = model.geometry().tool_offset_mm;
-    let (model, retooled) = model
-        .for_machine_geometry(&machine.geometry())
-        .with_context(does_not_fit)?;
-    if retooled {
-        writeln!(
-            out,
-            "note: {} was calibrated with tool offset {:?} mm; its elementary errors are \
-             synthesised for this machine's tool offset {:?} mm",
-            path.display(),
-            trained_tool_mm,
-            machine.tool.offset_mm
-        )?;
-    }
-    let here = machine.identity(Some(cfg.seed));
-    match trained_on.as_ref().and_then(|t| t.machine.as_ref()) {
-        Some(id) => {
-            if let Some(why) = id.difference(&here) {
-                if !cfg.allow_other_machine {
-                    anyhow::bail!(
-                        "{}: the model does not belong to this machine: {why}; retrain it on \
-                         this machine's calibration, or pass --allow-other-machine to use it \
-                         anyway",
-                        path.display()
-                    );
-                }
-                writeln!(
-                    out,
-                    "note: {}: {why} (--allow-other-machine)",
-                    path.display()
-                )?;
-            }
-        }
-        None => writeln!(
-            out,
-            "note: {} records no machine or trained ranges (a model file older than version \
-             8): neither is checked",
-            path.display()
-        )?,
-    }
+    let (model, trained_on) =
+        super::model::load_for_machine(machine, cfg.seed, path, cfg.allow_other_machine, out)?;
     let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
-    let ctrl = Compensator::for_machine(model, &names).with_context(does_not_fit)?;
+    let ctrl = Compensator::for_machine(model, &names)
+        .with_context(|| super::model::does_not_fit(path, machine))?;
     let none = InputRanges {
         sensors: Vec::new(),
         sensor_degc: Vec::new(),
