@@ -97,9 +97,14 @@ class Session:
             time.sleep(POLL_S)
 
     def command(self, what, send):
+        """Sends a command and waits until LinuxCNC has carried it out."""
         send()
-        self.cmd.wait_complete(self.remaining_s())
+        status = self.cmd.wait_complete(self.remaining_s())
         self.check_errors()
+        if status == -1:
+            raise DriverError(f"{what}: no answer from LinuxCNC before the deadline")
+        if status == linuxcnc.RCS_ERROR:
+            raise DriverError(f"{what}: refused by LinuxCNC")
 
     def start(self):
         """E-stop reset, machine on, every joint homed in place, MDI mode."""

@@ -89,9 +89,10 @@ fi
 
 status=0
 if [ "$isolated" = yes ]; then
-  # --kill-child: if timeout ends unshare, the namespace's first process gets SIGKILL and the
-  # kernel ends every other process of the namespace with it.
-  timeout -k 10 "$timeout_s" unshare --ipc --mount --pid --fork --mount-proc --kill-child \
+  # On the timeout unshare gets SIGKILL (it waits through SIGTERM); --kill-child then sends
+  # SIGKILL to the namespace's first process and the kernel ends every other process of the
+  # namespace with it.
+  timeout -s KILL "$timeout_s" unshare --ipc --mount --pid --fork --mount-proc --kill-child \
     "$0" --inside-namespace "$ini" || status=$?
 else
   if [ -e /tmp/linuxcnc.lock ]; then
