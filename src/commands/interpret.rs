@@ -48,7 +48,8 @@ pub fn interpret(cfg: &InterpretConfig, out: &mut dyn Write) -> Result<()> {
     let file = cfg.program.display().to_string();
     let text = vmc_machine::read::read_text(&cfg.program)
         .with_context(|| format!("{file}: cannot read program"))?;
-    let moves = interp::run_program(&text, &cfg.interp).with_context(|| file.clone())?;
+    let moves = interp::run_program(&text, &cfg.interp)
+        .map_err(|e| anyhow::anyhow!("{}", e.display_in(&file)))?;
     write_calls(&moves, out)?;
     Ok(())
 }
@@ -92,6 +93,20 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                 }
                 let p = point(end_mm, end_abc_deg);
                 call(out, format!("STRAIGHT_FEED({p})"))?;
+            }
+            CanonKind::Probe {
+                end_mm,
+                end_abc_deg,
+                feed_mm_per_min,
+                ..
+            } => {
+                if feed != Some(*feed_mm_per_min) {
+                    feed = Some(*feed_mm_per_min);
+                    call(out, format!("SET_FEED_RATE({feed_mm_per_min:.4})"))?;
+                }
+                call(out, "TURN_PROBE_ON()".to_string())?;
+                call(out, interp::straight_probe_call(*end_mm, *end_abc_deg))?;
+                call(out, "TURN_PROBE_OFF()".to_string())?;
             }
             CanonKind::Arc {
                 end_mm,

@@ -22,8 +22,9 @@ pub enum ProgramError {
         /// Why.
         err: std::io::Error,
     },
-    /// Syntax or semantics (line and column in the message).
-    #[error("{file}: {err}")]
+    /// Syntax or semantics (file, line and column in the message; an error in a subroutine file
+    /// names that file and the calls that led to it).
+    #[error("{}", .err.display_in(.file))]
     Gcode {
         /// The file.
         file: String,
@@ -156,6 +157,7 @@ pub fn refuse_rotary(
     for m in moves {
         let (interp::CanonKind::Traverse { end_abc_deg, .. }
         | interp::CanonKind::Feed { end_abc_deg, .. }
+        | interp::CanonKind::Probe { end_abc_deg, .. }
         | interp::CanonKind::Arc { end_abc_deg, .. }) = &m.kind
         else {
             continue;

@@ -396,10 +396,18 @@ impl PlanBuilder<'_> {
                 let end = (end_mm, end_abc_deg);
                 self.push(line, SegmentKind::Rapid, end, geometry, speed, accel);
             }
+            // A probe move is planned as the feed it is; stand-alone, the interpreter takes the
+            // probe as tripped at the target (as LinuxCNC's `rs274` does).
             CanonKind::Feed {
                 end_mm,
                 end_abc_deg,
                 feed_mm_per_min,
+            }
+            | CanonKind::Probe {
+                end_mm,
+                end_abc_deg,
+                feed_mm_per_min,
+                ..
             } => {
                 check_finite(line, "end point", end_mm)?;
                 self.rotary.check_move(line, self.abc_deg, end_abc_deg)?;
