@@ -9,7 +9,7 @@ use crate::nn::{Activation, Regressor};
 use crate::predictor::{ErrorPredictor, HybridPredictor, LinearPlusNet};
 use crate::synthesis::{LinearAxis, MachineGeometry};
 
-use super::query::{AxisSlots, HEAD, N_OUT, PAD};
+use super::query::{AxisHead, Isa, UnitBlock, N_OUT};
 use super::temps::{Inputs, PartCoefficients, SpindleStage, SquarenessStage, TempPart};
 use super::{CompileError, CompiledHybrid, Synthesis};
 
@@ -71,7 +71,9 @@ pub(super) fn lower(p: &HybridPredictor) -> Result<CompiledHybrid, CompileError>
         n_in: n_shared,
         data: sq.intercept().iter().chain(sq.slopes()).copied().collect(),
     };
-    let (hot, axes) = pack_hot(&nets);
+    let synthesis = synthesis_of(p.geometry());
+    let (heads, units) = pack_axes(&nets, synthesis.sign);
+    let max_hidden = heads.iter().map(|a| a.hidden).max().unwrap_or(0);
     let axis_temps: [TempPart; 3] =
         axis_temps
             .try_into()
@@ -80,10 +82,12 @@ pub(super) fn lower(p: &HybridPredictor) -> Result<CompiledHybrid, CompileError>
             })?;
     Ok(CompiledHybrid {
         sensors: p.sensor_names().to_vec(),
-        synthesis: synthesis_of(p.geometry()),
+        synthesis,
         neg_shift_mm: p.negative_approach_shift_mm(),
-        hot,
-        axes,
+        heads,
+        units,
+        isa: Isa::detect(),
+        c_scratch: vec![0.0; max_hidden].into_boxed_slice(),
         axis_temps,
         spindle,
         squareness,
@@ -91,6 +95,7 @@ pub(super) fn lower(p: &HybridPredictor) -> Result<CompiledHybrid, CompileError>
         spindle_lin_mm: [f64::NAN; 3],
         spindle_tilt_rad: [f64::NAN; 2],
         squareness_rad: [f64::NAN; 3],
+        constant_mm: [f64::NAN; 3],
         stale: true,
     })
 }
@@ -117,44 +122,39 @@ fn synthesis_of(g: &MachineGeometry) -> Synthesis {
     }
 }
 
-/// The hot block of the three axis parts (layout in `query::AxisSlots`).
-fn pack_hot(nets: &[QueryNet]) -> (Box<[f64]>, [AxisSlots; 3]) {
-    let mut hot = Vec::new();
-    let mut slots = [AxisSlots {
-        start: 0,
-        hidden: 0,
-        padded: 0,
-    }; 3];
-    for (k, net) in nets.iter().enumerate().take(3) {
+/// The heads of the three axis parts and their blocks of units (layouts in `query`), the
+/// synthesis's units and the sides' signs `sign` folded into the outputs; the linear terms and
+/// `c₂` start at zero (the readings stage writes them); padded units have zero weights.
+fn pack_axes(nets: &[QueryNet], sign: [f64; 3]) -> ([AxisHead; 3], Box<[UnitBlock]>) {
+    let mut units: Vec<UnitBlock> = Vec::new();
+    let mut heads = [AxisHead::default(); 3];
+    for ((head, net), sign) in heads.iter_mut().zip(nets).zip(sign) {
         let h = net.hidden;
-        let s = AxisSlots {
-            start: hot.len(),
-            hidden: h,
-            padded: h.div_ceil(PAD) * PAD,
-        };
-        let mut region = vec![0.0; s.len()];
-        let (head, rest) = region.split_at_mut(HEAD);
-        if h > 0 {
-            head[..N_OUT].copy_from_slice(&net.b2);
-            head[N_OUT..2 * N_OUT].copy_from_slice(&net.out_std);
-            head[2 * N_OUT..3 * N_OUT].copy_from_slice(&net.out_mean);
-            head[5 * N_OUT] = net.pos_mean;
-            head[5 * N_OUT + 1] = net.pos_std;
-            let (w, rest) = rest.split_at_mut(s.padded);
-            w[..h].copy_from_slice(&net.w_pos);
-            // `c` stays zero: padded units get `s = 0`, `a = 0`, and zero output weights.
-            let (_, rest) = rest.split_at_mut(s.padded);
-            let (v, _) = rest.split_at_mut(s.padded * N_OUT);
-            for (j, unit) in v.chunks_exact_mut(N_OUT).take(h).enumerate() {
-                for (o, vo) in unit.iter_mut().enumerate() {
-                    *vo = net.w2[o * h + j];
-                }
+        head.hidden = h;
+        head.start = units.len();
+        head.blocks = h.div_ceil(4);
+        head.pos_norm = [0.0, 1.0];
+        head.out_scale = std::array::from_fn(|o| sign * if o < 3 { 1e-3 } else { 1e-6 });
+        if h == 0 {
+            continue;
+        }
+        head.b2.copy_from_slice(&net.b2);
+        for o in 0..N_OUT {
+            head.out_std[o] = net.out_std[o] * head.out_scale[o];
+            head.out_mean[o] = net.out_mean[o] * head.out_scale[o];
+        }
+        head.pos_norm = [net.pos_mean, net.pos_std];
+        let mut blocks = vec![UnitBlock::default(); head.blocks];
+        for j in 0..h {
+            let b = &mut blocks[j / 4];
+            b.w2[j % 4] = 2.0 * net.w_pos[j] / net.pos_std;
+            for o in 0..N_OUT {
+                b.v[o][j % 4] = net.w2[o * h + j];
             }
         }
-        hot.extend_from_slice(&region);
-        slots[k] = s;
+        units.extend_from_slice(&blocks);
     }
-    (hot.into_boxed_slice(), slots)
+    (heads, units.into_boxed_slice())
 }
 
 /// Splits a part with `n_pos` (0 or 1) position inputs and `n_t` temperature inputs into its

@@ -18,14 +18,21 @@
 //!   squareness) is recomputed at the first query after an observation, in the arithmetic order
 //!   of the library (the cached values are bit-identical). A query evaluates the position
 //!   column only: per axis `s_j = c_j + w_j·z`, `a_j = tanh(s_j)`, six outputs `Σ_j V_oj a_j`.
-//! - **Flat memory.** Everything a query reads or writes — per axis the position weights, the
-//!   cached `c_j`, the output weights (unit-major, so the six outputs accumulate side by side),
-//!   the cached linear terms and the scratch of the last evaluation — sits in one boxed slice;
-//!   hidden layers are padded to a multiple of 4 units with zero weights (a padded unit adds
-//!   exactly 0). Built once; nothing is allocated afterwards.
+//! - **Flat memory.** Everything a query reads or writes sits in two places: per axis a head
+//!   (output biases and de-normalisation, the linear terms cached for the readings, the position
+//!   normalisation) held in the model itself, and one boxed slice of blocks of four hidden units,
+//!   each block holding what a query does with its units (position weights, the cached
+//!   temperature part `c_j`, the arguments and exponentials of the last evaluation, the output
+//!   weights output-major so each output accumulates four units at once). Hidden layers are padded to
+//!   a multiple of 4 units with zero weights (a padded unit adds exactly 0). Built once; nothing
+//!   is allocated afterwards.
+//! - **One pass per axis**, four units at a time: arguments, exponentials, activations and the
+//!   output accumulation, with fixed-size loops only (no length-dependent code, no calls).
 //! - **Activations** by the [`kernel`]: `tanh(s) = 1 − 2/(e^{2s} + 1)` with a branch-free
-//!   exponential exact to ~2 ulp, which the compiler runs through SIMD lanes (the library calls
-//!   libm's `exp` per unit).
+//!   exponential exact to ~2 ulp, which runs through SIMD lanes (the library calls libm's `exp`
+//!   per unit).
+//! - **Two instantiations**: portable, and AVX2 with fused multiply–adds where the CPU has them
+//!   (detected at build; [`CompiledHybrid::with_portable_code`] forces the portable one).
 //! - **The fixed point** reuses its own work: the first evaluation of a solve is fresh; every
 //!   later one starts from the previous iterate's `e^{2s_j}` and multiplies by `e^{2Δs_j}`
 //!   (a polynomial: the iterates differ by the change of `E`, nanometres to micrometres, so
@@ -56,7 +63,7 @@ use crate::predictor::{AnyPredictor, ErrorPredictor, HybridPredictor, ModelKind,
 
 pub use compensator::CompiledCompensator;
 
-use query::AxisSlots;
+use query::{AxisHead, Isa, UnitBlock};
 use temps::{Inputs, SpindleStage, SquarenessStage, TempPart};
 
 /// Why a model cannot be compiled.
@@ -141,9 +148,14 @@ pub struct CompiledHybrid {
     synthesis: Synthesis,
     /// The reversal as it shows at the tool, mm per E component.
     neg_shift_mm: [f64; 3],
-    /// Everything a query touches (module doc), laid out by `axes`.
-    hot: Box<[f64]>,
-    axes: [AxisSlots; 3],
+    /// What a query reads of each axis part beside its units.
+    heads: [AxisHead; 3],
+    /// The units of the three axis parts, four to a block (module doc).
+    units: Box<[UnitBlock]>,
+    /// Which instantiation of the query code runs.
+    isa: Isa,
+    /// The readings stage's first-layer columns of one part, before they go to `units`.
+    c_scratch: Box<[f64]>,
     /// The readings stage of the three axis parts.
     axis_temps: [TempPart; 3],
     spindle: SpindleStage,
@@ -154,6 +166,8 @@ pub struct CompiledHybrid {
     spindle_tilt_rad: [f64; 2],
     /// Squareness for the held readings, rad: yz, xz, xy.
     squareness_rad: [f64; 3],
+    /// The spindle's drifts and tilts at the tool for the held readings and tool, mm.
+    constant_mm: [f64; 3],
     /// Whether the readings stage must run before the next query.
     stale: bool,
 }
@@ -233,17 +247,35 @@ impl CompiledHybrid {
             return Err(InputError::ToolOffset);
         }
         self.synthesis.tool_offset_mm = tool_offset_mm;
+        self.refresh_constant();
         Ok(())
     }
 
     /// Hidden units of the X, Y, Z parts' nets (0 where the part is linear only).
     pub fn hidden_units(&self) -> [usize; 3] {
-        self.axes.map(|a| a.hidden)
+        self.heads.map(|a| a.hidden)
     }
 
-    /// Bytes of the block a query reads and writes.
+    /// Bytes a query reads and writes: the three heads and the blocks of units.
     pub fn query_block_bytes(&self) -> usize {
-        std::mem::size_of_val(&*self.hot)
+        std::mem::size_of_val(&self.heads) + std::mem::size_of_val(&*self.units)
+    }
+
+    /// The same model running the portable instantiation of the query code whatever the CPU
+    /// (the AVX2 + FMA one, chosen when the CPU has it, may differ in the last bits: fused
+    /// multiply–adds round once).
+    #[must_use]
+    pub fn with_portable_code(mut self) -> Self {
+        self.isa = Isa::Portable;
+        self
+    }
+
+    /// Which instantiation of the query code runs: `"portable"` or `"avx2+fma"`.
+    pub fn instruction_set(&self) -> &'static str {
+        match self.isa {
+            Isa::Portable => "portable",
+            Isa::Avx2Fma => "avx2+fma",
+        }
     }
 }
 
