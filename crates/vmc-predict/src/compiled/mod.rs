@@ -232,7 +232,8 @@ impl CompiledHybrid {
         Ok(())
     }
 
-    /// Whether readings were observed (before the first, predictions are NaN).
+    /// Whether readings were observed (before the first, predictions are NaN; so are they
+    /// after a reading that is not a number).
     pub fn has_readings(&self) -> bool {
         self.inputs.has_readings()
     }

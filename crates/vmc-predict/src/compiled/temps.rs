@@ -19,6 +19,9 @@ pub(super) struct Inputs {
     feed: FeedHistory,
     /// The readings last observed, °C (NaN before the first).
     readings: Box<[f64]>,
+    /// Whether readings were observed since the build (or the predictor's state it started
+    /// from held some).
+    observed: bool,
     /// Readings and shared history features: the prefix of `all` every part sees.
     n_history: usize,
     /// Inputs of the axis parts (without own-axis feeds) and of the squareness.
@@ -59,6 +62,7 @@ impl Inputs {
             feeds: vec![0.0; feed.len()].into_boxed_slice(),
             all: vec![0.0; n_all].into_boxed_slice(),
             axis: vec![0.0; n_history + if own_feed { n_feed_axis } else { 0 }].into_boxed_slice(),
+            observed: readings.iter().any(|t| !t.is_nan()),
             readings: readings.into_boxed_slice(),
             history,
             spindle_history,
@@ -85,13 +89,14 @@ impl Inputs {
     /// As `HybridPredictor::observe_readings` (the count was checked by the caller).
     pub fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
         self.readings.copy_from_slice(temps_degc);
+        self.observed = true;
         self.history.observe(time_s, temps_degc);
         self.spindle_history.observe(time_s, temps_degc);
     }
 
-    /// Whether any reading was observed (the held ones are NaN before).
+    /// Whether readings were observed (the held ones are NaN before).
     pub fn has_readings(&self) -> bool {
-        self.readings.iter().all(|t| !t.is_nan())
+        self.observed
     }
 
     /// As `HybridPredictor::observe_spindle_speed`; whether the model uses the speed.
