@@ -88,8 +88,8 @@ fn the_servo_loop_through_the_c_functions_gives_the_librarys_corrections() {
         if let Some(prev) = sent {
             let dt = t_s - prev.time_s;
             rpm_s += prev.spindle_rpm * dt;
-            for k in 0..3 {
-                feeds_s[k] += prev.axis_feed_mm_per_min[k].abs() * dt;
+            for (f, v) in feeds_s.iter_mut().zip(prev.axis_feed_mm_per_min) {
+                *f += v.abs() * dt;
             }
             span_s += dt;
         }

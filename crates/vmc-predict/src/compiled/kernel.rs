@@ -25,6 +25,11 @@
 //! `FMA = true` (fused multiply–adds, for code compiled with the `fma` target feature, where
 //! `mul_add` is one instruction). Both are exact to round-off; their last bits may differ.
 
+// Indexed loops over fixed-size arrays on purpose: the vectoriser turns them into SIMD lanes,
+// while array adaptors (`map`, `zip`) stayed out-of-line calls without the target features of
+// the AVX2 instantiation.
+#![allow(clippy::needless_range_loop)]
+
 /// Largest step `|δ|` of a unit's `x = 2s` for which a move is exact to round-off.
 pub const SMALL_STEP_MAX: f64 = 0.01;
 
@@ -149,8 +154,8 @@ pub fn exp2_tanh_block(s: &[Lane], e: &mut [Lane], a: &mut [Lane]) {
 }
 
 /// Moves each unit from `s_old` (with `e = e^{2 s_old}`) to `s_new` when the lane's steps are
-/// small ([`small_steps`]), afresh otherwise: `e ← e^{2 s_new}`, `a ← tanh(s_new)` (portable
-/// code).
+/// small (every `|δ| ≤` [`SMALL_STEP_MAX`]), afresh otherwise: `e ← e^{2 s_new}`,
+/// `a ← tanh(s_new)` (portable code).
 pub fn move_exp2_block(s_old: &[Lane], s_new: &[Lane], e: &mut [Lane], a: &mut [Lane]) {
     for (((so, sn), e), a) in s_old.iter().zip(s_new).zip(e.iter_mut()).zip(a.iter_mut()) {
         let mut d = [0.0; 4];

@@ -20,6 +20,11 @@
 //! (SSE2 on x86-64: two lanes, a multiply then an add) and, where the CPU has them (detected
 //! when the model is built), AVX2 with fused multiply–adds (four lanes).
 
+// Indexed loops over fixed-size arrays on purpose: the vectoriser turns them into SIMD lanes,
+// while array adaptors (`map`, `zip`) stayed out-of-line calls without the target features of
+// the AVX2 instantiation.
+#![allow(clippy::needless_range_loop)]
+
 use crate::controller::SolveInfo;
 
 use super::kernel::{exp_clamped, exp_small, madd, small_steps, tanh_from_exp2s};
