@@ -13,7 +13,7 @@ fn repo(rel: &str) -> PathBuf {
 
 /// The workspace's crates, each with the workspace crates it may depend on (normal
 /// dependencies) — the drawing of docs/architecture.md.
-const CRATE_GRAPH: [(&str, &[&str]); 7] = [
+const CRATE_GRAPH: [(&str, &[&str]); 8] = [
     ("vmc-gcode", &[]),
     ("vmc-predict", &[]),
     ("vmc-identify", &[]),
@@ -23,6 +23,7 @@ const CRATE_GRAPH: [(&str, &[&str]); 7] = [
         &["vmc-dynamics", "vmc-gcode", "vmc-identify", "vmc-predict"],
     ),
     ("vmc-tables", &["vmc-predict"]),
+    ("vmc-rtcomp", &["vmc-predict"]),
     (
         "vmc-twin",
         &[

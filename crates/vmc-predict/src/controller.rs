@@ -109,6 +109,70 @@ pub struct SolveInfo {
     pub converged: bool,
 }
 
+/// Each axis's direction of commanded motion (module doc, "Approach direction"): what both
+/// compensators, this one and the compiled one, key the reversal on.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct ApproachDirections {
+    /// Last commanded tool position, mm (None before the first).
+    last_commanded_mm: Option<[f64; 3]>,
+    /// Whether each axis's last commanded motion was negative.
+    negative: [bool; 3],
+}
+
+impl ApproachDirections {
+    /// Starts from the commanded position `p_mm` (mm), every axis positive.
+    pub(crate) fn starting_at(p_mm: [f64; 3]) -> Self {
+        Self {
+            last_commanded_mm: Some(p_mm),
+            negative: [false; 3],
+        }
+    }
+
+    /// Notes a commanded tool position `p_mm` (mm): a change of an axis beyond
+    /// [`DIRECTION_DEADBAND_MM`] sets its direction and moves its reference.
+    #[inline]
+    pub(crate) fn note_commanded_mm(&mut self, p_mm: [f64; 3]) {
+        if let Some(last) = self.last_commanded_mm {
+            for k in 0..3 {
+                let d = p_mm[k] - last[k];
+                if d > DIRECTION_DEADBAND_MM {
+                    self.negative[k] = false;
+                } else if d < -DIRECTION_DEADBAND_MM {
+                    self.negative[k] = true;
+                } else {
+                    continue;
+                }
+                // Only a counted motion moves the reference, so slow creep adds up.
+                if let Some(l) = self.last_commanded_mm.as_mut() {
+                    l[k] = p_mm[k];
+                }
+            }
+        } else {
+            self.last_commanded_mm = Some(p_mm);
+        }
+    }
+
+    /// Notes one commanded motion segment: the start counts only if no position was known yet.
+    #[inline]
+    pub(crate) fn note_motion_segment_mm(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
+        if self.last_commanded_mm.is_none() {
+            self.last_commanded_mm = Some(start_mm);
+        }
+        self.note_commanded_mm(end_mm);
+    }
+
+    /// Whether each axis's last commanded motion was negative.
+    #[inline]
+    pub(crate) fn negative(&self) -> [bool; 3] {
+        self.negative
+    }
+
+    /// `1.0` positive (or no motion yet), `-1.0` negative, per axis.
+    pub(crate) fn signs(&self) -> [f64; 3] {
+        self.negative.map(|n| if n { -1.0 } else { 1.0 })
+    }
+}
+
 /// Turns commanded tool positions into compensated axis commands with a predictor; the loop's
 /// [`Controller`]. It holds nothing of the readings itself: they go to the predictor
 /// ([`ErrorPredictor::observe_readings`]), which holds them.
@@ -118,10 +182,7 @@ pub struct Compensator<P: ErrorPredictor> {
     tol_mm: f64,
     max_iterations: usize,
     last: SolveInfo,
-    /// Last commanded tool position, mm (None before the first).
-    last_commanded_mm: Option<[f64; 3]>,
-    /// Whether each axis's last commanded motion was negative.
-    negative: [bool; 3],
+    directions: ApproachDirections,
 }
 
 impl<P: ErrorPredictor> Compensator<P> {
@@ -132,8 +193,7 @@ impl<P: ErrorPredictor> Compensator<P> {
             tol_mm: DEFAULT_TOL_MM,
             max_iterations: DEFAULT_MAX_ITERATIONS,
             last: SolveInfo::default(),
-            last_commanded_mm: None,
-            negative: [false; 3],
+            directions: ApproachDirections::default(),
         }
     }
 
@@ -161,7 +221,7 @@ impl<P: ErrorPredictor> Compensator<P> {
     /// start position), so the first motion already gives directions.
     #[must_use]
     pub fn with_start_mm(mut self, p_mm: [f64; 3]) -> Self {
-        self.last_commanded_mm = Some(p_mm);
+        self.directions = ApproachDirections::starting_at(p_mm);
         self
     }
 
@@ -169,40 +229,20 @@ impl<P: ErrorPredictor> Compensator<P> {
     /// command: updates each axis's direction of motion (see the module doc).
     #[inline]
     pub fn note_commanded_mm(&mut self, p_mm: [f64; 3]) {
-        if let Some(last) = self.last_commanded_mm {
-            for k in 0..3 {
-                let d = p_mm[k] - last[k];
-                if d > DIRECTION_DEADBAND_MM {
-                    self.negative[k] = false;
-                } else if d < -DIRECTION_DEADBAND_MM {
-                    self.negative[k] = true;
-                } else {
-                    continue;
-                }
-                // Only a counted motion moves the reference, so slow creep adds up.
-                if let Some(l) = self.last_commanded_mm.as_mut() {
-                    l[k] = p_mm[k];
-                }
-            }
-        } else {
-            self.last_commanded_mm = Some(p_mm);
-        }
+        self.directions.note_commanded_mm(p_mm);
     }
 
     /// Notes one commanded motion segment from `start_mm` to `end_mm` (mm): the start counts
     /// only if no position was known yet (the segments of a path join end to start).
     #[inline]
     pub fn note_motion_segment_mm(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
-        if self.last_commanded_mm.is_none() {
-            self.last_commanded_mm = Some(start_mm);
-        }
-        self.note_commanded_mm(end_mm);
+        self.directions.note_motion_segment_mm(start_mm, end_mm);
     }
 
     /// Direction of each axis's last commanded motion: `1.0` positive (or none yet), `-1.0`
     /// negative.
     pub fn approach_directions(&self) -> [f64; 3] {
-        self.negative.map(|n| if n { -1.0 } else { 1.0 })
+        self.directions.signs()
     }
 
     /// How the last [`Controller::axis_command_mm`] went.
@@ -258,8 +298,9 @@ impl<P: ErrorPredictor> Controller for Compensator<P> {
     fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
         self.note_commanded_mm(p_mm);
         let shift = self.predictor.negative_approach_shift_mm();
+        let negative = self.directions.negative();
         let reversal_mm: [f64; 3] =
-            std::array::from_fn(|k| if self.negative[k] { shift[k] } else { 0.0 });
+            std::array::from_fn(|k| if negative[k] { shift[k] } else { 0.0 });
         let mut q = p_mm;
         let mut info = SolveInfo::default();
         while info.iterations < self.max_iterations {

@@ -4,6 +4,7 @@
 //! so nothing in it can name the twin's error functions, thermal nodes, parameters or seeds. It
 //! sees only what a real controller sees: nominal machine geometry, calibration datasets and
 //! sensor readings.
+pub mod compiled;
 pub mod controller;
 pub mod dataset;
 pub mod guard;

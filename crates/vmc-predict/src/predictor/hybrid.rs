@@ -126,6 +126,22 @@ struct Runtime {
     stale: bool,
 }
 
+/// The filters over the observed inputs and the readings last observed (NaN before the first),
+/// as a [`HybridPredictor`] holds them.
+#[derive(Debug, Clone)]
+pub(crate) struct FilterState {
+    /// The shared history features' filters.
+    pub history: ReadingHistory,
+    /// The spindle-only history features' filters.
+    pub spindle_history: ReadingHistory,
+    /// The spindle speed's heat-input filters.
+    pub speed: SpeedHistory,
+    /// The axes' feed filters.
+    pub feed: FeedHistory,
+    /// The readings last observed, °C.
+    pub readings: Vec<f64>,
+}
+
 /// Hybrid predictor: 3 axis MLPs + spindle MLP (each on a linear part) + squareness regression
 /// + first-order synthesis.
 #[derive(Debug, Clone)]
@@ -273,6 +289,18 @@ impl HybridPredictor {
     /// The trained parts (for the model file).
     pub(crate) fn parts(&self) -> &HybridParts {
         &self.parts
+    }
+
+    /// The filters and the held readings as they stand (for the compiled form, which starts
+    /// from the same state).
+    pub(crate) fn filter_state(&self) -> FilterState {
+        FilterState {
+            history: self.rt.history.clone(),
+            spindle_history: self.rt.spindle_history.clone(),
+            speed: self.rt.speed.clone(),
+            feed: self.rt.feed.clone(),
+            readings: self.rt.readings.clone(),
+        }
     }
 
     /// Rejects a machine whose sensor names or order differ from the model's.

@@ -52,6 +52,9 @@ mod volumetric;
 #[cfg(test)]
 pub(crate) mod testdata;
 
+pub(crate) use hybrid::FilterState;
+pub(crate) use part::LinearPlusNet;
+
 pub use feed_ranges::feed_ranges;
 pub use file::{AnyPredictor, SensorInfo, FORMAT_NAME, FORMAT_VERSION, OLDEST_READ_VERSION};
 pub use hybrid::{train_hybrid, HybridPredictor};
