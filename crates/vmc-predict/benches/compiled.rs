@@ -19,7 +19,19 @@
 //! - `synthesis`: the first-order synthesis alone.
 //! - `readings_stage/*`: a new set of readings observed and the first query after it.
 //!
-//! Figures (release, 2-core machine shared with builds, criterion medians): see the record.
+//! Figures (release, the 2-core machine shared with other builds at load 8, criterion medians;
+//! every figure about twice its idle value — the library's query is 0.73–0.86 µs idle), 6 / 10
+//! hidden units:
+//! - query: library 983 / 1,722 ns; compiled 343 / 509 ns; compiled portable 573 / 1,312 ns;
+//!   compiled unfused 421 / 790 ns.
+//! - evaluation: library 382 / 805 ns; compiled 194 / 274 ns.
+//! - readings stage: library 2.71 / 3.41 µs; compiled 2.33 / 3.01 µs.
+//! - activations: libm 30 units 354 ns; kernel (portable) 36 units 308 ns, fresh + moved 640 ns.
+//! - synthesis: 44 ns.
+//!
+//! The load-robust figure (minimum over 400 batches of 2,000 queries, same machine): compiled
+//! 0.20 / 0.25 µs against the library's 0.55 / 0.76 µs. Steps and analysis:
+//! docs/decisions/2026-11-28-compiled-model.md.
 
 #[path = "../tests/common/mod.rs"]
 mod common;

@@ -16,33 +16,39 @@
 //!   the temperature columns of every first layer `c_j = b_j + Σ_T W_jT z_T`, the linear parts'
 //!   intercepts and their position slopes with the bilinear products, the spindle drifts, the
 //!   squareness) is recomputed at the first query after an observation, in the arithmetic order
-//!   of the library (the cached values are bit-identical). A query evaluates the position
-//!   column only: per axis `s_j = c_j + w_j·z`, `a_j = tanh(s_j)`, six outputs `Σ_j V_oj a_j`.
+//!   of the library (these values are bit-identical), then folded for the query (below). A query
+//!   evaluates the position column only.
+//! - **Folded query.** Per hidden unit `x_j = 2s_j = c₂_j + w₂_j·q` (`w₂ = 2w/σ_q`,
+//!   `c₂ = 2c − w₂·m`: the position's normalisation folded in), `a_j = 1 − 2/(e^{x_j} + 1)`; six
+//!   output sums per axis part whose de-normalisation also carries the synthesis's units
+//!   (µm → mm, µrad → rad) and the sign of the axis's side of the chain; the spindle's part of `E`
+//!   cached per readings and tool.
 //! - **Flat memory.** Everything a query reads or writes sits in two places: per axis a head
-//!   (output biases and de-normalisation, the linear terms cached for the readings, the position
-//!   normalisation) held in the model itself, and one boxed slice of blocks of four hidden units,
-//!   each block holding what a query does with its units (position weights, the cached
-//!   temperature part `c_j`, the arguments and exponentials of the last evaluation, the output
-//!   weights output-major so each output accumulates four units at once). Hidden layers are padded to
-//!   a multiple of 4 units with zero weights (a padded unit adds exactly 0). Built once; nothing
-//!   is allocated afterwards.
-//! - **One pass per axis**, four units at a time: arguments, exponentials, activations and the
-//!   output accumulation, with fixed-size loops only (no length-dependent code, no calls).
-//! - **Activations** by the [`kernel`]: `tanh(s) = 1 − 2/(e^{2s} + 1)` with a branch-free
-//!   exponential exact to ~2 ulp, which runs through SIMD lanes (the library calls libm's `exp`
-//!   per unit).
+//!   (output biases and de-normalisation, the cached linear terms, the position of the last
+//!   evaluation) held in the model itself, and one boxed slice of blocks of four hidden units,
+//!   each block holding what a query does with its units (`w₂`, `c₂`, the exponentials and
+//!   activations of the last evaluation, the output weights output-major so each output sums
+//!   four units at once). Hidden layers are padded to a multiple of 4 units with zero weights (a
+//!   padded unit adds exactly 0). Built once; nothing is allocated afterwards.
+//! - **Two passes per axis and evaluation**, four units at a time, fixed-size loops only (no
+//!   length-dependent code, no calls): the activations, then the output sums.
+//! - **Activations** by the [`kernel`]: a branch-free exponential exact to ~2 ulp, which runs
+//!   through SIMD lanes (the library calls libm's `exp` per unit).
 //! - **Two instantiations**: portable, and AVX2 with fused multiply–adds where the CPU has them
-//!   (detected at build; [`CompiledHybrid::with_portable_code`] forces the portable one).
+//!   (detected at build; [`CompiledHybrid::with_portable_code`] forces the portable one). Their
+//!   last bits may differ.
 //! - **The fixed point** reuses its own work: the first evaluation of a solve is fresh; every
-//!   later one starts from the previous iterate's `e^{2s_j}` and multiplies by `e^{2Δs_j}`
-//!   (a polynomial: the iterates differ by the change of `E`, nanometres to micrometres, so
-//!   `|2Δs| ≲ 1e-4`), with a fresh evaluation for an axis whose step is too large for the
+//!   later one starts from the previous iterate's `e^{x_j}` and multiplies by `e^{w₂_j·Δq}`
+//!   (a polynomial: the iterates differ by the change of `E`, nanometres to micrometres, so the
+//!   step is ~1e-4 or less), afresh for a block of units whose step is too large for the
 //!   polynomial ([`kernel::SMALL_STEP_MAX`]). A solve therefore depends on its own inputs only,
 //!   never on earlier queries.
 //!
-//! Equivalence: the readings stage, the output layers, the linear terms and the synthesis use
-//! the library's operations in its order; only the activations differ, by a few 1e-16 (absolute),
-//! which moves `E` by ~1e-15 µm on the test models (checked to 1e-12 µm in the tests).
+//! Equivalence: the readings stage is the library's arithmetic; the folds, the exponential, the
+//! order of the output sums and the fused multiply–adds each round differently from the
+//! library, by ~1e-16 relative: the predicted error differs by ≤ 2.1e-17 mm (2e-14 µm) on the
+//! test models, checked against 1e-12 µm in the tests; the compensated command by at most one
+//! rounding of `q = p − E`. The figures are in docs/decisions/2026-11-28-compiled-model.md.
 //!
 //! Only the hybrid model compiles ([`CompileError::NotHybrid`] for the volumetric and linear
 //! baselines, which the library's [`crate::controller::Compensator`] runs).

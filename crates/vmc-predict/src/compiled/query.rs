@@ -39,6 +39,7 @@ pub(super) enum Isa {
     /// Any CPU of the target.
     Portable,
     /// x86-64 with AVX2 and FMA.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     Avx2Fma,
 }
 
