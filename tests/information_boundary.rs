@@ -8,7 +8,7 @@
 use std::path::Path;
 
 /// The crates of the knowledge side.
-const KNOWLEDGE_CRATES: [&str; 3] = ["vmc-predict", "vmc-identify", "vmc-dynamics"];
+const KNOWLEDGE_CRATES: [&str; 4] = ["vmc-predict", "vmc-identify", "vmc-dynamics", "vmc-tables"];
 
 /// The crates of the truth side and the application, which the knowledge side must not name.
 const TRUTH_CRATES: [&str; 2] = ["vmc-machine", "vmc-twin"];
