@@ -115,7 +115,7 @@ fn export_writes_tables_a_controller_loads_at_the_stated_thermal_state() {
     assert!(e.contains(cold.split('=').next().unwrap()), "{e}");
     let e = err(
         d,
-        &["export", "--model", "model.json", "--format", "linuxcnc", "--readings", &cold, "--step-mm", "-1", "--out", "s"],
+        &["export", "--model", "model.json", "--format", "linuxcnc", "--readings", &cold, "--step-mm", "0", "--out", "s"],
     );
     assert!(e.contains("--step-mm must be a positive number"), "{e}");
     let e = err(
