@@ -143,8 +143,8 @@ fn main() {
         } else {
             calibration::evaluation_states(&spec, seed)
         };
-        let r =
-            campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &h, &states, &plans).unwrap();
+        let r = campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &h, &states, &plans)
+            .unwrap();
         let mx = r.iter().map(|x| x.max_after_um).fold(0.0, f64::max);
         let qm = (r.iter().map(|x| x.rms_after_um.powi(2)).sum::<f64>() / r.len() as f64).sqrt();
         println!("seed {seed}: nets {kept:?} max {mx:.2} qmean rms {qm:.3}");

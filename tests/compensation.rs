@@ -174,10 +174,12 @@ fn a_predictor_blind_to_temperature_does_not_reach_80_percent_on_warm_runs() {
         cold_degc,
     };
     let states = calibration::evaluation_states(&spec, seed);
-    let blind = campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &frozen, &states, &plans)
-        .unwrap();
+    let blind =
+        campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &frozen, &states, &plans)
+            .unwrap();
     let full =
-        campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans).unwrap();
+        campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans)
+            .unwrap();
     let mean = |runs: &[RunReport]| {
         let warm: Vec<f64> = runs
             .iter()

@@ -62,8 +62,15 @@ fn export_writes_tables_a_controller_loads_at_the_stated_thermal_state() {
     let out = ok(
         d,
         &[
-            "export", "--model", "model.json", "--format", "linuxcnc,siemens-cec",
-            "--readings", &cold, "--out", "cold",
+            "export",
+            "--model",
+            "model.json",
+            "--format",
+            "linuxcnc,siemens-cec",
+            "--readings",
+            &cold,
+            "--out",
+            "cold",
         ],
     );
     assert!(out.contains("wrote 6 files to cold"), "{out}");
@@ -86,9 +93,17 @@ fn export_writes_tables_a_controller_loads_at_the_stated_thermal_state() {
     ok(
         d,
         &[
-            "export", "--model", "model.json", "--format", "linuxcnc",
-            "--warmup", &common::repo_file("trajectories/warmup_2h_4000rpm.ngc").display().to_string(),
-            "--out", "warm",
+            "export",
+            "--model",
+            "model.json",
+            "--format",
+            "linuxcnc",
+            "--warmup",
+            &common::repo_file("trajectories/warmup_2h_4000rpm.ngc")
+                .display()
+                .to_string(),
+            "--out",
+            "warm",
         ],
     );
     let z_cold = forward_trims_mm(&std::fs::read_to_string(d.join("cold/joint2-z.comp")).unwrap());
@@ -99,28 +114,76 @@ fn export_writes_tables_a_controller_loads_at_the_stated_thermal_state() {
         .zip(&z_warm)
         .map(|(c, w)| (c - w).abs() * 1e3)
         .fold(0.0, f64::max);
-    assert!(moved_um > 1.0, "the warm-up moved Z's table by {moved_um} µm");
+    assert!(
+        moved_um > 1.0,
+        "the warm-up moved Z's table by {moved_um} µm"
+    );
 
     // Refusals: existing outputs, a sensor left out, a bad step, a file that is not readings.
     let e = err(
         d,
-        &["export", "--model", "model.json", "--format", "linuxcnc", "--readings", &cold, "--out", "cold"],
+        &[
+            "export",
+            "--model",
+            "model.json",
+            "--format",
+            "linuxcnc",
+            "--readings",
+            &cold,
+            "--out",
+            "cold",
+        ],
     );
     assert!(e.contains("already exists"), "{e}");
     let missing = cold.split(',').skip(1).collect::<Vec<_>>().join(",");
     let e = err(
         d,
-        &["export", "--model", "model.json", "--format", "linuxcnc", "--readings", &missing, "--out", "m"],
+        &[
+            "export",
+            "--model",
+            "model.json",
+            "--format",
+            "linuxcnc",
+            "--readings",
+            &missing,
+            "--out",
+            "m",
+        ],
     );
     assert!(e.contains(cold.split('=').next().unwrap()), "{e}");
     let e = err(
         d,
-        &["export", "--model", "model.json", "--format", "linuxcnc", "--readings", &cold, "--step-mm", "0", "--out", "s"],
+        &[
+            "export",
+            "--model",
+            "model.json",
+            "--format",
+            "linuxcnc",
+            "--readings",
+            &cold,
+            "--step-mm",
+            "0",
+            "--out",
+            "s",
+        ],
     );
     assert!(e.contains("--step-mm must be a positive number"), "{e}");
     let e = err(
         d,
-        &["export", "--model", "model.json", "--format", "linuxcnc", "--readings", "no-such-file", "--out", "n"],
+        &[
+            "export",
+            "--model",
+            "model.json",
+            "--format",
+            "linuxcnc",
+            "--readings",
+            "no-such-file",
+            "--out",
+            "n",
+        ],
     );
-    assert!(e.contains("neither NAME=VALUE readings nor a readable file"), "{e}");
+    assert!(
+        e.contains("neither NAME=VALUE readings nor a readable file"),
+        "{e}"
+    );
 }
