@@ -88,8 +88,7 @@ pub fn export(cfg: &ExportConfig, out: &mut dyn Write) -> Result<()> {
         cfg.allow_other_machine,
         out,
     )?;
-    let (model, state) = at_thermal_state(cfg, model)?;
-    let mut model = model;
+    let (mut model, state) = at_thermal_state(cfg, model)?;
     let axes = &cfg.machine.axes;
     let travel: [AxisTravel; 3] = std::array::from_fn(|k| AxisTravel {
         min_mm: axes.travel_min_mm[k],
@@ -147,10 +146,9 @@ pub fn export(cfg: &ExportConfig, out: &mut dyn Write) -> Result<()> {
 }
 
 /// The model at the configured thermal state, and that state in words for the files' comments.
-fn at_thermal_state(cfg: &ExportConfig, model: AnyPredictor) -> Result<(AnyPredictor, String)> {
+fn at_thermal_state(cfg: &ExportConfig, mut model: AnyPredictor) -> Result<(AnyPredictor, String)> {
     match &cfg.thermal {
         ThermalState::Readings { text, source } => {
-            let mut model = model;
             let readings =
                 parse_readings(text, model.sensor_names()).with_context(|| source.clone())?;
             observe_steady_state(&mut model, &readings).with_context(|| source.clone())?;
