@@ -32,6 +32,7 @@
 
 pub mod beam;
 pub mod control;
+pub mod converged;
 pub mod cut;
 pub mod forces;
 pub mod lobes;
@@ -43,6 +44,7 @@ pub mod spectrum;
 pub mod time_domain;
 pub mod zoa;
 
+pub use converged::{Resolution, StepRule};
 pub use cut::{simulate_cut, CutOptions, CutSimulation, Verdict};
 pub use lobes::{lobes, sdm_lowest_critical_depth, LobePoint, Method};
 pub use params::{Cut, DynamicsError, Milling, Mode, TipModes, Tool};

@@ -50,6 +50,13 @@ pub struct LobePoint {
     pub chatter_frequency_hz: f64,
     /// How stability is lost.
     pub kind: BoundaryKind,
+    /// Steps per tooth period of the discretisation behind the point: for the
+    /// semi-discretisation the finest one (with the converged rule of [`crate::converged`] the
+    /// depth is extrapolated from it and the resolution of half as many steps), for the time
+    /// domain its RK4 steps per tooth period; `None` for the zero-order solution, which has no
+    /// time steps. Files written before it existed read as `None`.
+    #[serde(default)]
+    pub steps_per_period: Option<usize>,
 }
 
 /// Discrete map of one semi-discretisation step.

@@ -26,6 +26,7 @@ use nalgebra::{Complex, DMatrix};
 use super::blade::BladePlant;
 use super::pade::pade;
 use super::{ControlError, StateSpace};
+use crate::converged::Resolution;
 use crate::milling::{MillingSdm, SdmOptions};
 use crate::params::{positive, DynamicsError, Milling, TipModes, Tool};
 use crate::sdm::LobePoint;
@@ -223,25 +224,27 @@ pub fn sdm(
         .with_augmented_system(&closed.a, &plant.frequencies_hz())
 }
 
-/// Closed-loop stability lobes by semi-discretisation with `steps_per_period` steps: the
-/// critical depth at each speed to `tol_mm` in (0, `max_depth_mm`]. The blade's higher modes
-/// (kHz) can set the closed-loop limit once the first modes are damped; the error of the
-/// first-order method grows as (f τ / m)², so they need m ≈ 160 where the open loop's first
-/// mode is content with 40. An unstable loop is refused.
+/// Closed-loop stability lobes by semi-discretisation at `resolution` (a count of steps per
+/// tooth period converts to [`Resolution::Fixed`]; [`Resolution::default`] chooses and checks
+/// the steps per speed, see [`crate::converged`]): the critical depth at each speed to
+/// `tol_mm` in (0, `max_depth_mm`]. The blade's higher modes (kHz) can set the closed-loop
+/// limit once the first modes are damped; the error of the first-order method grows as
+/// (f τ / m)², so they need m ≈ 160 where the open loop's first mode is content with 40. An
+/// unstable loop is refused.
 pub fn lobes(
     plant: &BladePlant,
     closed: &ClosedLoop,
     cut: &LobeCut,
     speeds_rpm: &[f64],
     (max_depth_mm, tol_mm): (f64, f64),
-    steps_per_period: usize,
+    resolution: impl Into<Resolution>,
 ) -> Result<Vec<LobePoint>, ControlError> {
     if !closed.is_stable() {
         return Err(ControlError::UnstableLoop);
     }
     let all = 0..speeds_rpm.len();
     let tol = (max_depth_mm, tol_mm);
-    let points = lobes_block(plant, closed, cut, speeds_rpm, all, tol, steps_per_period)?;
+    let points = lobes_block(plant, closed, cut, speeds_rpm, all, tol, resolution)?;
     Ok(points.into_iter().flatten().collect())
 }
 
@@ -256,19 +259,16 @@ pub fn lobes_block(
     speeds_rpm: &[f64],
     block: Range<usize>,
     (max_depth_mm, tol_mm): (f64, f64),
-    steps_per_period: usize,
+    resolution: impl Into<Resolution>,
 ) -> Result<Vec<Option<LobePoint>>, ControlError> {
     if !closed.is_stable() {
         return Err(ControlError::UnstableLoop);
     }
-    let options = SdmOptions { steps_per_period };
-    Ok(sdm(plant, closed, cut, options)?.trace_block(
-        speeds_rpm,
-        block,
-        None,
-        max_depth_mm,
-        tol_mm,
-    )?)
+    let resolution = resolution.into();
+    resolution.validate()?;
+    let range = (max_depth_mm, tol_mm);
+    Ok(sdm(plant, closed, cut, SdmOptions::default())?
+        .trace_block_at(speeds_rpm, block, None, range, &resolution)?)
 }
 
 #[cfg(test)]
