@@ -20,9 +20,12 @@
 //!   1.2 M steps/s.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use vmc_dynamics::lobes::lobes_block_at;
 use vmc_dynamics::milling::{MillingSdm, SdmOptions};
 use vmc_dynamics::time_domain::{ForceModel, TimeDomain, TimeOptions};
-use vmc_dynamics::{simulate_cut, Cut, CutOptions, Milling, Mode, TipModes, Tool};
+use vmc_dynamics::{
+    simulate_cut, Cut, CutOptions, Method, Milling, Mode, Resolution, TipModes, Tool,
+};
 
 fn setup() -> (Tool, TipModes) {
     (
@@ -55,6 +58,29 @@ fn bench(c: &mut Criterion) {
             sdm.trace(&speeds, 15.0, 0.03).unwrap()
         })
     });
+    // The lobes of `lobes` (start at the zero-order minimum, tolerance 1e-3 of it): the fixed
+    // 40 steps of before and the converged resolution, at a_e/D = 0.05 and in slotting over
+    // 5000–25 000 rpm (201 speeds) and 2000–30 000 rpm every 250 rpm (113 speeds).
+    let wide: Vec<f64> = (0..201).map(|i| 5000.0 + 100.0 * f64::from(i)).collect();
+    let every_250: Vec<f64> = (0..113).map(|i| 2000.0 + 250.0 * f64::from(i)).collect();
+    for (name, immersion, list) in [
+        ("ae005_5k_25k", 0.05, &wide),
+        ("slot_5k_25k", 1.0, &wide),
+        ("slot_2k_30k", 1.0, &every_250),
+    ] {
+        for (res_name, res) in [
+            ("m40", Resolution::Fixed(40)),
+            ("converged", Resolution::default()),
+        ] {
+            g.bench_function(format!("lobes_{name}_{res_name}"), |b| {
+                b.iter(|| {
+                    let cut = (immersion, Milling::Down);
+                    let all = 0..list.len();
+                    lobes_block_at(Method::Sdm, &tool, &modes, cut, list, all, &res).unwrap()
+                })
+            });
+        }
+    }
     let opts = TimeOptions::default();
     let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, opts).unwrap();
     g.throughput(Throughput::Elements(

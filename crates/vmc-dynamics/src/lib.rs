@@ -38,6 +38,7 @@ pub mod forces;
 pub mod lobes;
 pub mod milling;
 pub mod modal;
+pub mod modal_fit;
 pub mod params;
 pub mod sdm;
 pub mod spectrum;
