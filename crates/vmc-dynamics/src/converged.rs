@@ -175,6 +175,43 @@ impl MillingSdm {
         }
     }
 
+    /// The lowest critical depth at one speed (see [`SpeedSdm::lowest_critical_depth`]: an even
+    /// scan of `scan` depths over (0, `max_depth_mm`], then ITP to `tol_mm`) at the resolution
+    /// `resolution`; with [`Resolution::Converged`] on the extrapolated spectral radius, the
+    /// scan repeated at doubled steps while the check fails.
+    ///
+    /// [`SpeedSdm::lowest_critical_depth`]: crate::milling::SpeedSdm::lowest_critical_depth
+    pub fn lowest_critical_depth_at(
+        &self,
+        spindle_rpm: f64,
+        (max_depth_mm, tol_mm): (f64, f64),
+        scan: usize,
+        resolution: &Resolution,
+    ) -> Result<Option<LobePoint>, DynamicsError> {
+        resolution.validate()?;
+        let rule = match resolution {
+            Resolution::Fixed(m) => {
+                return self
+                    .at_speed_with_steps(spindle_rpm, *m)?
+                    .lowest_critical_depth(max_depth_mm, scan, tol_mm)
+            }
+            Resolution::Converged(rule) => rule,
+        };
+        let period_s = self.tool().tooth_period_s(spindle_rpm);
+        let mut m = rule.coarse_steps(self.highest_frequency_hz(), self.cut_fraction(), period_s);
+        loop {
+            let s = self.at_speed_extrapolated(spindle_rpm, m)?;
+            let Some(p) = s.lowest_critical_depth(max_depth_mm, scan, tol_mm)? else {
+                return Ok(None);
+            };
+            let change = 3.0 * s.stability(p.critical_depth_mm)?.extrapolation.abs();
+            if change <= rule.max_radius_change || 4 * m > rule.max_steps {
+                return Ok(Some(p));
+            }
+            m *= 2;
+        }
+    }
+
     /// [`MillingSdm::trace_block`] at the resolution `resolution`: the same runs of
     /// [`crate::milling::TRACE_RUN`] speeds, each speed's depth from
     /// [`MillingSdm::critical_depth_at`], so any split of the list gives the same bits.

@@ -30,6 +30,7 @@
 
 #![warn(missing_docs)]
 
+pub mod arnoldi;
 pub mod beam;
 pub mod control;
 pub mod converged;

@@ -33,9 +33,10 @@ pub enum Method {
 /// Scanned depths of [`sdm_lowest_critical_depth`].
 pub const LOWEST_DEPTH_SCAN: usize = 100;
 
-/// The lowest SDM critical depth at one speed (default 40 steps per period): an even scan of
+/// The lowest SDM critical depth at one speed at the converged resolution
+/// ([`Resolution::default`], see [`MillingSdm::lowest_critical_depth_at`]): an even scan of
 /// [`LOWEST_DEPTH_SCAN`] depths over the range of [`lobes`] (0, 20 × the ZOA minimum], then
-/// bisection to 1e-3 × the ZOA minimum. Slower than the tracer of [`lobes`] but it does not
+/// ITP to 1e-3 × the ZOA minimum. Slower than the tracer of [`lobes`] but it does not
 /// follow a boundary from speed to speed, so it finds an unstable island (e.g. of a helical
 /// cutter) under a higher boundary when the island is wider than the scan's spacing.
 pub fn sdm_lowest_critical_depth(
@@ -48,9 +49,9 @@ pub fn sdm_lowest_critical_depth(
     crate::params::validate_speed(spindle_rpm)?;
     let zoa = Zoa::new(tool, modes, immersion, milling)?;
     let (min_mm, _) = zoa.minimum_depth();
+    let range = (20.0 * min_mm, 1e-3 * min_mm);
     MillingSdm::new(tool, modes, immersion, milling, SdmOptions::default())?
-        .at_speed(spindle_rpm)?
-        .lowest_critical_depth(20.0 * min_mm, LOWEST_DEPTH_SCAN, 1e-3 * min_mm)
+        .lowest_critical_depth_at(spindle_rpm, range, LOWEST_DEPTH_SCAN, &Resolution::default())
 }
 
 /// Stability lobes at the given speeds (speeds without a boundary in range are omitted); SDM at
