@@ -15,6 +15,13 @@
 //! * `cut_400_teeth` — one `cut` (9000 rpm, 2 mm, f_z 0.1 mm): steady state, 400 tooth periods
 //!   × 64 RK4 steps of the process model with every step recorded, verdict and two spectra
 //!   (radix-2 FFTs of 16 384 points): 7.07 ms, i.e. 3.6 M steps/s = 56 600 tooth passes/s.
+//! * `lobes_*_m40` / `lobes_*_converged` — the SDM lobes of `lobes` (tracer from the zero-order
+//!   minimum, tolerance 1e-3 of it) at 40 fixed steps and at the converged resolution
+//!   (`Resolution::default()`), D = 20 mm, down milling (load average ≈ 5): a_e/D 0.05,
+//!   5000–25 000 rpm, 201 speeds 82.6 ms → 470 ms; slotting, same speeds 1.29 s → 3.74 s;
+//!   slotting, 2000–30 000 rpm every 250 rpm 0.80 s → 2.63 s (decision record on converged
+//!   lobes). `sdm_tracer_201` in the same run: 67.6 ms (1429 evaluations; the load, not the
+//!   code, makes it slower than the idle figure above).
 //! * `cut_400_teeth_helix30` — the same cut with a 4-tooth 30° helical cutter, modes in x and
 //!   y (3 axial disks: 12 tooth-disk force evaluations per stage instead of 2): 21.2 ms,
 //!   1.2 M steps/s.

@@ -31,7 +31,10 @@ pub fn dominant_eigenvalue(a: &DMatrix<f64>) -> Option<Complex<f64>> {
     if k_max < FIRST_CHECK {
         return None;
     }
-    let scale = a.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+    let scale = a
+        .iter()
+        .fold(0.0_f64, |m, v| m.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
     let mut v: Vec<DVector<f64>> = Vec::with_capacity(k_max + 1);
     let start = DVector::from_fn(n, |i, _| 1.0 + 0.5 * ((i as f64) * 0.618_033_988_75).sin());
     v.push(start.normalize());
@@ -89,7 +92,11 @@ fn ritz_vector(hk: &DMatrix<f64>, mu: Complex<f64>) -> Option<DVector<Complex<f6
     // A tiny shift off the eigenvalue keeps the factorisation regular.
     let shift = mu + Complex::new(1e-12, 1e-12) * mu.norm().max(1e-300);
     let m = DMatrix::from_fn(k, k, |i, j| {
-        let d = if i == j { shift } else { Complex::new(0.0, 0.0) };
+        let d = if i == j {
+            shift
+        } else {
+            Complex::new(0.0, 0.0)
+        };
         Complex::new(hk[(i, j)], 0.0) - d
     });
     let lu = m.lu();
@@ -127,7 +134,9 @@ mod tests {
             d[(i, i)] = 0.3 / (1.0 + t as f64);
         }
         // A fixed dense orthogonal matrix from the QR of a deterministic one.
-        let q = DMatrix::from_fn(n, n, |i, j| ((i * 7 + j * 13) as f64 * 0.37).sin()).qr().q();
+        let q = DMatrix::from_fn(n, n, |i, j| ((i * 7 + j * 13) as f64 * 0.37).sin())
+            .qr()
+            .q();
         let top = blocks.iter().map(|b| b.0).fold(0.3, f64::max);
         (&q * d * q.transpose(), top)
     }

@@ -151,9 +151,11 @@ impl MillingSdm {
     ) -> Result<Option<LobePoint>, DynamicsError> {
         let rule = match resolution {
             Resolution::Fixed(m) => {
-                return self
-                    .at_speed_with_steps(spindle_rpm, *m)?
-                    .critical_depth(guess_mm, max_depth_mm, tol_mm)
+                return self.at_speed_with_steps(spindle_rpm, *m)?.critical_depth(
+                    guess_mm,
+                    max_depth_mm,
+                    tol_mm,
+                )
             }
             Resolution::Converged(rule) => rule,
         };

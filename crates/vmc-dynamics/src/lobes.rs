@@ -51,7 +51,12 @@ pub fn sdm_lowest_critical_depth(
     let (min_mm, _) = zoa.minimum_depth();
     let range = (20.0 * min_mm, 1e-3 * min_mm);
     MillingSdm::new(tool, modes, immersion, milling, SdmOptions::default())?
-        .lowest_critical_depth_at(spindle_rpm, range, LOWEST_DEPTH_SCAN, &Resolution::default())
+        .lowest_critical_depth_at(
+            spindle_rpm,
+            range,
+            LOWEST_DEPTH_SCAN,
+            &Resolution::default(),
+        )
 }
 
 /// Stability lobes at the given speeds (speeds without a boundary in range are omitted); SDM at

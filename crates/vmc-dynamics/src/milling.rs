@@ -10,7 +10,9 @@
 //!
 //! with H, D from [`crate::forces`] (means over each step, integrated exactly including the
 //! screen function, so entry and exit inside a step are resolved), τ = 60/(N n) and
-//! v_c = πDn/60. It is solved by [`crate::sdm`] with m steps per tooth period (default 40).
+//! v_c = πDn/60. It is solved by [`crate::sdm`] with m steps per tooth period (default 40;
+//! [`crate::converged`] chooses m per speed for accuracy and extrapolates the spectral radius
+//! from two resolutions, [`MillingSdm::at_speed_extrapolated`]).
 //! Steps during which no tooth cuts reuse one exponential per speed.
 //!
 //! Helical teeth: H and D are the disk means of [`crate::forces::helical_cutting_matrix_mean`]

@@ -392,6 +392,9 @@ mod tests {
             }
         });
         assert_eq!(err(&negative), "line 3: frequency -5 Hz is negative");
-        assert_eq!(err("# only a comment\n\n"), "the FRF file has no header line");
+        assert_eq!(
+            err("# only a comment\n\n"),
+            "the FRF file has no header line"
+        );
     }
 }

@@ -79,25 +79,54 @@ fn check(fitted: &DirectionFit, truth: &[Mode], what: &str) {
             100.0 * (g.stiffness_n_per_m / want.stiffness_n_per_m - 1.0),
             got.stable_orders
         );
-        assert!(rel(g.frequency_hz, want.frequency_hz) < 0.005, "{what}: {g:?} vs {want:?}");
-        assert!(rel(g.damping_ratio, want.damping_ratio) < 0.10, "{what}: {g:?} vs {want:?}");
-        assert!(rel(g.stiffness_n_per_m, want.stiffness_n_per_m) < 0.05, "{what}: {g:?} vs {want:?}");
+        assert!(
+            rel(g.frequency_hz, want.frequency_hz) < 0.005,
+            "{what}: {g:?} vs {want:?}"
+        );
+        assert!(
+            rel(g.damping_ratio, want.damping_ratio) < 0.10,
+            "{what}: {g:?} vs {want:?}"
+        );
+        assert!(
+            rel(g.stiffness_n_per_m, want.stiffness_n_per_m) < 0.05,
+            "{what}: {g:?} vs {want:?}"
+        );
         assert!((got.modal_mass_kg - g.modal_mass_kg()).abs() < 1e-12 * got.modal_mass_kg);
     }
 }
 
 fn three_modes() -> Vec<Mode> {
     vec![
-        Mode { frequency_hz: 640.0, damping_ratio: 0.03, stiffness_n_per_m: 1.0e7 },
-        Mode { frequency_hz: 1150.0, damping_ratio: 0.015, stiffness_n_per_m: 2.0e7 },
-        Mode { frequency_hz: 2600.0, damping_ratio: 0.02, stiffness_n_per_m: 6.0e7 },
+        Mode {
+            frequency_hz: 640.0,
+            damping_ratio: 0.03,
+            stiffness_n_per_m: 1.0e7,
+        },
+        Mode {
+            frequency_hz: 1150.0,
+            damping_ratio: 0.015,
+            stiffness_n_per_m: 2.0e7,
+        },
+        Mode {
+            frequency_hz: 2600.0,
+            damping_ratio: 0.02,
+            stiffness_n_per_m: 6.0e7,
+        },
     ]
 }
 
 fn two_modes() -> Vec<Mode> {
     vec![
-        Mode { frequency_hz: 700.0, damping_ratio: 0.025, stiffness_n_per_m: 1.5e7 },
-        Mode { frequency_hz: 1900.0, damping_ratio: 0.012, stiffness_n_per_m: 4.0e7 },
+        Mode {
+            frequency_hz: 700.0,
+            damping_ratio: 0.025,
+            stiffness_n_per_m: 1.5e7,
+        },
+        Mode {
+            frequency_hz: 1900.0,
+            damping_ratio: 0.012,
+            stiffness_n_per_m: 4.0e7,
+        },
     ]
 }
 
@@ -119,9 +148,13 @@ fn a_fit_from_a_file_gives_the_tip_modes_of_a_tool_file() {
     let grid = (100.0, 4000.0, 2.0);
     let (f, hx) = synthesise(&three_modes(), grid, (0.01, 0.002), 7);
     let (_, hy) = synthesise(&two_modes(), grid, (0.01, 0.002), 8);
-    let mut text = String::from("frequency_hz,x_re_m_per_n,x_im_m_per_n,y_re_m_per_n,y_im_m_per_n\n");
+    let mut text =
+        String::from("frequency_hz,x_re_m_per_n,x_im_m_per_n,y_re_m_per_n,y_im_m_per_n\n");
     for ((fk, x), y) in f.iter().zip(&hx).zip(&hy) {
-        text.push_str(&format!("{fk},{:e},{:e},{:e},{:e}\n", x.re, x.im, y.re, y.im));
+        text.push_str(&format!(
+            "{fk},{:e},{:e},{:e},{:e}\n",
+            x.re, x.im, y.re, y.im
+        ));
     }
     let frf = Frf::parse(&text).unwrap();
     let fitted = fit(&frf, &FitOptions::default()).unwrap();
@@ -135,12 +168,18 @@ fn a_fit_from_a_file_gives_the_tip_modes_of_a_tool_file() {
 #[test]
 fn bad_options_and_degenerate_data_are_refused() {
     let (f, h) = synthesise(&two_modes(), (100.0, 4000.0, 2.0), (0.0, 0.0), 1);
-    let odd = FitOptions { max_order: 41, ..FitOptions::default() };
+    let odd = FitOptions {
+        max_order: 41,
+        ..FitOptions::default()
+    };
     assert_eq!(
         fit_direction(&f, &h, &odd, 'x').unwrap_err().to_string(),
         "max_order must be even and >= 4, got 41"
     );
-    let tol = FitOptions { damping_tol: 0.0, ..FitOptions::default() };
+    let tol = FitOptions {
+        damping_tol: 0.0,
+        ..FitOptions::default()
+    };
     assert!(fit_direction(&f, &h, &tol, 'x').is_err());
     let zero = vec![Complex::new(0.0, 0.0); f.len()];
     assert_eq!(
@@ -148,7 +187,9 @@ fn bad_options_and_degenerate_data_are_refused() {
         FitError::ZeroReceptance { direction: 'y' }
     );
     assert_eq!(
-        fit_direction(&f[..30], &h[..30], &FitOptions::default(), 'x').unwrap_err().to_string(),
+        fit_direction(&f[..30], &h[..30], &FitOptions::default(), 'x')
+            .unwrap_err()
+            .to_string(),
         "direction x: 30 rows are too few for model order 40 (need at least 41)"
     );
 }
