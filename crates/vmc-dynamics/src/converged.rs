@@ -19,7 +19,9 @@
 //!    tip of a lobe barely over 1) is seen at the coarse resolutions already;
 //! 3. check: at the boundary found, |ρ₂ − ρ₁| must be at most `max_radius_change`, i.e. the
 //!    two resolutions lie in the asymptotic range where the extrapolation holds; otherwise m
-//!    doubles and the search repeats from the depth found, up to `max_steps`.
+//!    doubles and the search repeats from the depth found, up to `max_steps` (a point at
+//!    `max_steps` is returned although its check failed: a cap trades the check for time, e.g.
+//!    for a structure whose highest retained mode is fast and stiff).
 //!
 //! Kind and chatter frequency are those of m₂, which [`LobePoint::steps_per_period`]
 //! reports. [`Resolution::Fixed`] keeps the plain semi-discretisation at one m (the tracer of

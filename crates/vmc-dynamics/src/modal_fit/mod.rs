@@ -238,17 +238,17 @@ pub fn fit_direction(
     loop {
         let poles: Vec<Pole> = kept.iter().map(|(p, _)| *p).collect();
         let constants = real_mode_constants(f, &scaled, &poles);
-        // Drop the weakest unphysical or negligible mode, then refit the others.
-        let weakest = constants.per_mode.iter().enumerate().find(|(k, &c)| {
-            let share = c / (2.0 * poles[*k].damping_ratio);
-            c <= 0.0 || share < options.min_share
-        });
+        // Drop the weakest of the unphysical or negligible modes, then refit the others.
+        let share = |k: usize| constants.per_mode[k] / (2.0 * poles[k].damping_ratio);
+        let weakest = (0..poles.len())
+            .filter(|&k| constants.per_mode[k] <= 0.0 || share(k) < options.min_share)
+            .min_by(|&a, &b| share(a).total_cmp(&share(b)));
         match weakest {
-            Some((k, _)) if kept.len() > 1 => {
+            Some(k) if kept.len() > 1 => {
                 kept.remove(k);
             }
             Some(_) => return Err(FitError::NoStableMode { direction }),
-            None => return Ok(constants.into_fit(&kept, f, h, peak)),
+            None => return Ok(constants.into_fit(&kept, h, peak)),
         }
     }
 }
@@ -408,7 +408,7 @@ fn stable_poles(diagram: &[Vec<Pole>], o: &FitOptions) -> Vec<(Pole, usize)> {
 
 /// Real-mode constants of a fit with fixed poles, in units of the scaled receptance.
 struct Constants {
-    /// 1/k_k × ω_k²/ω_k² scaled: the static compliance of each mode over the peak.
+    /// The static compliance 1/k_k of each mode, over the measured peak.
     per_mode: Vec<f64>,
     upper: f64,
     lower: f64,
@@ -459,13 +459,7 @@ fn real_mode_constants(f_hz: &[f64], h: &[Complex<f64>], poles: &[Pole]) -> Cons
 
 impl Constants {
     /// The fit in physical units (`peak` m/N per unit of the scaled receptance).
-    fn into_fit(
-        self,
-        kept: &[(Pole, usize)],
-        _f_hz: &[f64],
-        h: &[Complex<f64>],
-        peak: f64,
-    ) -> DirectionFit {
+    fn into_fit(self, kept: &[(Pole, usize)], h: &[Complex<f64>], peak: f64) -> DirectionFit {
         let mut modes: Vec<FittedMode> = kept
             .iter()
             .zip(&self.per_mode)

@@ -193,3 +193,22 @@ fn bad_options_and_degenerate_data_are_refused() {
         "direction x: 30 rows are too few for model order 40 (need at least 41)"
     );
 }
+
+/// The 1-DOF benchmark's mode (922 Hz, ζ = 0.011, 0.03993 kg) measured in x only, 200–2000 Hz
+/// every 1 Hz with 1 % noise: one mode in x, y rigid, modal mass within 5 %.
+#[test]
+fn the_benchmark_mode_measured_in_x_only_gives_a_rigid_y() {
+    let truth = [Mode::from_mass(922.0, 0.011, 0.03993)];
+    let (f, h) = synthesise(&truth, (200.0, 2000.0, 1.0), (0.01, 0.002), 11);
+    let mut text = String::from("# x only\nfrequency_hz,x_re_m_per_n,x_im_m_per_n\n");
+    for (fk, v) in f.iter().zip(&h) {
+        text.push_str(&format!("{fk},{:e},{:e}\n", v.re, v.im));
+    }
+    let fitted = fit(&Frf::parse(&text).unwrap(), &FitOptions::default()).unwrap();
+    assert!(fitted.y.is_none());
+    let x = fitted.x.as_ref().unwrap();
+    check(x, &truth, "benchmark");
+    assert!((x.modes[0].modal_mass_kg / 0.03993 - 1.0).abs() < 0.05);
+    let tip = fitted.tip_modes();
+    assert!(tip.y.is_empty() && tip.x.len() == 1);
+}
