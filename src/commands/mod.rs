@@ -15,6 +15,7 @@ pub mod interpret;
 pub mod lobes;
 pub mod lobes_shard;
 pub mod merge;
+pub mod modal_fit;
 pub mod probe_campaign;
 pub mod run;
 pub mod run_fiveaxis;

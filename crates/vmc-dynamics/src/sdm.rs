@@ -305,18 +305,9 @@ pub fn critical_multiplier(phi: &DMatrix<f64>) -> Complex<f64> {
     largest(&multipliers(phi))
 }
 
-/// The largest-modulus value of a list (ties towards positive imaginary part).
-pub fn largest(values: &[Complex<f64>]) -> Complex<f64> {
-    let mut best = Complex::new(0.0, 0.0);
-    for &mu in values {
-        let better = mu.norm() > best.norm() * (1.0 + 1e-12)
-            || (mu.norm() >= best.norm() * (1.0 - 1e-12) && mu.im > best.im);
-        if better {
-            best = mu;
-        }
-    }
-    best
-}
+/// The largest-modulus value of a list (ties towards positive imaginary part); it lives with
+/// the Arnoldi iteration, which picks its Ritz values by the same rule.
+pub use crate::arnoldi::largest;
 
 /// Classifies a critical multiplier: real and negative is a flip, anything else a Hopf pair.
 pub fn classify(mu: Complex<f64>) -> BoundaryKind {
