@@ -247,7 +247,14 @@ fn bad_inputs_are_refused_with_a_reason() {
 #[test]
 fn controller_lobes_at_the_default_resolution_agree_with_finer_fixed_steps() {
     let tmp = TempDir::new("control-conv");
-    let design = ["control", "design", "--plant", &blade(), "--controller", "lqg"];
+    let design = [
+        "control",
+        "design",
+        "--plant",
+        &blade(),
+        "--controller",
+        "lqg",
+    ];
     run_ok(tmp.path(), &[&design[..], &["-o", "ctrl.json"]].concat());
     let lobes = |extra: &[&str], csv: &str| -> Vec<Vec<String>> {
         let base = ["lobes", "--controller", "ctrl.json", "--rpm", "1700,4400"];

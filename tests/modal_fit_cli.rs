@@ -15,7 +15,11 @@ use common::{ok, refused, repo_file, vmc, TempDir};
 type Mode = (f64, f64, f64);
 
 /// Three modes in x, two in y: a spindle-holder mode, a holder mode and a tool-bending mode.
-const X: [Mode; 3] = [(560.0, 0.028, 1.2e7), (1320.0, 0.017, 2.6e7), (2900.0, 0.013, 5.5e7)];
+const X: [Mode; 3] = [
+    (560.0, 0.028, 1.2e7),
+    (1320.0, 0.017, 2.6e7),
+    (2900.0, 0.013, 5.5e7),
+];
 const Y: [Mode; 2] = [(590.0, 0.032, 1.4e7), (2750.0, 0.018, 4.0e7)];
 
 /// SplitMix64: a small seeded generator, so the noise is the same on every machine.
@@ -44,12 +48,14 @@ impl SplitMix64 {
 
 /// Receptance (re, im) in m/N of `modes` at `f_hz` (mode shape 1 at the tip).
 fn receptance(modes: &[Mode], f_hz: f64) -> (f64, f64) {
-    modes.iter().fold((0.0, 0.0), |(re, im), &(fn_hz, zeta, k)| {
-        let r = f_hz / fn_hz;
-        let (a, b) = (k * (1.0 - r * r), k * 2.0 * zeta * r);
-        let d = a * a + b * b;
-        (re + a / d, im - b / d)
-    })
+    modes
+        .iter()
+        .fold((0.0, 0.0), |(re, im), &(fn_hz, zeta, k)| {
+            let r = f_hz / fn_hz;
+            let (a, b) = (k * (1.0 - r * r), k * 2.0 * zeta * r);
+            let d = a * a + b * b;
+            (re + a / d, im - b / d)
+        })
 }
 
 /// The FRF file of `X` and `Y` from 100 to 4000 Hz every 2 Hz, with complex Gaussian noise of
@@ -67,7 +73,9 @@ fn synthetic_frf(seed: u64) -> String {
     };
     let (px, py) = (peak(&X), peak(&Y));
     let mut rng = SplitMix64(seed);
-    let mut s = String::from("# synthetic\nfrequency_hz,x_re_m_per_n,x_im_m_per_n,y_re_m_per_n,y_im_m_per_n\n");
+    let mut s = String::from(
+        "# synthetic\nfrequency_hz,x_re_m_per_n,x_im_m_per_n,y_re_m_per_n,y_im_m_per_n\n",
+    );
     for &f in &freqs {
         s.push_str(&format!("{f}"));
         for (modes, p) in [(&X[..], px), (&Y[..], py)] {
@@ -123,7 +131,10 @@ fn the_fit_of_a_synthetic_frf_gives_back_its_modes_in_a_tool_file_that_lobes_tak
         let frf = format!("frf{seed}.csv");
         write(dir, &frf, &synthetic_frf(seed));
         let toml_name = format!("fit{seed}.toml");
-        let out = ok(&vmc(dir, &["modal-fit", &frf, "-o", &toml_name]), "modal-fit");
+        let out = ok(
+            &vmc(dir, &["modal-fit", &frf, "-o", &toml_name]),
+            "modal-fit",
+        );
         assert!(out.contains("direction x: 3 mode(s)"), "{out}");
         assert!(out.contains("direction y: 2 mode(s)"), "{out}");
         assert!(out.contains("stable_orders"), "{out}");
@@ -178,9 +189,15 @@ fn an_existing_tool_file_is_kept_without_force() {
     let dir = tmp.path();
     write(dir, "frf.csv", &synthetic_frf(3));
     write(dir, "fit.toml", "keep me");
-    let e = refused(&vmc(dir, &["modal-fit", "frf.csv", "-o", "fit.toml"]), "no --force");
+    let e = refused(
+        &vmc(dir, &["modal-fit", "frf.csv", "-o", "fit.toml"]),
+        "no --force",
+    );
     assert!(e.contains("fit.toml: already exists (pass --force"), "{e}");
-    assert_eq!(std::fs::read_to_string(dir.join("fit.toml")).unwrap(), "keep me");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("fit.toml")).unwrap(),
+        "keep me"
+    );
     let args = ["modal-fit", "frf.csv", "-o", "fit.toml", "--force"];
     ok(&vmc(dir, &args), "--force");
     assert!(std::fs::read_to_string(dir.join("fit.toml"))

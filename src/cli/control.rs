@@ -114,8 +114,7 @@ pub fn lobes_config(
                 .collect()
         }
     };
-    let resolution = steps_resolution(steps)?
-        .unwrap_or_else(commands::control::blade_resolution);
+    let resolution = steps_resolution(steps)?.unwrap_or_else(commands::control::blade_resolution);
     Ok(commands::control::ControlLobesConfig {
         file,
         source: path.display().to_string(),

@@ -428,7 +428,8 @@ pub fn write_lobes(
     let mut csv = String::from(
         "spindle_rpm,open_depth_mm,closed_depth_mm,open_steps_per_period,closed_steps_per_period\n",
     );
-    let depth = |p: Option<LobePoint>| p.map_or(String::new(), |p| format!("{:.6}", p.critical_depth_mm));
+    let depth =
+        |p: Option<LobePoint>| p.map_or(String::new(), |p| format!("{:.6}", p.critical_depth_mm));
     let steps = |p: Option<LobePoint>| {
         p.and_then(|p| p.steps_per_period)
             .map_or(String::new(), |m| m.to_string())

@@ -1,6 +1,9 @@
 //! `vmc-twin lobes`: the stability lobe diagram of a tool — critical axial depth against spindle
 //! speed for a radial immersion and milling direction, by semi-discretisation, the zero-order
-//! analytic solution or time-domain simulation.
+//! analytic solution or time-domain simulation. The semi-discretisation runs at the converged
+//! resolution of [`crate::dynamics::converged`] (steps per tooth period chosen per speed and
+//! checked) unless `--steps` fixes them; each point carries its steps per tooth period, which the
+//! table and the CSV show.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -59,8 +59,8 @@ pub fn modal_fit(cfg: &ModalFitConfig, out: &mut dyn Write) -> Result<()> {
     }
     let fitted = fit(&cfg.frf, &cfg.options).with_context(|| cfg.frf_source.clone())?;
     let modes = fitted.tip_modes();
-    let model = ModalModel::new(&modes)
-        .with_context(|| format!("{}: the fitted modes", cfg.frf_source))?;
+    let model =
+        ModalModel::new(&modes).with_context(|| format!("{}: the fitted modes", cfg.frf_source))?;
     let curves = curves(&cfg.frf, &model);
     let text = report(cfg, &fitted, &curves)?;
     out.write_all(text.as_bytes())?;
@@ -175,7 +175,12 @@ fn direction_report(
     writeln!(
         s,
         "  {:>4} {:>12} {:>13} {:>17} {:>13} {:>13}",
-        "mode", "frequency_hz", "damping_ratio", "stiffness_n_per_m", "modal_mass_kg", "stable_orders"
+        "mode",
+        "frequency_hz",
+        "damping_ratio",
+        "stiffness_n_per_m",
+        "modal_mass_kg",
+        "stable_orders"
     )?;
     for (i, m) in d.modes.iter().enumerate() {
         writeln!(
@@ -199,12 +204,10 @@ fn tool_file(
     modes: &TipModes,
     path: &Path,
 ) -> Result<String> {
-    let name = cfg.name.clone().unwrap_or_else(|| {
-        format!(
-            "{} with the modes of {}",
-            cfg.template.name, cfg.frf_source
-        )
-    });
+    let name = cfg
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("{} with the modes of {}", cfg.template.name, cfg.frf_source));
     let mut comment = format!(
         "Written by vmc-twin modal-fit from the FRF {}.\n\
          Modes: LSCF with a stabilisation diagram (orders 2 to {}, stable through >= {}); the \

@@ -75,7 +75,10 @@ pub fn record_frf(
             )
         };
         for (quantity, value) in [
-            ("magnitude_um_per_n", magnitude_um_per_n as fn(&Complex<f64>) -> f64),
+            (
+                "magnitude_um_per_n",
+                magnitude_um_per_n as fn(&Complex<f64>) -> f64,
+            ),
             ("phase_deg", phase_deg),
         ] {
             for (name, values, color, line) in [

@@ -1,6 +1,8 @@
 //! The app side of the milling-dynamics study: the tool file (TOML) that gives a cutter and the
-//! modes of its tool tip, the lobes table (CSV) and the time series of one cut (CSV). The numerics are the `vmc-dynamics` crate
-//! (re-exported as [`vmc_dynamics`]); this module only reads, checks and writes.
+//! modes of its tool tip (read and checked; written from fitted modes by [`tool_file_toml`]),
+//! the lobes table (CSV) and the time series of one cut (CSV). The numerics are the
+//! `vmc-dynamics` crate (re-exported as [`vmc_dynamics`]); this module only reads, checks and
+//! writes text.
 //!
 //! A tool file (units in names; every field checked, unknown fields refused):
 //!
@@ -500,7 +502,10 @@ mod tests {
         };
         let name = "fit of \"a.csv\" \\ tab\there";
         let text = tool_file_toml(name, "first line\n\nthird line", &tool, &modes);
-        assert!(text.starts_with("# first line\n#\n# third line\n"), "{text}");
+        assert!(
+            text.starts_with("# first line\n#\n# third line\n"),
+            "{text}"
+        );
         let back = ToolDynamics::from_toml_str(&text, "fit.toml").unwrap();
         assert_eq!(back.name, name);
         assert_eq!(back.tool, tool);
@@ -519,8 +524,8 @@ mod tests {
             x: modes.x.clone(),
             y: Vec::new(),
         };
-        let back = ToolDynamics::from_toml_str(&tool_file_toml("r", "", &tool, &rigid), "r")
-            .unwrap();
+        let back =
+            ToolDynamics::from_toml_str(&tool_file_toml("r", "", &tool, &rigid), "r").unwrap();
         assert!(back.modes.y.is_empty());
     }
 }

@@ -240,9 +240,14 @@ mod tests {
             got <= want + 1e-3 * 0.3 && got > want * 0.995,
             "{got} vs {want}"
         );
-        let sdm =
-            MillingSdm::new(&tool.tool, &tool.modes, 1.0, Milling::Down, SdmOptions::default())
-                .unwrap();
+        let sdm = MillingSdm::new(
+            &tool.tool,
+            &tool.modes,
+            1.0,
+            Milling::Down,
+            SdmOptions::default(),
+        )
+        .unwrap();
         let rule = match Resolution::default() {
             Resolution::Converged(rule) => rule,
             Resolution::Fixed(_) => unreachable!("the default is converged"),
