@@ -114,7 +114,7 @@ fn main() {
         let mut hs = Vec::new();
         let mut sum = None;
         for m in 0..members {
-            let s = study::fit_to_data(
+            let s = campaign::fit_to_data(
                 Settings {
                     seed: seed + seed_off + 100 * m,
                     ..settings.clone()
@@ -143,14 +143,14 @@ fn main() {
         } else {
             calibration::evaluation_states(&spec, seed)
         };
-        let r =
-            study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &h, &states, &plans).unwrap();
+        let r = campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &h, &states, &plans)
+            .unwrap();
         let mx = r.iter().map(|x| x.max_after_um).fold(0.0, f64::max);
         let qm = (r.iter().map(|x| x.rms_after_um.powi(2)).sum::<f64>() / r.len() as f64).sqrt();
         println!("seed {seed}: nets {kept:?} max {mx:.2} qmean rms {qm:.3}");
         runs.extend(r);
     }
-    let h = study::headline(&runs, ModelKind::Hybrid).unwrap();
+    let h = campaign::headline(&runs, ModelKind::Hybrid).unwrap();
     let (med, worst, max, rmse) = (
         h.median_reduction,
         h.worst_reduction,

@@ -25,7 +25,7 @@ fn trained(spec: &MachineSpec, seed: u64) -> HybridPredictor {
         &CampaignConfig::new(seed),
     )
     .expect("campaign runs");
-    let settings = study::fit_to_data(
+    let settings = campaign::fit_to_data(
         Settings {
             seed,
             ..Settings::for_machine(spec)
@@ -75,13 +75,13 @@ const Z_STROKES: &str = "stress_z_strokes@3h";
 #[test]
 fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_state_and_seed() {
     let spec = MachineSpec::reference();
-    let plans = study::diagonal_plans(&spec).unwrap();
+    let plans = campaign::diagonal_plans(&spec).unwrap();
     let mut runs = Vec::new();
     for seed in SEEDS {
         let model = trained(&spec, seed);
         let states = calibration::evaluation_states(&spec, seed);
         runs.extend(
-            study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans)
+            campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans)
                 .unwrap(),
         );
     }
@@ -165,7 +165,7 @@ fn hybrid_compensation_removes_at_least_80_percent_on_every_diagonal_held_out_st
 #[test]
 fn a_predictor_blind_to_temperature_does_not_reach_80_percent_on_warm_runs() {
     let spec = MachineSpec::reference();
-    let plans = study::diagonal_plans(&spec).unwrap();
+    let plans = campaign::diagonal_plans(&spec).unwrap();
     let seed = SEEDS[0];
     let model = trained(&spec, seed);
     let cold_degc = vec![20.0; model.sensor_names().len()];
@@ -174,10 +174,12 @@ fn a_predictor_blind_to_temperature_does_not_reach_80_percent_on_warm_runs() {
         cold_degc,
     };
     let states = calibration::evaluation_states(&spec, seed);
-    let blind = study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &frozen, &states, &plans)
-        .unwrap();
+    let blind =
+        campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &frozen, &states, &plans)
+            .unwrap();
     let full =
-        study::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans).unwrap();
+        campaign::evaluate_predictor(&spec, seed, ModelKind::Hybrid, &model, &states, &plans)
+            .unwrap();
     let mean = |runs: &[RunReport]| {
         let warm: Vec<f64> = runs
             .iter()

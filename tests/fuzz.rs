@@ -28,8 +28,8 @@ const SEEDS: [&str; 8] = [
     include_str!("../trajectories/cooldown_4h.ngc"),
     include_str!("data/collision/clean_pocket.ngc"),
     include_str!("data/collision/holder_into_stock.ngc"),
-    include_str!("data/linuxcnc/nc_files/3dtest.ngc"),
-    include_str!("data/linuxcnc/nc_files/plasmatest.ngc"),
+    include_str!("../crates/vmc-gcode/tests/data/linuxcnc/nc_files/3dtest.ngc"),
+    include_str!("../crates/vmc-gcode/tests/data/linuxcnc/nc_files/plasmatest.ngc"),
     include_str!("data/g2_without_centre.ngc"),
 ];
 

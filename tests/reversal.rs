@@ -75,7 +75,7 @@ fn the_inferred_approach_direction_is_the_twins_at_every_diagonal_point() {
     );
     let side = [-1.0, -1.0, 1.0];
     let names: Vec<String> = with.sensors.iter().map(|s| s.name.clone()).collect();
-    let plans = study::diagonal_plans(&with).unwrap();
+    let plans = campaign::diagonal_plans(&with).unwrap();
     let mut negatives = [0usize; 3];
     for (diag, plan) in &plans {
         let run = |spec: &MachineSpec, ctrl: Option<&mut dyn Controller>| {
