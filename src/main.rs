@@ -51,6 +51,7 @@ fn run(command: Command) -> Result<()> {
             Some(cfg) => commands::control::cut(&cfg, out),
             None => commands::cut::cut(&args.config()?, out),
         },
+        Command::ModalFit(args) => commands::modal_fit::modal_fit(&args.config()?, out),
         Command::Control(args) => match args.action {
             ControlAction::Design(d) => commands::control::design(&d.config()?, out),
         },

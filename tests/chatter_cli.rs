@@ -43,13 +43,13 @@ fn the_example_pocket_has_stable_and_unstable_cuts_and_fails() {
             .unwrap_or_else(|| panic!("no line {line} in\n{out}"))
             .to_string()
     };
-    // The first pass is a full slot: 1 mm deep where 0.33 mm is the limit at 10 000 rpm.
+    // The first pass is a full slot: 1 mm deep where 0.32 mm is the limit at 10 000 rpm.
     let slot = cut(10);
     assert!(
         slot.contains("a_e/D 1.000 slot") && slot.ends_with("unstable"),
         "{slot}"
     );
-    assert!(slot.contains("a_p,lim   0.328 mm"), "{slot}");
+    assert!(slot.contains("a_p,lim   0.322 mm"), "{slot}");
     // The step-over into the end wall meets material ahead: unstable.
     assert!(cut(14).contains(" entry ") && cut(14).ends_with("unstable"));
     // The climb passes 2 mm wide are stable.

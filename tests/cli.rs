@@ -545,9 +545,12 @@ fn lobes_writes_the_csv_of_its_table_and_refuses_bad_input_in_one_line() {
     let rows: Vec<&str> = csv.lines().collect();
     assert_eq!(
         rows[0],
-        "spindle_rpm,critical_depth_mm,chatter_frequency_hz,kind"
+        "spindle_rpm,critical_depth_mm,chatter_frequency_hz,kind,steps_per_period"
     );
     assert_eq!(rows.len(), 12, "{csv}");
+    // The zero-order solution has no time steps: the column is empty, the table says `-`.
+    assert!(rows[1..].iter().all(|r| r.ends_with(',')), "{csv}");
+    assert!(out.contains("resolution: analytic in frequency"), "{out}");
     // The printed minimum is the smallest depth of the file.
     let min = rows[1..]
         .iter()
@@ -574,6 +577,11 @@ fn lobes_writes_the_csv_of_its_table_and_refuses_bad_input_in_one_line() {
         (
             &["lobes", "--tool", "bad.toml"][..],
             "bad.toml: the tool has no teeth",
+        ),
+        (&["lobes", "--steps", "3"][..], "--steps must be >= 4, got 3"),
+        (
+            &["lobes", "--method", "zoa", "--steps", "40"][..],
+            "--steps sets the semi-discretisation's resolution: it applies to --method sdm (and --controller) only",
         ),
     ] {
         let o = vmc(tmp.path(), args);

@@ -104,9 +104,22 @@ fn lqg_design_lobes_and_cut_work_end_to_end() {
     let open = number_after(&lobes, "open loop  : minimum critical depth");
     let closed = number_after(&lobes, "closed loop: minimum critical depth");
     assert!(closed > 2.0 * open, "{lobes}");
+    assert!(
+        lobes.contains("resolution: 40 steps per tooth period at every speed"),
+        "{lobes}"
+    );
     let csv = std::fs::read_to_string(tmp.path().join("lobes.csv")).unwrap();
     assert_eq!(csv.lines().count(), 6, "{csv}");
-    assert!(csv.starts_with("spindle_rpm,open_depth_mm,closed_depth_mm"));
+    assert!(csv.starts_with(
+        "spindle_rpm,open_depth_mm,closed_depth_mm,open_steps_per_period,closed_steps_per_period\n"
+    ));
+    // Each depth comes with its steps (a speed without a boundary below 50 mm has neither).
+    for row in csv.lines().skip(1) {
+        let f: Vec<&str> = row.split(',').collect();
+        for (depth, steps) in [(f[1], f[3]), (f[2], f[4])] {
+            assert_eq!(steps, if depth.is_empty() { "" } else { "40" }, "{csv}");
+        }
+    }
 
     let depth = format!("{:.4}", 2.0 * open);
     let cut = run_ok(
@@ -225,4 +238,45 @@ fn bad_inputs_are_refused_with_a_reason() {
         "{}",
         stderr(&o)
     );
+}
+
+/// The default resolution of `lobes --controller` (converged, at most 640 steps per tooth
+/// period) agrees with a fixed 1280 steps within 0.5 % at a low speed, where the blade's kHz
+/// modes span many vibration cycles per tooth period, and at a high one; the steps behind each
+/// point are in the CSV.
+#[test]
+fn controller_lobes_at_the_default_resolution_agree_with_finer_fixed_steps() {
+    let tmp = TempDir::new("control-conv");
+    let design = [
+        "control",
+        "design",
+        "--plant",
+        &blade(),
+        "--controller",
+        "lqg",
+    ];
+    run_ok(tmp.path(), &[&design[..], &["-o", "ctrl.json"]].concat());
+    let lobes = |extra: &[&str], csv: &str| -> Vec<Vec<String>> {
+        let base = ["lobes", "--controller", "ctrl.json", "--rpm", "1700,4400"];
+        let out = run_ok(tmp.path(), &[&base[..], extra, &["--out", csv]].concat());
+        assert!(out.contains("resolution: "), "{out}");
+        let text = std::fs::read_to_string(tmp.path().join(csv)).unwrap();
+        text.lines()
+            .skip(1)
+            .map(|r| r.split(',').map(String::from).collect())
+            .collect()
+    };
+    let conv = lobes(&[], "conv.csv");
+    let fine = lobes(&["--steps", "1280"], "fine.csv");
+    assert_eq!(conv.len(), 2);
+    for (c, f) in conv.iter().zip(&fine) {
+        for col in [1, 2] {
+            let (a, b): (f64, f64) = (c[col].parse().unwrap(), f[col].parse().unwrap());
+            assert!((a / b - 1.0).abs() < 0.005, "{c:?} vs {f:?}");
+        }
+        for col in [3, 4] {
+            let steps: usize = c[col].parse().unwrap();
+            assert!((40..=640).contains(&steps), "{c:?}");
+        }
+    }
 }

@@ -204,6 +204,13 @@ fn merge_refuses_lobes_shards_that_do_not_belong_together_naming_them() {
         e.contains("a1 is a shard of `lobes`, c1 of `campaign`"),
         "{e}"
     );
+    // Shards at another resolution of the semi-discretisation do not belong together.
+    shard(&with(&three, &["--steps", "40"]), "3/3", "steps3");
+    let e = merge(&["a1", "a2", "steps3"]);
+    assert!(
+        e.contains("a1 and steps3 were run on different inputs (resolution)"),
+        "{e}"
+    );
     assert!(!dir.join("m").exists(), "nothing written on a refusal");
     // A shard whose points were altered is refused, naming the file and line.
     shard(&three, "3/3", "a3");

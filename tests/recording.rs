@@ -746,3 +746,31 @@ fn an_identify_thermal_recording_holds_measured_and_predicted_drift_of_each_chan
         "identify-thermal recording",
     );
 }
+
+#[test]
+fn a_modal_fit_recording_holds_measured_and_fitted_receptance_per_direction() {
+    let dir = TempDir::new("modalfit");
+    let d = dir.path();
+    let frf = repo_file("machines/benchmarks/frf-example.csv");
+    let args = [
+        "modal-fit",
+        frf.to_str().expect("UTF-8 path"),
+        "--rrd",
+        "fit.rrd",
+    ];
+    let out = ok(vmc(d, &args), "modal-fit --rrd");
+    assert!(out.contains("wrote fit.rrd"), "{out}");
+    let file = d.join("fit.rrd");
+    assert_verified(&file);
+    let mut entities = vec!["report".to_string()];
+    for dir in ["x", "y"] {
+        for q in ["magnitude_um_per_n", "phase_deg"] {
+            for s in ["measured", "fitted"] {
+                entities.push(format!("frf/{dir}/{q}/{s}"));
+            }
+        }
+    }
+    let entities: Vec<&str> = entities.iter().map(String::as_str).collect();
+    let what = "modal-fit recording";
+    assert_has(&printed(&file, "-vv"), &entities, &["frequency_hz"], what);
+}

@@ -8,6 +8,7 @@ use anyhow::{bail, Result};
 use super::ForceArg;
 use crate::commands;
 use crate::commands::control::Kind;
+use crate::dynamics::Resolution;
 use vmc_machine::blade::{ControllerFile, Plant};
 
 /// Arguments of `control`.
@@ -90,9 +91,6 @@ impl DesignArgs {
     }
 }
 
-/// Default semi-discretisation steps per tooth period of the blade's lobes.
-pub const BLADE_SDM_STEPS: usize = 160;
-
 /// The config of `lobes --controller FILE`.
 ///
 /// # Errors
@@ -116,18 +114,27 @@ pub fn lobes_config(
                 .collect()
         }
     };
-    let steps_per_period = steps.unwrap_or(BLADE_SDM_STEPS);
-    if steps_per_period < 4 {
-        bail!("--steps must be >= 4, got {steps_per_period}");
-    }
+    let resolution = steps_resolution(steps)?.unwrap_or_else(commands::control::blade_resolution);
     Ok(commands::control::ControlLobesConfig {
         file,
         source: path.display().to_string(),
         speeds_rpm,
-        steps_per_period,
+        resolution,
         out,
         rrd,
         force,
         shard: None,
     })
+}
+
+/// The fixed resolution of `--steps M` (at least 4); `None` without it.
+///
+/// # Errors
+/// Fewer than 4 steps.
+pub fn steps_resolution(steps: Option<usize>) -> Result<Option<Resolution>> {
+    match steps {
+        Some(m) if m < 4 => bail!("--steps must be >= 4, got {m}"),
+        Some(m) => Ok(Some(Resolution::Fixed(m))),
+        None => Ok(None),
+    }
 }

@@ -50,8 +50,10 @@ pub struct LobesArgs {
     /// and --milling do not apply: the blade's cut is in the file).
     #[arg(long, conflicts_with = "tool")]
     pub controller: Option<PathBuf>,
-    /// Semi-discretisation steps per tooth period with --controller (default 160).
-    #[arg(long, requires = "controller")]
+    /// Semi-discretisation steps per tooth period, the same at every speed and not checked
+    /// (--method sdm or --controller). Default: chosen per speed and checked (converged; with
+    /// --controller at most 640).
+    #[arg(long, value_name = "M")]
     pub steps: Option<usize>,
     /// Write a Rerun recording of the lobe diagram (depth against speed, Hopf and flip lobes;
     /// with --controller: the open- and closed-loop lobes).
@@ -149,6 +151,15 @@ impl LobesArgs {
                 None => InputFingerprint::of("tool", "embedded", DEFAULT_TOOL_TOML.as_bytes()),
             })
         })?;
+        let method = match self.method {
+            MethodArg::Sdm => crate::dynamics::Method::Sdm,
+            MethodArg::Zoa => crate::dynamics::Method::Zoa,
+            MethodArg::Time => crate::dynamics::Method::Time,
+        };
+        if self.steps.is_some() && method != crate::dynamics::Method::Sdm {
+            bail!("--steps sets the semi-discretisation's resolution: it applies to --method sdm (and --controller) only");
+        }
+        let resolution = control::steps_resolution(self.steps)?.unwrap_or_default();
         crate::dynamics::params::validate_immersion(self.immersion)
             .map_err(|e| anyhow::anyhow!("--immersion: {e}"))?;
         let rpm = self.rpm.as_deref().unwrap_or("5000:25000:201");
@@ -157,11 +168,8 @@ impl LobesArgs {
         Ok(commands::lobes::LobesConfig {
             tool,
             tool_source,
-            method: match self.method {
-                MethodArg::Sdm => crate::dynamics::Method::Sdm,
-                MethodArg::Zoa => crate::dynamics::Method::Zoa,
-                MethodArg::Time => crate::dynamics::Method::Time,
-            },
+            method,
+            resolution,
             immersion: self.immersion,
             milling: match self.milling {
                 MillingArg::Up => crate::dynamics::Milling::Up,

@@ -12,6 +12,7 @@ mod export;
 mod fiveaxis;
 mod identify_thermal;
 mod lobes;
+mod modal_fit;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -32,6 +33,7 @@ pub use export::{ExportArgs, FormatArg};
 pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
 pub use identify_thermal::IdentifyThermalArgs;
 pub use lobes::{LobesArgs, MethodArg};
+pub use modal_fit::ModalFitArgs;
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
 /// `vmc-twin`: the whole command line.
@@ -89,6 +91,10 @@ pub enum Command {
     /// spectrum, the chatter frequency and the verdict (stable or chatter), with the
     /// semi-discretisation critical depth at that speed.
     Cut(CutArgs),
+    /// Tool-tip modes from a measured receptance FRF (CSV of an impact test): frequency,
+    /// damping ratio, stiffness and modal mass of each mode per direction, written as the tool
+    /// file that `lobes`, `cut` and `chatter` take.
+    ModalFit(ModalFitArgs),
     /// Active chatter control of a piezo-actuated blade: design LQG and H∞ controllers.
     Control(ControlArgs),
     /// Which cuts of a milling program will chatter? For every feed move in material: the

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
+use crate::dynamics::Resolution;
 use crate::files;
 use crate::studies::chatter::stock_file::StockSpec;
 use crate::studies::chatter::{self, ChatterOptions, ChatterReport, Cut, Verdict};
@@ -257,12 +258,15 @@ fn write_header(cfg: &ChatterConfig, r: &ChatterReport, out: &mut dyn Write) -> 
     )?;
     writeln!(
         out,
-        "method: Z-map {:.3} × {:.3} mm ({} × {} cells); SDM, {} steps per tooth period, a_e/D rounded up to bins of {}, depths searched to {:.3} mm; the worst sample of each move; unstable: margin a_p,lim/a_p < 1, marginal: < {}",
+        "method: Z-map {:.3} × {:.3} mm ({} × {} cells); SDM {}, a_e/D rounded up to bins of {}, depths searched to {:.3} mm; the worst sample of each move; unstable: margin a_p,lim/a_p < 1, marginal: < {}",
         r.grid_mm[0],
         r.grid_mm[1],
         r.cells[0],
         r.cells[1],
-        o.sdm.steps_per_period,
+        match o.resolution {
+            Resolution::Fixed(m) => format!("with {m} steps per tooth period"),
+            Resolution::Converged(_) => "at the converged resolution (steps per tooth period chosen per speed and checked)".to_string(),
+        },
         o.immersion_bin,
         r.max_depth_mm,
         o.marginal_below

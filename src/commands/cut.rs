@@ -168,11 +168,12 @@ fn report(cfg: &CutConfig, sim: &CutSimulation, sdm: Option<&LobePoint>) -> Stri
         Some(p) => {
             let _ = writeln!(
                 s,
-                "SDM critical depth at {} rpm: {:.4} mm ({}, {:.1} Hz); this depth is {:.1} % of it",
+                "SDM critical depth at {} rpm: {:.4} mm ({}, {:.1} Hz; converged, {} steps per tooth period); this depth is {:.1} % of it",
                 c.spindle_rpm,
                 p.critical_depth_mm,
                 kind_name(p.kind),
                 p.chatter_frequency_hz,
+                p.steps_per_period.map_or_else(|| "-".to_string(), |m| m.to_string()),
                 100.0 * c.axial_depth_mm / p.critical_depth_mm
             );
         }

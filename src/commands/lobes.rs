@@ -1,6 +1,9 @@
 //! `vmc-twin lobes`: the stability lobe diagram of a tool — critical axial depth against spindle
 //! speed for a radial immersion and milling direction, by semi-discretisation, the zero-order
-//! analytic solution or time-domain simulation.
+//! analytic solution or time-domain simulation. The semi-discretisation runs at the converged
+//! resolution of [`crate::dynamics::converged`] (steps per tooth period chosen per speed and
+//! checked) unless `--steps` fixes them; each point carries its steps per tooth period, which the
+//! table and the CSV show.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -8,7 +11,8 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 
-use crate::dynamics::{lobes as lobes_of, LobePoint, Method, Milling};
+use crate::dynamics::lobes::lobes_block_at;
+use crate::dynamics::{LobePoint, Method, Milling, Resolution, StepRule};
 use crate::files;
 use crate::shard::{InputFingerprint, Shard};
 use vmc_machine::milling::{kind_name, lobes_csv, ToolDynamics};
@@ -21,6 +25,9 @@ pub struct LobesConfig {
     pub tool_source: String,
     /// Stability method.
     pub method: Method,
+    /// Resolution of the semi-discretisation (`--steps N`: [`Resolution::Fixed`]; default the
+    /// converged rule, [`Resolution::default`]); the other methods ignore it.
+    pub resolution: Resolution,
     /// Radial immersion a_e/D, in (0, 1].
     pub immersion: f64,
     /// Up or down milling.
@@ -70,6 +77,10 @@ pub struct LobesHead {
     pub milling: Milling,
     /// Every spindle speed asked for, rpm, in order.
     pub speeds_rpm: Vec<f64>,
+    /// The semi-discretisation's steps per tooth period when fixed by `--steps`; `None`: chosen
+    /// per speed by the converged rule (and for the other methods, which ignore it).
+    #[serde(default)]
+    pub fixed_steps: Option<usize>,
 }
 
 impl LobesHead {
@@ -83,6 +94,10 @@ impl LobesHead {
             immersion: cfg.immersion,
             milling: cfg.milling,
             speeds_rpm: cfg.speeds_rpm.clone(),
+            fixed_steps: match cfg.resolution {
+                Resolution::Fixed(m) if cfg.method == Method::Sdm => Some(m),
+                _ => None,
+            },
         }
     }
 }
@@ -112,16 +127,31 @@ pub fn lobes(cfg: &LobesConfig, out: &mut dyn Write) -> Result<()> {
         force: cfg.force,
     };
     check_outputs(&outputs)?;
+    let points = lobes_block(cfg, 0..cfg.speeds_rpm.len())?;
+    let points: Vec<LobePoint> = points.into_iter().flatten().collect();
+    write_lobes(&LobesHead::of(cfg), &points, &outputs, out)
+}
+
+/// The lobe points of the block `block` of the speeds, one per speed (`None` without a
+/// boundary in the searched range), at the config's resolution: the same bits as the whole
+/// list's.
+///
+/// # Errors
+/// Values the dynamics refuses.
+pub fn lobes_block(
+    cfg: &LobesConfig,
+    block: std::ops::Range<usize>,
+) -> Result<Vec<Option<LobePoint>>> {
     let t = &cfg.tool;
-    let points = lobes_of(
+    Ok(lobes_block_at(
         cfg.method,
         &t.tool,
         &t.modes,
-        cfg.immersion,
-        cfg.milling,
+        (cfg.immersion, cfg.milling),
         &cfg.speeds_rpm,
-    )?;
-    write_lobes(&LobesHead::of(cfg), &points, &outputs, out)
+        block,
+        &cfg.resolution,
+    )?)
 }
 
 /// Refuses outputs that may not be written, before anything is computed.
@@ -191,6 +221,7 @@ fn report(head: &LobesHead, points: &[LobePoint], out: &mut dyn Write) -> Result
         super::cut::milling_name(head.milling),
         head.speeds_rpm.len()
     )?;
+    writeln!(out, "resolution: {}", resolution_text(head))?;
     match points
         .iter()
         .min_by(|a, b| a.critical_depth_mm.total_cmp(&b.critical_depth_mm))
@@ -221,23 +252,49 @@ fn write_table(points: &[LobePoint], out: &mut dyn Write) -> std::io::Result<()>
     let every = points.len().div_ceil(MAX_PRINTED_ROWS).max(1);
     writeln!(
         out,
-        "  {:>12} {:>18} {:>20} {:>5}",
-        "spindle_rpm", "critical_depth_mm", "chatter_frequency_hz", "kind"
+        "  {:>12} {:>18} {:>20} {:>5} {:>16}",
+        "spindle_rpm", "critical_depth_mm", "chatter_frequency_hz", "kind", "steps_per_period"
     )?;
     for p in points.iter().step_by(every) {
         writeln!(
             out,
-            "  {:>12.0} {:>18.4} {:>20.1} {:>5}",
+            "  {:>12.0} {:>18.4} {:>20.1} {:>5} {:>16}",
             p.spindle_rpm,
             p.critical_depth_mm,
             p.chatter_frequency_hz,
-            kind_name(p.kind)
+            kind_name(p.kind),
+            steps_text(p.steps_per_period)
         )?;
     }
     if every > 1 {
         writeln!(out, "  (every {every}th speed shown; all rows with --out)")?;
     }
     Ok(())
+}
+
+/// A point's steps per tooth period for the table (`-` without time steps).
+pub fn steps_text(steps: Option<usize>) -> String {
+    steps.map_or_else(|| "-".to_string(), |m| m.to_string())
+}
+
+/// How the points of a lobes report were resolved, for its header.
+fn resolution_text(head: &LobesHead) -> String {
+    match (head.method, head.fixed_steps) {
+        (Method::Sdm, Some(m)) => {
+            format!("{m} steps per tooth period at every speed (fixed by --steps, not checked)")
+        }
+        (Method::Sdm, None) => converged_text(&StepRule::default()),
+        (Method::Zoa, _) => "analytic in frequency (no time steps)".into(),
+        (Method::Time, _) => "RK4 steps per tooth period in the steps_per_period column".into(),
+    }
+}
+
+/// The converged rule `rule` in words: what `steps_per_period` of a point means.
+pub fn converged_text(rule: &StepRule) -> String {
+    format!(
+        "converged (per speed m = 2 × max({}, {} steps per cycle of the highest mode, {} per cut) steps per tooth period, doubled up to {} while the spectral radius at the boundary changes by more than {} from m/2; the radius extrapolated from m/2 and m; m in steps_per_period)",
+        rule.min_steps, rule.steps_per_cycle, rule.steps_per_cut, rule.max_steps, rule.max_radius_change
+    )
 }
 
 /// `sdm`, `zoa` or `time`, described.

@@ -4,7 +4,7 @@
 //! The work items are the spindle speeds of `--rpm`, in order; shard `I/N` computes the block
 //! [`crate::shard::Shard::block`] of them. The semi-discretisation traces the boundary in runs of
 //! [`TRACE_RUN`] speeds that start afresh at fixed places of the whole list, and a block is
-//! traced from the start of its first run ([`crate::dynamics::milling::MillingSdm::trace_block`]),
+//! traced from the start of its first run ([`crate::dynamics::milling::MillingSdm::trace_block_at`]),
 //! so a shard's points are bit-identical to the same speeds' points of the unsharded command;
 //! the zero-order and time-domain methods treat each speed on its own. A shard's folder holds:
 //! - `shard.json`, the manifest ([`ShardManifest`], command `lobes`; work ids `rpm N`);
@@ -26,9 +26,8 @@ use serde::{Deserialize, Serialize};
 use super::control::{self, ControlLobesConfig, ControlLobesHead};
 use super::lobes::{self as tool_lobes, LobesConfig, LobesHead, LobesOutputs, ShardOutput};
 use super::VERSION;
-use crate::dynamics::lobes::lobes_block;
 use crate::dynamics::milling::TRACE_RUN;
-use crate::dynamics::LobePoint;
+use crate::dynamics::{LobePoint, Resolution};
 use crate::files;
 use crate::shard::MergeConfig;
 use crate::shard::{InputFingerprint, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
@@ -102,18 +101,10 @@ pub fn lobes_shard(cfg: &LobesConfig, target: &ShardOutput, out: &mut dyn Write)
         ("method", serde_json::to_string(&cfg.method)?),
         ("immersion", cfg.immersion.to_string()),
         ("milling direction", serde_json::to_string(&cfg.milling)?),
+        ("resolution", resolution_argument(&cfg.resolution)),
     ];
-    let t = &cfg.tool;
     let compute = |block| {
-        let points = lobes_block(
-            cfg.method,
-            &t.tool,
-            &t.modes,
-            cfg.immersion,
-            cfg.milling,
-            &cfg.speeds_rpm,
-            block,
-        )?;
+        let points = tool_lobes::lobes_block(cfg, block)?;
         Ok(points.into_iter().map(|p| vec![p]).collect())
     };
     write_shard(target, cfg.force, &header, &arguments, compute, out)
@@ -133,7 +124,7 @@ pub fn control_lobes_shard(
         csv: cfg.out.as_ref().map(|p| p.display().to_string()),
         lobes: Head::Controller(ControlLobesHead::of(cfg)),
     };
-    let arguments = [("steps per tooth period", cfg.steps_per_period.to_string())];
+    let arguments = [("resolution", resolution_argument(&cfg.resolution))];
     let compute = |block| {
         let [open, closed] = control::lobes_block(cfg, block)?;
         Ok(open
@@ -143,6 +134,12 @@ pub fn control_lobes_shard(
             .collect())
     };
     write_shard(target, cfg.force, &header, &arguments, compute, out)
+}
+
+/// The resolution as a shard's argument: every field of the fixed count or of the rule, so
+/// shards computed at different resolutions are refused by the merge.
+fn resolution_argument(resolution: &Resolution) -> String {
+    format!("{resolution:?}")
 }
 
 /// Writes a shard's points (computed by `compute` for its block of the speeds, one list of
@@ -333,6 +330,7 @@ mod tests {
             critical_depth_mm: 0.1 + 0.2,
             chatter_frequency_hz: 1.0 / 3.0,
             kind: crate::dynamics::BoundaryKind::Flip,
+            steps_per_period: Some(1280),
         };
         let line = SpeedPoints {
             spindle_rpm: p.spindle_rpm,
@@ -347,5 +345,14 @@ mod tests {
             p.chatter_frequency_hz.to_bits()
         );
         assert_eq!(back, line);
+    }
+
+    #[test]
+    fn a_line_written_before_the_steps_per_period_reads_as_none() {
+        let old = r#"{"spindle_rpm":5000.0,"points":[{"spindle_rpm":5000.0,"critical_depth_mm":0.44,"chatter_frequency_hz":950.0,"kind":"Hopf"}]}"#;
+        let back: SpeedPoints = serde_json::from_str(old).unwrap();
+        let p = back.points[0].unwrap();
+        assert_eq!(p.steps_per_period, None);
+        assert_eq!(p.critical_depth_mm, 0.44);
     }
 }

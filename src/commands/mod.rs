@@ -17,6 +17,7 @@ pub mod lobes;
 pub mod lobes_shard;
 pub mod merge;
 pub(crate) mod model;
+pub mod modal_fit;
 pub mod probe_campaign;
 pub mod run;
 pub mod run_fiveaxis;

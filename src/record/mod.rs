@@ -22,7 +22,7 @@
 //! | `runs/seed<s>/<state>/<diagonal>/{before,after}` | `Scalars` | campaign only: \|E\| of every held-out hybrid run (see [`campaign`]) |
 //!
 //! The milling-dynamics commands write their own recordings ([`dynamics`]: lobe diagram, one
-//! cut's vibration, forces and spectra).
+//! cut's vibration, forces and spectra; [`modal_fit`]: a measured and a fitted receptance).
 //!
 //! Timelines: `sim_time` (duration, s of twin time), `sample` (measurement point index) and, for
 //! straight-line tests such as the diagonals, `diagonal_mm` (position along the line from the
@@ -45,6 +45,7 @@ pub mod dynamics;
 pub mod fiveaxis;
 pub mod fleet;
 pub mod layout;
+pub mod modal_fit;
 mod recorder;
 pub mod scene;
 

@@ -10,12 +10,18 @@
 //! Through the command line (`vmc-twin lobes --controller lqg.json`, open and closed loop, 160
 //! steps, `taskset -c 1`): 3.8 s of CPU time on the idle machine, 4.2–5.2 s under a load average
 //! of 9 (23.1 s with the full monodromy product and bisection).
+//!
+//! Resolution, 20 of the speeds (every 10th), load average ≈ 5: `closed_loop_lobes_20_m160`
+//! 1.08 s, `_m640` 3.28 s, `_converged640` (the converged rule capped at 640 steps, 320 and 640
+//! extrapolated) 4.81 s. Over all 200 speeds the fixed 160 steps are up to 10 % deep in closed
+//! loop; the capped rule is within 0.12 % of the uncapped converged lobes (decision record on
+//! converged lobes).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use vmc_dynamics::control::blade::{Actuator, Blade};
 use vmc_dynamics::control::closed_loop::{close, lobes, sampled_model, LobeCut};
 use vmc_dynamics::control::design::{to_metres, DesignPlant, LqgWeights};
-use vmc_dynamics::{Milling, Tool};
+use vmc_dynamics::{Milling, Resolution, StepRule, Tool};
 
 fn bench(c: &mut Criterion) {
     let blade = Blade {
@@ -60,6 +66,22 @@ fn bench(c: &mut Criterion) {
     for m in [40, 160] {
         g.bench_function(format!("closed_loop_lobes_200_m{m}"), |b| {
             b.iter(|| lobes(&plant, &closed, &cut, &speeds, (50.0, 1e-4), m).expect("lobes"));
+        });
+    }
+    // 20 of the speeds: the fixed 160 and 640 steps against the converged rule capped at 640
+    // steps (extrapolated from 320 and 640).
+    let few: Vec<f64> = speeds.iter().step_by(10).copied().collect();
+    let capped = Resolution::Converged(StepRule {
+        max_steps: 640,
+        ..StepRule::default()
+    });
+    for (name, res) in [
+        ("m160", Resolution::Fixed(160)),
+        ("m640", Resolution::Fixed(640)),
+        ("converged640", capped),
+    ] {
+        g.bench_function(format!("closed_loop_lobes_20_{name}"), |b| {
+            b.iter(|| lobes(&plant, &closed, &cut, &few, (50.0, 1e-4), res).expect("lobes"));
         });
     }
     g.finish();

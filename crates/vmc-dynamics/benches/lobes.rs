@@ -15,14 +15,24 @@
 //! * `cut_400_teeth` — one `cut` (9000 rpm, 2 mm, f_z 0.1 mm): steady state, 400 tooth periods
 //!   × 64 RK4 steps of the process model with every step recorded, verdict and two spectra
 //!   (radix-2 FFTs of 16 384 points): 7.07 ms, i.e. 3.6 M steps/s = 56 600 tooth passes/s.
+//! * `lobes_*_m40` / `lobes_*_converged` — the SDM lobes of `lobes` (tracer from the zero-order
+//!   minimum, tolerance 1e-3 of it) at 40 fixed steps and at the converged resolution
+//!   (`Resolution::default()`), D = 20 mm, down milling (load average ≈ 5): a_e/D 0.05,
+//!   5000–25 000 rpm, 201 speeds 82.6 ms → 470 ms; slotting, same speeds 1.29 s → 3.74 s;
+//!   slotting, 2000–30 000 rpm every 250 rpm 0.80 s → 2.63 s (decision record on converged
+//!   lobes). `sdm_tracer_201` in the same run: 67.6 ms (1429 evaluations; the load, not the
+//!   code, makes it slower than the idle figure above).
 //! * `cut_400_teeth_helix30` — the same cut with a 4-tooth 30° helical cutter, modes in x and
 //!   y (3 axial disks: 12 tooth-disk force evaluations per stage instead of 2): 21.2 ms,
 //!   1.2 M steps/s.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use vmc_dynamics::lobes::lobes_block_at;
 use vmc_dynamics::milling::{MillingSdm, SdmOptions};
 use vmc_dynamics::time_domain::{ForceModel, TimeDomain, TimeOptions};
-use vmc_dynamics::{simulate_cut, Cut, CutOptions, Milling, Mode, TipModes, Tool};
+use vmc_dynamics::{
+    simulate_cut, Cut, CutOptions, Method, Milling, Mode, Resolution, TipModes, Tool,
+};
 
 fn setup() -> (Tool, TipModes) {
     (
@@ -55,6 +65,29 @@ fn bench(c: &mut Criterion) {
             sdm.trace(&speeds, 15.0, 0.03).unwrap()
         })
     });
+    // The lobes of `lobes` (start at the zero-order minimum, tolerance 1e-3 of it): the fixed
+    // 40 steps of before and the converged resolution, at a_e/D = 0.05 and in slotting over
+    // 5000–25 000 rpm (201 speeds) and 2000–30 000 rpm every 250 rpm (113 speeds).
+    let wide: Vec<f64> = (0..201).map(|i| 5000.0 + 100.0 * f64::from(i)).collect();
+    let every_250: Vec<f64> = (0..113).map(|i| 2000.0 + 250.0 * f64::from(i)).collect();
+    for (name, immersion, list) in [
+        ("ae005_5k_25k", 0.05, &wide),
+        ("slot_5k_25k", 1.0, &wide),
+        ("slot_2k_30k", 1.0, &every_250),
+    ] {
+        for (res_name, res) in [
+            ("m40", Resolution::Fixed(40)),
+            ("converged", Resolution::default()),
+        ] {
+            g.bench_function(format!("lobes_{name}_{res_name}"), |b| {
+                b.iter(|| {
+                    let cut = (immersion, Milling::Down);
+                    let all = 0..list.len();
+                    lobes_block_at(Method::Sdm, &tool, &modes, cut, list, all, &res).unwrap()
+                })
+            });
+        }
+    }
     let opts = TimeOptions::default();
     let td = TimeDomain::new(&tool, &modes, 0.05, Milling::Down, opts).unwrap();
     g.throughput(Throughput::Elements(

@@ -10,12 +10,15 @@
 //!   a_lim = 1/(2 Re Λ), Λ eigenvalues of G(iω)A₀; Hopf lobes only;
 //! * [`sdm`] (generic) and [`milling`] — first-order semi-discretisation (Insperger–Stépán),
 //!   monodromy matrix over one tooth period, stable when its spectral radius is < 1, loss of
-//!   stability classified as Hopf (complex multiplier) or flip (−1);
+//!   stability classified as Hopf (complex multiplier) or flip (−1); [`converged`] chooses the
+//!   steps per tooth period for accuracy (the default of [`lobes()`]), [`arnoldi`] gives the
+//!   dominant multiplier of large monodromy matrices;
 //! * [`time_domain`] — RK4 simulation with a delay buffer (linear or with feed, edge forces
 //!   and loss of contact), instability = growth of the once-per-tooth vibration amplitude.
 //!
 //! [`lobes()`] gives one API for the stability lobes of all three; [`beam`] builds tip modes
-//! of an Euler–Bernoulli clamped-free cantilever; [`modal`] the state-space form.
+//! of an Euler–Bernoulli clamped-free cantilever; [`modal`] the state-space form;
+//! [`modal_fit`] fits tip modes to a measured receptance FRF.
 //!
 //! [`cut`] simulates one cut with the process force (feed, edge forces, loss of contact) from
 //! its steady vibration and judges it stable or chattering; [`spectrum`] gives its amplitude
@@ -30,19 +33,23 @@
 
 #![warn(missing_docs)]
 
+pub mod arnoldi;
 pub mod beam;
 pub mod control;
+pub mod converged;
 pub mod cut;
 pub mod forces;
 pub mod lobes;
 pub mod milling;
 pub mod modal;
+pub mod modal_fit;
 pub mod params;
 pub mod sdm;
 pub mod spectrum;
 pub mod time_domain;
 pub mod zoa;
 
+pub use converged::{Resolution, StepRule};
 pub use cut::{simulate_cut, CutOptions, CutSimulation, Verdict};
 pub use lobes::{lobes, sdm_lowest_critical_depth, LobePoint, Method};
 pub use params::{Cut, DynamicsError, Milling, Mode, TipModes, Tool};

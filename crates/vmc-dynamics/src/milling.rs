@@ -10,7 +10,9 @@
 //!
 //! with H, D from [`crate::forces`] (means over each step, integrated exactly including the
 //! screen function, so entry and exit inside a step are resolved), τ = 60/(N n) and
-//! v_c = πDn/60. It is solved by [`crate::sdm`] with m steps per tooth period (default 40).
+//! v_c = πDn/60. It is solved by [`crate::sdm`] with m steps per tooth period (default 40;
+//! [`crate::converged`] chooses m per speed for accuracy and extrapolates the spectral radius
+//! from two resolutions, [`MillingSdm::at_speed_extrapolated`]).
 //! Steps during which no tooth cuts reuse one exponential per speed.
 //!
 //! Helical teeth: H and D are the disk means of [`crate::forces::helical_cutting_matrix_mean`]
@@ -51,6 +53,9 @@ use crate::sdm::{
 /// lobe shards.)
 pub const TRACE_RUN: usize = 8;
 
+/// Largest step of the upward walk of [`SpeedSdm::critical_depth`], relative to the depth.
+const WALK_STEP: f64 = 0.15;
+
 /// Fractions of the previous speed's critical depth probed for unstable islands.
 const ISLAND_PROBES: [f64; 2] = [0.55, 0.8];
 
@@ -82,6 +87,10 @@ pub struct Stability {
     pub kind: BoundaryKind,
     /// Chatter frequency in Hz of the critical multiplier (alias nearest a natural frequency).
     pub chatter_frequency_hz: f64,
+    /// Richardson's correction included in the spectral radius, (ρ_m − ρ_{m/2})/3, when it is
+    /// extrapolated from a companion of half the steps ([`MillingSdm::at_speed_extrapolated`]);
+    /// 0 without one.
+    pub extrapolation: f64,
 }
 
 impl Stability {
@@ -122,12 +131,15 @@ struct StepTerms {
 pub struct SpeedSdm<'a> {
     sdm: &'a MillingSdm,
     spindle_rpm: f64,
+    steps: usize,
     period_s: f64,
     dt_s: f64,
     omega_rad_per_s: f64,
     /// Per step; `None` while no tooth cuts. Empty for helical teeth (built per depth).
     terms: Vec<Option<StepTerms>>,
     free: DMatrix<f64>,
+    /// The same speed at half the steps, for the extrapolated spectral radius.
+    coarse: Option<Box<SpeedSdm<'a>>>,
 }
 
 impl MillingSdm {
@@ -163,36 +175,80 @@ impl MillingSdm {
         })
     }
 
+    /// The cutter.
+    pub fn tool(&self) -> &Tool {
+        &self.tool
+    }
+
     /// Number of stability evaluations (monodromy + eigenvalues) done so far.
     pub fn evaluations(&self) -> usize {
         self.evaluations.load(Ordering::Relaxed)
     }
 
-    /// Precomputes the step terms of one spindle speed.
+    /// Precomputes the step terms of one spindle speed (the options' steps per tooth period).
     pub fn at_speed(&self, spindle_rpm: f64) -> Result<SpeedSdm<'_>, DynamicsError> {
+        self.at_speed_with_steps(spindle_rpm, self.steps)
+    }
+
+    /// Precomputes the step terms of one spindle speed with `steps` steps per tooth period
+    /// (at least 4), whatever the options say.
+    pub fn at_speed_with_steps(
+        &self,
+        spindle_rpm: f64,
+        steps: usize,
+    ) -> Result<SpeedSdm<'_>, DynamicsError> {
         validate_speed(spindle_rpm)?;
+        if steps < 4 {
+            return Err(DynamicsError::TooFewSteps {
+                name: "steps_per_period",
+                min: 4,
+                value: steps,
+            });
+        }
         let period_s = self.tool.tooth_period_s(spindle_rpm);
-        let dt_s = period_s / self.steps as f64;
+        let dt_s = period_s / steps as f64;
         let omega = 2.0 * std::f64::consts::PI * spindle_rpm / 60.0;
         let terms = if self.tool.lag_rad_per_m() == 0.0 {
-            self.step_terms(omega, dt_s, &Disks::new(&self.tool, 0.0, 0.0))
+            self.step_terms(steps, omega, dt_s, &Disks::new(&self.tool, 0.0, 0.0))
         } else {
             Vec::new()
         };
         Ok(SpeedSdm {
             sdm: self,
             spindle_rpm,
+            steps,
             period_s,
             dt_s,
             omega_rad_per_s: omega,
             terms,
             free: (&self.a0 * dt_s).exp(),
+            coarse: None,
         })
     }
 
-    /// Force terms of every step (per metre of depth) for the given disks.
-    fn step_terms(&self, omega: f64, dt_s: f64, disks: &Disks) -> Vec<Option<StepTerms>> {
-        (0..self.steps)
+    /// [`MillingSdm::at_speed_with_steps`] with `2 × coarse_steps` steps and a companion of
+    /// `coarse_steps`: its stability extrapolates the spectral radius from the two (see
+    /// [`SpeedSdm::stability`]).
+    pub fn at_speed_extrapolated(
+        &self,
+        spindle_rpm: f64,
+        coarse_steps: usize,
+    ) -> Result<SpeedSdm<'_>, DynamicsError> {
+        let coarse = self.at_speed_with_steps(spindle_rpm, coarse_steps)?;
+        let mut fine = self.at_speed_with_steps(spindle_rpm, 2 * coarse_steps)?;
+        fine.coarse = Some(Box::new(coarse));
+        Ok(fine)
+    }
+
+    /// Force terms of each of `steps` steps (per metre of depth) for the given disks.
+    fn step_terms(
+        &self,
+        steps: usize,
+        omega: f64,
+        dt_s: f64,
+        disks: &Disks,
+    ) -> Vec<Option<StepTerms>> {
+        (0..steps)
             .map(|i| {
                 let (pa, pb) = (omega * dt_s * i as f64, omega * dt_s * (i + 1) as f64);
                 let h = helical_cutting_matrix_mean(&self.tool, &self.window, disks, pa, pb);
@@ -294,6 +350,22 @@ impl MillingSdm {
         if let Some(g) = start_mm {
             positive("start_mm", g)?;
         }
+        self.trace_runs(speeds_rpm, block, start_mm, |n, guess| {
+            self.at_speed(n)?
+                .critical_depth(guess, max_depth_mm, tol_mm)
+        })
+    }
+
+    /// The run structure of [`MillingSdm::trace_block`] with the critical depth of one speed
+    /// given by `depth_at(speed, guess)`: checks the block, starts each run of [`TRACE_RUN`]
+    /// speeds from `start_mm` and every other speed from the point before it.
+    pub(crate) fn trace_runs(
+        &self,
+        speeds_rpm: &[f64],
+        block: Range<usize>,
+        start_mm: Option<f64>,
+        depth_at: impl Fn(f64, Option<f64>) -> Result<Option<LobePoint>, DynamicsError>,
+    ) -> Result<Vec<Option<LobePoint>>, DynamicsError> {
         if block.end > speeds_rpm.len() {
             return Err(DynamicsError::TooManySteps {
                 name: "end of the block of speeds",
@@ -315,15 +387,26 @@ impl MillingSdm {
             if k % TRACE_RUN == 0 {
                 guess = start_mm;
             }
-            let p = self
-                .at_speed(n)?
-                .critical_depth(guess, max_depth_mm, tol_mm)?;
+            let p = depth_at(n, guess)?;
             guess = p.map(|p| p.critical_depth_mm);
             if k >= block.start {
                 out.push(p);
             }
         }
         Ok(out)
+    }
+
+    /// The highest natural frequency the chatter is referred to (the tip modes', or those given
+    /// to [`MillingSdm::with_augmented_system`]), Hz.
+    pub fn highest_frequency_hz(&self) -> f64 {
+        self.frequencies_hz.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// The fraction of a tooth period in which a tooth is in the engagement window, in (0, 1]
+    /// (window width × N / 2π; a helix spreads the cut over more of the period).
+    pub fn cut_fraction(&self) -> f64 {
+        let width = self.window.exit_rad - self.window.entry_rad;
+        (width * f64::from(self.tool.teeth) / (2.0 * std::f64::consts::PI)).clamp(1e-9, 1.0)
     }
 }
 
@@ -349,7 +432,7 @@ impl SpeedSdm<'_> {
             // Helical teeth: disks at most one step angle apart in lag, for this depth.
             let step_rad = self.omega_rad_per_s * self.dt_s;
             let disks = Disks::new(&sdm.tool, a_m, step_rad);
-            Cow::Owned(sdm.step_terms(self.omega_rad_per_s, self.dt_s, &disks))
+            Cow::Owned(sdm.step_terms(self.steps, self.omega_rad_per_s, self.dt_s, &disks))
         } else {
             Cow::Borrowed(self.terms.as_slice())
         };
@@ -377,17 +460,35 @@ impl SpeedSdm<'_> {
         f(&refs)
     }
 
-    /// Stability at an axial depth in mm (counts one evaluation).
+    /// Stability at an axial depth in mm (counts one evaluation). With a companion of half the
+    /// steps the spectral radius is Richardson's extrapolation ρ_m + (ρ_m − ρ_{m/2})/3 (the
+    /// first-order error falls as m⁻²) and the multiplier is scaled to it; kind and chatter
+    /// frequency are those of the m steps.
     pub fn stability(&self, depth_mm: f64) -> Result<Stability, DynamicsError> {
         crate::params::non_negative("axial_depth_mm", depth_mm)?;
         self.sdm.evaluations.fetch_add(1, Ordering::Relaxed);
         let mu = critical_multiplier(&self.monodromy_compact(depth_mm));
+        let rho = mu.norm();
+        let extrapolation = match &self.coarse {
+            Some(c) => {
+                let rho_c = critical_multiplier(&c.monodromy_compact(depth_mm)).norm();
+                (rho - rho_c) / 3.0
+            }
+            None => 0.0,
+        };
+        let rho_x = (rho + extrapolation).max(0.0);
         Ok(Stability {
-            spectral_radius: mu.norm(),
-            multiplier: mu,
+            spectral_radius: rho_x,
+            multiplier: if rho > 0.0 { mu * (rho_x / rho) } else { mu },
             kind: classify(mu),
             chatter_frequency_hz: chatter_frequency_hz(mu, self.period_s, &self.sdm.frequencies_hz),
+            extrapolation,
         })
+    }
+
+    /// Steps per tooth period of this discretisation.
+    pub fn steps_per_period(&self) -> usize {
+        self.steps
     }
 
     fn point(&self, depth_mm: f64, unstable: &Stability) -> LobePoint {
@@ -396,12 +497,14 @@ impl SpeedSdm<'_> {
             critical_depth_mm: depth_mm,
             chatter_frequency_hz: unstable.chatter_frequency_hz,
             kind: unstable.kind,
+            steps_per_period: Some(self.steps),
         }
     }
 
     /// Critical depth by bracketing and bisection. With a guess (the previous speed's depth)
     /// 0.55 and 0.8 × guess are probed for islands first, then the bracket starts at
-    /// guess·(1 ± 5 %) and widens geometrically; without a guess it is (0, max].
+    /// guess·(1 ± 5 %) and widens geometrically, upwards by at most 15 % of the depth a step;
+    /// without a guess it is (0, max].
     pub fn critical_depth(
         &self,
         guess_mm: Option<f64>,
@@ -441,7 +544,9 @@ impl SpeedSdm<'_> {
                     }
                     lo = hi;
                     lo_rho = Some(hi_st.spectral_radius);
-                    width *= 2.0;
+                    // Steps of at most WALK_STEP × the depth, so that a narrow unstable band
+                    // (the tip of a lobe) above the guess is not stepped over.
+                    width = (2.0 * width).min(WALK_STEP * hi);
                     hi = (hi + width).min(max_depth_mm);
                     hi_st = self.stability(hi)?;
                 }

@@ -50,6 +50,13 @@ pub struct LobePoint {
     pub chatter_frequency_hz: f64,
     /// How stability is lost.
     pub kind: BoundaryKind,
+    /// Steps per tooth period of the discretisation behind the point: for the
+    /// semi-discretisation the finest one (with the converged rule of [`crate::converged`] the
+    /// depth is extrapolated from it and the resolution of half as many steps), for the time
+    /// domain its RK4 steps per tooth period; `None` for the zero-order solution, which has no
+    /// time steps. Files written before it existed read as `None`.
+    #[serde(default)]
+    pub steps_per_period: Option<usize>,
 }
 
 /// Discrete map of one semi-discretisation step.
@@ -254,8 +261,9 @@ fn matrix_power(p: &DMatrix<f64>, k: usize) -> DMatrix<f64> {
     out
 }
 
-/// Eigenvalues of Φ after removing the zero columns (and their rows), which carry only zero multipliers.
-pub fn multipliers(phi: &DMatrix<f64>) -> Vec<Complex<f64>> {
+/// Φ without its zero columns (and their rows), which carry only zero multipliers; `None`
+/// when every column is zero.
+fn reduced(phi: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     let rows = phi.nrows();
     let keep: Vec<usize> = phi
         .as_slice()
@@ -265,28 +273,41 @@ pub fn multipliers(phi: &DMatrix<f64>) -> Vec<Complex<f64>> {
         .map(|(j, _)| j)
         .collect();
     if keep.is_empty() {
-        return vec![Complex::new(0.0, 0.0)];
+        return None;
     }
     let k = keep.len();
-    let reduced = DMatrix::from_fn(k, k, |i, j| phi[(keep[i], keep[j])]);
-    if k == 1 {
-        return vec![Complex::new(reduced[(0, 0)], 0.0)];
-    }
-    reduced.complex_eigenvalues().iter().copied().collect()
+    Some(DMatrix::from_fn(k, k, |i, j| phi[(keep[i], keep[j])]))
 }
 
-/// The multiplier of largest modulus (ties resolved towards positive imaginary part).
+/// Eigenvalues of Φ after removing the zero columns (and their rows), which carry only zero
+/// multipliers (full decomposition).
+pub fn multipliers(phi: &DMatrix<f64>) -> Vec<Complex<f64>> {
+    match reduced(phi) {
+        None => vec![Complex::new(0.0, 0.0)],
+        Some(r) if r.nrows() == 1 => vec![Complex::new(r[(0, 0)], 0.0)],
+        Some(r) => r.complex_eigenvalues().iter().copied().collect(),
+    }
+}
+
+/// Reduced monodromy matrices from this size on try the Arnoldi method of
+/// [`crate::arnoldi`] before the full decomposition.
+pub const ARNOLDI_FROM: usize = 120;
+
+/// The multiplier of largest modulus (ties resolved towards positive imaginary part): by
+/// Arnoldi for a reduced matrix of [`ARNOLDI_FROM`] states or more when it converges, else
+/// from the full decomposition.
 pub fn critical_multiplier(phi: &DMatrix<f64>) -> Complex<f64> {
-    let mut best = Complex::new(0.0, 0.0);
-    for mu in multipliers(phi) {
-        let better = mu.norm() > best.norm() * (1.0 + 1e-12)
-            || (mu.norm() >= best.norm() * (1.0 - 1e-12) && mu.im > best.im);
-        if better {
-            best = mu;
+    if let Some(r) = reduced(phi).filter(|r| r.nrows() >= ARNOLDI_FROM) {
+        if let Some(mu) = crate::arnoldi::dominant_eigenvalue(&r) {
+            return mu;
         }
     }
-    best
+    largest(&multipliers(phi))
 }
+
+/// The largest-modulus value of a list (ties towards positive imaginary part); it lives with
+/// the Arnoldi iteration, which picks its Ritz values by the same rule.
+pub use crate::arnoldi::largest;
 
 /// Classifies a critical multiplier: real and negative is a flip, anything else a Hopf pair.
 pub fn classify(mu: Complex<f64>) -> BoundaryKind {

@@ -396,6 +396,7 @@ impl TimeDomain {
             critical_depth_mm: 0.5 * (lo + hi),
             chatter_frequency_hz: f,
             kind,
+            steps_per_period: Some(self.options.steps_per_tooth),
         }))
     }
 }

@@ -147,6 +147,7 @@ impl Zoa {
                     critical_depth_mm: r.depth_mm,
                     chatter_frequency_hz: w / (2.0 * PI),
                     kind: BoundaryKind::Hopf,
+                    steps_per_period: None,
                 })
             })
             .collect()
@@ -181,6 +182,7 @@ impl Zoa {
                                 critical_depth_mm: r.depth_mm,
                                 chatter_frequency_hz: w / (2.0 * PI),
                                 kind: BoundaryKind::Hopf,
+                                steps_per_period: None,
                             });
                         }
                     }

@@ -185,7 +185,8 @@ fn tracer_matches_grid_with_ten_times_fewer_evaluations() {
 }
 
 /// The lobes API returns points for every method, and repeated calls are bit-identical; SDM
-/// (m = 40) and the time domain (64 RK4 steps per tooth) agree to 3 % at a_e/D = 0.5 up milling.
+/// (converged resolution) and the time domain (64 RK4 steps per tooth) agree to 3 % at
+/// a_e/D = 0.5 up milling.
 #[test]
 fn lobes_api_and_determinism() {
     let (tool, modes) = (benchmark_tool(), benchmark_modes());

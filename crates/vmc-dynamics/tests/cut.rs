@@ -27,7 +27,7 @@ fn rotation(f_hz: f64, period_s: f64) -> f64 {
     x.min(1.0 - x)
 }
 
-/// 5 % under the SDM boundary (m = 40, the default of `lobes`) `cut` says stable, 5 % over it
+/// 5 % under the SDM boundary (m = 40, `SdmOptions::default()`) `cut` says stable, 5 % over it
 /// says chatter, at Hopf and flip speeds in down milling at a_e/D = 0.05, in slotting and in
 /// up milling at 0.5. The chatter's once-per-tooth rotation agrees with SDM's to 0.01 cycles
 /// (1 % of the tooth-passing frequency; observed ≤ 0.006), its kind too, and where the

@@ -1,6 +1,8 @@
 //! The app side of the milling-dynamics study: the tool file (TOML) that gives a cutter and the
-//! modes of its tool tip, the lobes table (CSV) and the time series of one cut (CSV). The numerics are the `vmc-dynamics` crate
-//! (re-exported as [`vmc_dynamics`]); this module only reads, checks and writes.
+//! modes of its tool tip (read and checked; written from fitted modes by [`tool_file_toml`]),
+//! the lobes table (CSV) and the time series of one cut (CSV). The numerics are the
+//! `vmc-dynamics` crate (re-exported as [`vmc_dynamics`]); this module only reads, checks and
+//! writes text.
 //!
 //! A tool file (units in names; every field checked, unknown fields refused):
 //!
@@ -220,21 +222,66 @@ impl ToolDynamics {
     }
 }
 
-/// The lobes table as CSV: `spindle_rpm, critical_depth_mm, chatter_frequency_hz, kind`, one
-/// row per speed with a boundary.
+/// The lobes table as CSV: `spindle_rpm, critical_depth_mm, chatter_frequency_hz, kind,
+/// steps_per_period`, one row per speed with a boundary; `steps_per_period` (the steps per
+/// tooth period behind the point, see [`LobePoint::steps_per_period`]) is empty for the
+/// zero-order solution, which has no time steps.
 pub fn lobes_csv(points: &[LobePoint]) -> String {
-    let mut s = String::from("spindle_rpm,critical_depth_mm,chatter_frequency_hz,kind\n");
+    let mut s =
+        String::from("spindle_rpm,critical_depth_mm,chatter_frequency_hz,kind,steps_per_period\n");
     for p in points {
         let _ = writeln!(
             s,
-            "{},{:.6},{:.3},{}",
+            "{},{:.6},{:.3},{},{}",
             p.spindle_rpm,
             p.critical_depth_mm,
             p.chatter_frequency_hz,
-            kind_name(p.kind)
+            kind_name(p.kind),
+            p.steps_per_period.map_or(String::new(), |m| m.to_string())
         );
     }
     s
+}
+
+/// The text of a tool file (the format of the module doc) for `tool` and `modes`, named
+/// `name`, with `comment` (any number of lines) as `#` lines at the top. Every value is written
+/// in the shortest form that reads back to the same `f64` (each mode by its stiffness), so
+/// [`ToolDynamics::from_toml_str`] gives back `tool` and `modes` bit for bit.
+pub fn tool_file_toml(name: &str, comment: &str, tool: &Tool, modes: &TipModes) -> String {
+    let mut s = String::new();
+    for line in comment.lines() {
+        let _ = writeln!(s, "#{}{line}", if line.is_empty() { "" } else { " " });
+    }
+    // TOML's own quoting of the name (escapes quotes, backslashes and control characters).
+    let _ = writeln!(s, "name = {}", toml::Value::String(name.to_string()));
+    let _ = writeln!(s, "\n[tool]");
+    let _ = writeln!(s, "teeth = {}", tool.teeth);
+    for (key, v) in [
+        ("diameter_mm", tool.diameter_mm),
+        ("helix_deg", tool.helix_deg),
+        ("kt_n_per_m2", tool.kt_n_per_m2),
+        ("kn_n_per_m2", tool.kn_n_per_m2),
+        ("kte_n_per_m", tool.kte_n_per_m),
+        ("kne_n_per_m", tool.kne_n_per_m),
+        ("process_damping_n_per_m", tool.process_damping_n_per_m),
+    ] {
+        let _ = writeln!(s, "{key} = {}", toml_float(v));
+    }
+    for (direction, list) in [("x", &modes.x), ("y", &modes.y)] {
+        for m in list {
+            let _ = writeln!(s, "\n[[modes.{direction}]]");
+            let _ = writeln!(s, "frequency_hz = {}", toml_float(m.frequency_hz));
+            let _ = writeln!(s, "damping_ratio = {}", toml_float(m.damping_ratio));
+            let _ = writeln!(s, "stiffness_n_per_m = {}", toml_float(m.stiffness_n_per_m));
+        }
+    }
+    s
+}
+
+/// A finite `f64` as a TOML float that reads back bit for bit: Rust's shortest round-trip
+/// form (`{:?}`: `16.0`, `1e-7`, `600000000.0`) is valid TOML.
+fn toml_float(v: f64) -> String {
+    format!("{v:?}")
 }
 
 /// The time series of one cut as CSV: `time_s, x_um, y_um, fx_n, fy_n` (tip displacement in
@@ -408,13 +455,77 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(
             lines[0],
-            "spindle_rpm,critical_depth_mm,chatter_frequency_hz,kind"
+            "spindle_rpm,critical_depth_mm,chatter_frequency_hz,kind,steps_per_period"
         );
         assert_eq!(lines.len(), 1 + pts.len());
+        // The zero-order solution has no time steps: the last field is empty.
         assert!(
-            lines[1].starts_with("5000,") && lines[1].ends_with(",hopf"),
+            lines[1].starts_with("5000,") && lines[1].ends_with(",hopf,"),
             "{}",
             lines[1]
         );
+        let sdm = lobes(
+            Method::Sdm,
+            &b.tool,
+            &b.modes,
+            1.0,
+            Milling::Down,
+            &[12_000.0],
+        )
+        .unwrap();
+        let csv = lobes_csv(&sdm);
+        let row = csv.lines().nth(1).unwrap();
+        let steps = sdm[0].steps_per_period.unwrap();
+        let kind = kind_name(sdm[0].kind);
+        assert!(row.ends_with(&format!(",{kind},{steps}")), "{row}");
+    }
+
+    #[test]
+    fn a_written_tool_file_reads_back_bit_for_bit() {
+        let mut tool = ToolDynamics::benchmark().tool;
+        tool.helix_deg = 30.0;
+        tool.kte_n_per_m = 1.0 / 3.0;
+        let modes = TipModes {
+            x: vec![
+                Mode::from_mass(922.0, 0.011, 0.03993),
+                Mode {
+                    frequency_hz: 2600.123456789,
+                    damping_ratio: 0.0199,
+                    stiffness_n_per_m: 6.02e7,
+                },
+            ],
+            y: vec![Mode {
+                frequency_hz: 700.5,
+                damping_ratio: 1e-3,
+                stiffness_n_per_m: 1.5e-7 * 1e14,
+            }],
+        };
+        let name = "fit of \"a.csv\" \\ tab\there";
+        let text = tool_file_toml(name, "first line\n\nthird line", &tool, &modes);
+        assert!(
+            text.starts_with("# first line\n#\n# third line\n"),
+            "{text}"
+        );
+        let back = ToolDynamics::from_toml_str(&text, "fit.toml").unwrap();
+        assert_eq!(back.name, name);
+        assert_eq!(back.tool, tool);
+        assert_eq!(back.modes, modes);
+        // Bit for bit, not only equal as numbers.
+        let bits = |m: &[Mode]| -> Vec<u64> {
+            m.iter()
+                .flat_map(|m| [m.frequency_hz, m.damping_ratio, m.stiffness_n_per_m])
+                .map(f64::to_bits)
+                .collect()
+        };
+        assert_eq!(bits(&back.modes.x), bits(&modes.x));
+        assert_eq!(bits(&back.modes.y), bits(&modes.y));
+        // A rigid direction writes no table and reads back empty.
+        let rigid = TipModes {
+            x: modes.x.clone(),
+            y: Vec::new(),
+        };
+        let back =
+            ToolDynamics::from_toml_str(&tool_file_toml("r", "", &tool, &rigid), "r").unwrap();
+        assert!(back.modes.y.is_empty());
     }
 }

@@ -19,8 +19,9 @@
 //!    [`stability::StabilityTable`] (immersion rounded up to its bin, computed once per key);
 //! 3. the margin a_p,lim / a_p of each sample; the move reports its worst sample, and its
 //!    verdict: **unstable** below 1, **marginal** from 1 to [`ChatterOptions::marginal_below`]
-//!    (default 1.25: the model's uncertainty — the default 40 SDM steps alone put the boundary
-//!    up to ≈ 4 % too deep), **stable** above.
+//!    (default 1.25: the model's uncertainty — cutting coefficients and modes measured to a
+//!    few %, a linear force law; the semi-discretisation itself is converged to within 1 %),
+//!    **stable** above.
 //!
 //! Vertical moves in material are reported as **plunge**, not judged (the model is side
 //! milling). Rapids are taken to be in air (`check` finds those that are not) and remove
@@ -31,8 +32,7 @@ pub mod stock_file;
 
 use thiserror::Error;
 
-use crate::dynamics::milling::SdmOptions;
-use crate::dynamics::{DynamicsError, Milling};
+use crate::dynamics::{DynamicsError, Milling, Resolution};
 use stability::{Key, StabilityTable};
 use vmc_gcode::interp::{CanonKind, CanonMove, SpindleDir};
 use vmc_machine::cutting::{Contact, ContactKind, CuttingError, EngagedArc, Side, StockBox, Sweep};
@@ -49,8 +49,9 @@ pub struct ChatterOptions {
     pub immersion_bin: f64,
     /// Margin below which a stable cut is called marginal (default 1.25).
     pub marginal_below: f64,
-    /// Semi-discretisation settings (default 40 steps per tooth period).
-    pub sdm: SdmOptions,
+    /// Resolution of the semi-discretisation (default converged: steps per tooth period chosen
+    /// per speed and checked, [`Resolution::default`]).
+    pub resolution: Resolution,
     /// Tool-tip position when the program starts (mm; default the origin).
     pub start_mm: [f64; 3],
 }
@@ -61,7 +62,7 @@ impl Default for ChatterOptions {
             grid_mm: None,
             immersion_bin: 0.025,
             marginal_below: 1.25,
-            sdm: SdmOptions::default(),
+            resolution: Resolution::default(),
             start_mm: [0.0; 3],
         }
     }
@@ -306,7 +307,12 @@ pub fn check(
         .flat_map(|e| &e.contacts)
         .map(|c| c.axial_depth_mm)
         .fold(0.0, f64::max);
-    let mut table = StabilityTable::new(tool, options.sdm, options.immersion_bin, 4.0 * deepest_mm);
+    let mut table = StabilityTable::new(
+        tool,
+        options.resolution,
+        options.immersion_bin,
+        4.0 * deepest_mm,
+    );
     let keys: Vec<Key> = engaged
         .iter()
         .flat_map(|e| e.contacts.iter().map(move |c| (e, c)))

@@ -9,8 +9,11 @@
 //!   turned into the modes' frame (exact for moves along X or Y).
 //! - Depth: the lowest unstable depth on (0, `max_depth_mm`] — a scan of [`SCAN_DEPTHS`] equal
 //!   steps from the bottom (so an unstable island between stable depths is found if it is wider
-//!   than a step), then bisection to 0.5 % of the depth; the stable end of the last bracket is
-//!   returned, the side that does not overstate the margin.
+//!   than a step), then ITP to [`RELATIVE_TOL`] of a step
+//!   ([`MillingSdm::lowest_critical_depth_at`]) at the table's resolution (default the converged
+//!   one of [`crate::dynamics::converged`]: steps per tooth period chosen per speed, the spectral
+//!   radius extrapolated from two resolutions, within 1 % of a converged reference); the stable
+//!   end of the last bracket is returned, the side that does not overstate the margin.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -18,15 +21,17 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 
 use crate::dynamics::milling::{MillingSdm, SdmOptions};
-use crate::dynamics::{DynamicsError, Milling};
+use crate::dynamics::{DynamicsError, Milling, Resolution};
 use vmc_machine::milling::ToolDynamics;
 
 /// Width of a feed-direction bin when the tip differs in X and Y (degrees).
 pub const DIRECTION_BIN_DEG: f64 = 5.0;
 /// Depths scanned from the bottom of the range before bisecting.
 pub const SCAN_DEPTHS: usize = 16;
-/// Relative width to which the critical depth is bisected.
-const RELATIVE_TOL: f64 = 0.005;
+/// Width of the last bracket of the critical depth, relative to a scan step (0.5 % of the
+/// depth wherever it is above a tenth of a step, i.e. at any margin above 1/40 of the
+/// deepest cut's).
+pub const RELATIVE_TOL: f64 = 0.0005;
 
 /// One stability question: which SDM to build and at which speed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -45,7 +50,7 @@ pub struct Key {
 #[derive(Debug)]
 pub struct StabilityTable<'a> {
     tool: &'a ToolDynamics,
-    options: SdmOptions,
+    resolution: Resolution,
     bin_width: f64,
     max_depth_mm: f64,
     isotropic: bool,
@@ -54,16 +59,17 @@ pub struct StabilityTable<'a> {
 }
 
 impl<'a> StabilityTable<'a> {
-    /// A table for `tool`, immersion bins of `bin_width`, depths searched up to `max_depth_mm`.
+    /// A table for `tool` at the semi-discretisation's `resolution`, immersion bins of
+    /// `bin_width`, depths searched up to `max_depth_mm`.
     pub fn new(
         tool: &'a ToolDynamics,
-        options: SdmOptions,
+        resolution: Resolution,
         bin_width: f64,
         max_depth_mm: f64,
     ) -> Self {
         Self {
             tool,
-            options,
+            resolution,
             bin_width,
             max_depth_mm,
             isotropic: tool.modes.x == tool.modes.y,
@@ -159,41 +165,26 @@ impl<'a> StabilityTable<'a> {
         let milling = if key.down { Milling::Down } else { Milling::Up };
         let immersion = self.immersion_of(key);
         let angle_rad = (f64::from(key.direction_bin) * DIRECTION_BIN_DEG).to_radians();
+        // The resolution chooses the steps per speed; the options' count is not used.
         let sdm = MillingSdm::with_feed_angle(
             &t.tool,
             &t.modes,
             immersion,
             milling,
             angle_rad,
-            self.options,
+            SdmOptions::default(),
         )?;
-        let at = sdm.at_speed(f64::from_bits(key.rpm_bits))?;
-        let step = self.max_depth_mm / SCAN_DEPTHS as f64;
-        let mut lo = 0.0;
-        let mut hi = None;
-        for k in 1..=SCAN_DEPTHS {
-            let depth = step * k as f64;
-            if at.stability(depth)?.is_stable() {
-                lo = depth;
-            } else {
-                hi = Some(depth);
-                break;
-            }
-        }
-        let result = match hi {
-            None => None,
-            Some(mut hi) => {
-                while hi - lo > RELATIVE_TOL * hi {
-                    let mid = 0.5 * (lo + hi);
-                    if at.stability(mid)?.is_stable() {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                Some(lo)
-            }
-        };
+        let step_mm = self.max_depth_mm / SCAN_DEPTHS as f64;
+        let tol_mm = RELATIVE_TOL * step_mm;
+        let found = sdm.lowest_critical_depth_at(
+            f64::from_bits(key.rpm_bits),
+            (self.max_depth_mm, tol_mm),
+            SCAN_DEPTHS,
+            &self.resolution,
+        )?;
+        // The point is the middle of a last bracket at most tol_mm wide: its stable end is at
+        // least half a tolerance below.
+        let result = found.map(|p| p.critical_depth_mm - 0.5 * tol_mm);
         self.evaluations
             .fetch_add(sdm.evaluations(), Ordering::Relaxed);
         Ok(result)
@@ -208,7 +199,7 @@ mod tests {
     #[test]
     fn immersions_round_up_to_their_bin_and_directions_to_theirs() {
         let tool = ToolDynamics::benchmark();
-        let t = StabilityTable::new(&tool, SdmOptions::default(), 0.025, 5.0);
+        let t = StabilityTable::new(&tool, Resolution::default(), 0.025, 5.0);
         let k = |imm| t.immersion_of(t.key(10_000.0, imm, Milling::Down, 0.0));
         assert!((k(0.15) - 0.15).abs() < 1e-12);
         assert!((k(0.1501) - 0.175).abs() < 1e-12);
@@ -226,9 +217,9 @@ mod tests {
     }
 
     #[test]
-    fn a_critical_depth_agrees_with_the_lobes_within_the_bisection() {
+    fn a_critical_depth_agrees_with_the_lobes_and_lies_on_the_stable_side() {
         let tool = ToolDynamics::benchmark();
-        let mut t = StabilityTable::new(&tool, SdmOptions::default(), 0.025, 4.0);
+        let mut t = StabilityTable::new(&tool, Resolution::default(), 0.025, 4.0);
         let key = t.key(10_000.0, 1.0, Milling::Down, 0.0);
         t.fill([key]).unwrap();
         let got = t.depth(key).unwrap();
@@ -242,9 +233,45 @@ mod tests {
         )
         .unwrap()[0]
             .critical_depth_mm;
-        // Both bisect the same SDM: 0.5 % here, 1e-3 of the ZOA minimum there.
-        assert!(got <= want * 1.001 && got > want * 0.99, "{got} vs {want}");
+        // Both search the same converged model: to 1e-3 of the ZOA minimum there, to
+        // 2.5e-4 × 0.25 mm here, the table on the stable side of its bracket.
+        let tol_mm = RELATIVE_TOL * 4.0 / SCAN_DEPTHS as f64;
+        assert!(
+            got <= want + 1e-3 * 0.3 && got > want * 0.995,
+            "{got} vs {want}"
+        );
+        let sdm = MillingSdm::new(
+            &tool.tool,
+            &tool.modes,
+            1.0,
+            Milling::Down,
+            SdmOptions::default(),
+        )
+        .unwrap();
+        let rule = match Resolution::default() {
+            Resolution::Converged(rule) => rule,
+            Resolution::Fixed(_) => unreachable!("the default is converged"),
+        };
+        let period_s = tool.tool.tooth_period_s(10_000.0);
+        let m = rule.coarse_steps(sdm.highest_frequency_hz(), sdm.cut_fraction(), period_s);
+        let at = sdm.at_speed_extrapolated(10_000.0, m).unwrap();
+        assert!(at.stability(got).unwrap().is_stable(), "{got}");
+        assert!(!at.stability(got + tol_mm).unwrap().is_stable(), "{got}");
         assert_eq!(t.len(), 1);
         assert!(t.evaluations() > SCAN_DEPTHS / 4);
+    }
+
+    #[test]
+    fn a_fixed_resolution_gives_the_fixed_step_depth() {
+        let tool = ToolDynamics::benchmark();
+        let mut fixed = StabilityTable::new(&tool, Resolution::Fixed(40), 0.025, 4.0);
+        let mut conv = StabilityTable::new(&tool, Resolution::default(), 0.025, 4.0);
+        // 5000 rpm slotting: 40 steps put the boundary 8 % deep (0.441 against 0.409 mm).
+        let key = fixed.key(5000.0, 1.0, Milling::Down, 0.0);
+        fixed.fill([key]).unwrap();
+        conv.fill([key]).unwrap();
+        let (f, c) = (fixed.depth(key).unwrap(), conv.depth(key).unwrap());
+        assert!((f - 0.4411).abs() < 0.001, "{f}");
+        assert!((c - 0.4086).abs() < 0.001, "{c}");
     }
 }

@@ -70,7 +70,7 @@ fn a_deep_slot_chatters_and_a_light_side_cut_does_not() {
 #[test]
 fn a_counter_clockwise_spindle_swaps_up_and_down() {
     let tool = ToolDynamics::benchmark();
-    let table = StabilityTable::new(&tool, SdmOptions::default(), 0.025, 4.0);
+    let table = StabilityTable::new(&tool, Resolution::default(), 0.025, 4.0);
     let contact = |side, entry_rad, exit_rad| Contact {
         s_mm: 0.0,
         position_mm: [0.0; 3],

@@ -26,6 +26,7 @@ use nalgebra::{Complex, DMatrix};
 use super::blade::BladePlant;
 use super::pade::pade;
 use super::{ControlError, StateSpace};
+use crate::converged::Resolution;
 use crate::milling::{MillingSdm, SdmOptions};
 use crate::params::{positive, DynamicsError, Milling, TipModes, Tool};
 use crate::sdm::LobePoint;
@@ -223,25 +224,27 @@ pub fn sdm(
         .with_augmented_system(&closed.a, &plant.frequencies_hz())
 }
 
-/// Closed-loop stability lobes by semi-discretisation with `steps_per_period` steps: the
-/// critical depth at each speed to `tol_mm` in (0, `max_depth_mm`]. The blade's higher modes
-/// (kHz) can set the closed-loop limit once the first modes are damped; the error of the
-/// first-order method grows as (f τ / m)², so they need m ≈ 160 where the open loop's first
-/// mode is content with 40. An unstable loop is refused.
+/// Closed-loop stability lobes by semi-discretisation at `resolution` (a count of steps per
+/// tooth period converts to [`Resolution::Fixed`]; [`Resolution::default`] chooses and checks
+/// the steps per speed, see [`crate::converged`]): the critical depth at each speed to
+/// `tol_mm` in (0, `max_depth_mm`]. The blade's higher modes (kHz) can set the closed-loop
+/// limit once the first modes are damped; the error of the first-order method grows as
+/// (f τ / m)², so they need m ≈ 160 where the open loop's first mode is content with 40. An
+/// unstable loop is refused.
 pub fn lobes(
     plant: &BladePlant,
     closed: &ClosedLoop,
     cut: &LobeCut,
     speeds_rpm: &[f64],
     (max_depth_mm, tol_mm): (f64, f64),
-    steps_per_period: usize,
+    resolution: impl Into<Resolution>,
 ) -> Result<Vec<LobePoint>, ControlError> {
     if !closed.is_stable() {
         return Err(ControlError::UnstableLoop);
     }
     let all = 0..speeds_rpm.len();
     let tol = (max_depth_mm, tol_mm);
-    let points = lobes_block(plant, closed, cut, speeds_rpm, all, tol, steps_per_period)?;
+    let points = lobes_block(plant, closed, cut, speeds_rpm, all, tol, resolution)?;
     Ok(points.into_iter().flatten().collect())
 }
 
@@ -256,19 +259,23 @@ pub fn lobes_block(
     speeds_rpm: &[f64],
     block: Range<usize>,
     (max_depth_mm, tol_mm): (f64, f64),
-    steps_per_period: usize,
+    resolution: impl Into<Resolution>,
 ) -> Result<Vec<Option<LobePoint>>, ControlError> {
     if !closed.is_stable() {
         return Err(ControlError::UnstableLoop);
     }
-    let options = SdmOptions { steps_per_period };
-    Ok(sdm(plant, closed, cut, options)?.trace_block(
-        speeds_rpm,
-        block,
-        None,
-        max_depth_mm,
-        tol_mm,
-    )?)
+    let resolution = resolution.into();
+    resolution.validate()?;
+    let range = (max_depth_mm, tol_mm);
+    Ok(
+        sdm(plant, closed, cut, SdmOptions::default())?.trace_block_at(
+            speeds_rpm,
+            block,
+            None,
+            range,
+            &resolution,
+        )?,
+    )
 }
 
 #[cfg(test)]
@@ -335,6 +342,44 @@ pub(crate) mod tests {
         assert!(norm < gamma && norm > 0.5 * gamma, "{norm} vs {gamma}");
         let att = attenuation(&p, &close(&p, &to_metres(&k)).unwrap());
         assert!(att[0].attenuation_db > 20.0, "{att:?}");
+    }
+
+    /// At 1696 rpm (a_e/D = 1/16 down milling, 2 teeth, K_t = 1e9, K_n = 3e8 N/m², the LQG
+    /// loop sampled at 50 kHz) the fixed 160 steps per tooth period put the closed-loop
+    /// boundary 10 % too deep; the converged rule capped at 640 steps (extrapolated from 320
+    /// and 640) lies within 0.5 % of 1280 fixed steps and reports its 640 steps.
+    #[test]
+    fn converged_closed_loop_lobes_report_their_steps_and_beat_the_fixed_160() {
+        let p = study_blade(4).plant().unwrap();
+        let rate = 50_000.0;
+        let design = DesignPlant::structure(&p).sampled(rate).unwrap();
+        let k = to_metres(&design.lqg(&lqg_weights()).unwrap());
+        let closed = close(&p, &sampled_model(&k, rate).unwrap()).unwrap();
+        let cut = LobeCut {
+            tool: Tool::new(2, 16.0, 1e9, 3e8),
+            immersion: 1.0 / 16.0,
+            milling: Milling::Down,
+        };
+        let at =
+            |res: Resolution| lobes(&p, &closed, &cut, &[1696.0], (50.0, 1e-4), res).unwrap()[0];
+        let fine = at(Resolution::Fixed(1280));
+        let capped = Resolution::Converged(crate::converged::StepRule {
+            max_steps: 640,
+            ..Default::default()
+        });
+        let converged = at(capped);
+        let coarse = at(160.into());
+        let rel = |q: LobePoint| q.critical_depth_mm / fine.critical_depth_mm - 1.0;
+        println!(
+            "1696 rpm: 1280 steps {:.4} mm, converged {:+.3} %, 160 steps {:+.2} %",
+            fine.critical_depth_mm,
+            100.0 * rel(converged),
+            100.0 * rel(coarse)
+        );
+        assert!(rel(converged).abs() < 0.005, "{converged:?} vs {fine:?}");
+        assert_eq!(converged.steps_per_period, Some(640));
+        assert!(rel(coarse) > 0.05, "{coarse:?} vs {fine:?}");
+        assert_eq!(coarse.steps_per_period, Some(160));
     }
 
     #[test]
