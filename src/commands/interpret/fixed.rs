@@ -17,7 +17,7 @@ const MAX_SCALED: f64 = 4.0e15;
 /// Appends `x` with 4 decimals to `buf` (the text of `format!("{x:.4}")`).
 pub fn push_fixed4(buf: &mut Vec<u8>, x: f64) {
     let scaled = x.abs() * 1e4;
-    if !(scaled < MAX_SCALED) {
+    if !scaled.is_finite() || scaled >= MAX_SCALED {
         // Not finite, or too large for the integer path.
         let _ = write!(buf, "{x:.4}");
         return;
