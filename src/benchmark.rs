@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::predict::compiled::{CompiledCompensator, CompiledHybrid};
 use crate::predict::controller::{Compensator, Controller};
 use crate::predict::predictor::{self, Settings};
 use crate::studies::calibration::{self, CampaignConfig, ThermalCycle};
@@ -44,11 +45,12 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Compensation query: median ns per query over `repeats` batches of 100,000 queries on one
-/// core, and the batch throughput on all cores (queries/s).
+/// core, for the library's compensator and for the compiled one (the form a servo thread runs,
+/// `vmc_predict::compiled`), and the library's batch throughput on all cores (queries/s).
 ///
 /// # Errors
-/// Campaign or training errors.
-pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> {
+/// Campaign, training or compilation errors.
+pub fn query(spec: &MachineSpec, repeats: usize) -> anyhow::Result<Vec<Row>> {
     let data = calibration::calibrate(
         spec,
         &ThermalCycle::calibration_plan(spec),
@@ -65,7 +67,7 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
     let names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
     let temps: Vec<f64> = (0..names.len()).map(|i| 22.0 + 0.25 * i as f64).collect();
     const N: usize = 100_000;
-    let batch = |comp: &mut Compensator<_>, offset: usize| {
+    let batch = |comp: &mut dyn Controller, offset: usize| {
         // One set of readings held over the batch, as between two sensor samples.
         comp.on_readings(0.0, &temps);
         let mut acc = 0.0;
@@ -76,15 +78,21 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
         }
         std::hint::black_box(acc)
     };
-    let mut comp = Compensator::for_machine(model.clone(), &names)?;
-    batch(&mut comp, 0); // warm-up
-    let per_query_ns: Vec<f64> = (0..repeats.max(1))
-        .map(|r| {
-            let t = Instant::now();
-            batch(&mut comp, r);
-            t.elapsed().as_secs_f64() * 1e9 / N as f64
-        })
-        .collect();
+    let median_ns = |comp: &mut dyn Controller| {
+        batch(comp, 0); // warm-up
+        let per_query_ns: Vec<f64> = (0..repeats.max(1))
+            .map(|r| {
+                let t = Instant::now();
+                batch(comp, r);
+                t.elapsed().as_secs_f64() * 1e9 / N as f64
+            })
+            .collect();
+        median(per_query_ns)
+    };
+    let library_ns = median_ns(&mut Compensator::for_machine(model.clone(), &names)?);
+    let compiled = CompiledHybrid::from_predictor(&model)?;
+    let instructions = compiled.instruction_set();
+    let compiled_ns = median_ns(&mut CompiledCompensator::for_machine(compiled, &names)?);
     let threads = rayon::current_num_threads();
     let t = Instant::now();
     (0..threads * 4).into_par_iter().try_for_each(|r| {
@@ -96,7 +104,12 @@ pub fn query(spec: &MachineSpec, repeats: usize) -> Result<Vec<Row>, EvalError> 
     Ok(vec![
         row(
             "one compensation query (hybrid: all nets + synthesis + fixed-point solve), one core, median",
-            median(per_query_ns),
+            library_ns,
+            "ns",
+        ),
+        row(
+            format!("the same query, compiled model (vmc_predict::compiled, {instructions}), one core, median"),
+            compiled_ns,
             "ns",
         ),
         row(

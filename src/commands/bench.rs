@@ -17,6 +17,26 @@ pub struct BenchConfig {
     pub quick: bool,
 }
 
+/// Median wall time (s) over `repeats` of interpreting the 1 MB program of
+/// [`benchmark::finishing_program`] and writing its canonical calls as `vmc-twin interpret`
+/// does, to a sink: the work `rs274 -g` does on the same file.
+///
+/// # Errors
+/// The program refused (a defect).
+fn interpret_and_write_s(repeats: usize) -> Result<f64> {
+    let (text, _) = benchmark::finishing_program(1 << 20);
+    let cfg = vmc_gcode::interp::InterpConfig::default();
+    let mut times = Vec::new();
+    for _ in 0..repeats.max(1) {
+        let t0 = std::time::Instant::now();
+        let moves = vmc_gcode::interp::run_program(&text, &cfg)?;
+        super::interpret::write_calls(&moves, &mut std::io::sink())?;
+        times.push(t0.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(times[times.len() / 2])
+}
+
 /// Measures and prints the figures.
 ///
 /// # Errors
@@ -58,6 +78,12 @@ pub fn bench(cfg: &BenchConfig, out: &mut dyn Write) -> Result<()> {
         g.lines
     )?;
     writeln!(out, "  {:<90} {:>12.3} s", "interpret", g.interpret_s)?;
+    writeln!(
+        out,
+        "  {:<90} {:>12.3} s",
+        "interpret and write the canonical calls (as `vmc-twin interpret`, output discarded)",
+        interpret_and_write_s(cfg.repeats.min(5))?
+    )?;
     writeln!(
         out,
         "  {:<90} {:>12.3} s",

@@ -16,6 +16,8 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
+mod fixed;
+
 use vmc_gcode::interp::{
     self, CanonKind, CanonMove, InterpConfig, OrientDirection, PauseKind, Plane, SpindleDir,
 };
@@ -54,33 +56,90 @@ pub fn interpret(cfg: &InterpretConfig, out: &mut dyn Write) -> Result<()> {
     Ok(())
 }
 
+/// The numbered call lines, built in a buffer that goes to the writer in large pieces (a
+/// million lines of moves would otherwise be a million small writes).
+struct Calls<'w> {
+    out: &'w mut dyn Write,
+    buf: Vec<u8>,
+    n: u64,
+}
+
+impl Calls<'_> {
+    /// Bytes gathered before they are written.
+    const CHUNK: usize = 1 << 16;
+
+    /// Starts call line `n + 1`: the number (5 wide) and the `N.....` of `rs274`.
+    fn begin(&mut self) {
+        self.n += 1;
+        fixed::push_u64_padded(&mut self.buf, self.n, 5);
+        self.buf.extend_from_slice(b" N..... ");
+    }
+
+    /// Ends the line; writes the buffer once it is large.
+    fn end(&mut self) -> std::io::Result<()> {
+        self.buf.push(b'\n');
+        if self.buf.len() >= Self::CHUNK {
+            self.out.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    /// One call given as text.
+    fn text(&mut self, text: &str) -> std::io::Result<()> {
+        self.begin();
+        self.buf.extend_from_slice(text.as_bytes());
+        self.end()
+    }
+
+    /// `NAME(v, v, …)` with every value at 4 decimals.
+    fn numbers(&mut self, name: &str, values: &[f64]) -> std::io::Result<()> {
+        self.begin();
+        self.buf.extend_from_slice(name.as_bytes());
+        self.buf.push(b'(');
+        for (i, v) in values.iter().enumerate() {
+            if i > 0 {
+                self.buf.extend_from_slice(b", ");
+            }
+            fixed::push_fixed4(&mut self.buf, *v);
+        }
+        self.buf.push(b')');
+        self.end()
+    }
+
+    /// A move to `p` (mm) and `a` (deg): `NAME(x, y, z, a, b, c)`.
+    fn point(&mut self, name: &str, p: &[f64; 3], a: &[f64; 3]) -> std::io::Result<()> {
+        self.numbers(name, &[p[0], p[1], p[2], a[0], a[1], a[2]])
+    }
+
+    /// Writes what is left.
+    fn finish(self) -> std::io::Result<()> {
+        self.out.write_all(&self.buf)?;
+        self.out.flush()
+    }
+}
+
 /// Writes the canonical calls of `moves` (see the module documentation).
 ///
 /// # Errors
 /// A failed write.
 pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<()> {
-    let mut n = 0usize;
-    let mut call = |out: &mut dyn Write, text: String| {
-        n += 1;
-        writeln!(out, "{n:5} N..... {text}")
+    let mut calls = Calls {
+        out,
+        buf: Vec::with_capacity(Calls::CHUNK + 256),
+        n: 0,
     };
-    call(out, "USE_LENGTH_UNITS(CANON_UNITS_MM)".to_string())?;
+    let c = &mut calls;
+    c.text("USE_LENGTH_UNITS(CANON_UNITS_MM)")?;
     let (mut feed, mut plane, mut speed) = (None, Plane::Xy, None);
     let mut coolant = (false, false);
-    let point = |p: &[f64; 3], a: &[f64; 3]| {
-        format!(
-            "{:.4}, {:.4}, {:.4}, {:.4}, {:.4}, {:.4}",
-            p[0], p[1], p[2], a[0], a[1], a[2]
-        )
-    };
     for m in moves {
         match &m.kind {
             CanonKind::Traverse {
                 end_mm,
                 end_abc_deg,
             } => {
-                let p = point(end_mm, end_abc_deg);
-                call(out, format!("STRAIGHT_TRAVERSE({p})"))?;
+                c.point("STRAIGHT_TRAVERSE", end_mm, end_abc_deg)?;
             }
             CanonKind::Feed {
                 end_mm,
@@ -89,10 +148,9 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
             } => {
                 if feed != Some(*feed_mm_per_min) {
                     feed = Some(*feed_mm_per_min);
-                    call(out, format!("SET_FEED_RATE({feed_mm_per_min:.4})"))?;
+                    c.numbers("SET_FEED_RATE", &[*feed_mm_per_min])?;
                 }
-                let p = point(end_mm, end_abc_deg);
-                call(out, format!("STRAIGHT_FEED({p})"))?;
+                c.point("STRAIGHT_FEED", end_mm, end_abc_deg)?;
             }
             CanonKind::Probe {
                 end_mm,
@@ -102,11 +160,11 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
             } => {
                 if feed != Some(*feed_mm_per_min) {
                     feed = Some(*feed_mm_per_min);
-                    call(out, format!("SET_FEED_RATE({feed_mm_per_min:.4})"))?;
+                    c.numbers("SET_FEED_RATE", &[*feed_mm_per_min])?;
                 }
-                call(out, "TURN_PROBE_ON()".to_string())?;
-                call(out, interp::straight_probe_call(*end_mm, *end_abc_deg))?;
-                call(out, "TURN_PROBE_OFF()".to_string())?;
+                c.text("TURN_PROBE_ON()")?;
+                c.text(&interp::straight_probe_call(*end_mm, *end_abc_deg))?;
+                c.text("TURN_PROBE_OFF()")?;
             }
             CanonKind::Arc {
                 end_mm,
@@ -119,7 +177,7 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
             } => {
                 if feed != Some(*feed_mm_per_min) {
                     feed = Some(*feed_mm_per_min);
-                    call(out, format!("SET_FEED_RATE({feed_mm_per_min:.4})"))?;
+                    c.numbers("SET_FEED_RATE", &[*feed_mm_per_min])?;
                 }
                 if *p != plane {
                     plane = *p;
@@ -128,7 +186,7 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                         Plane::Zx => "XZ",
                         Plane::Yz => "YZ",
                     };
-                    call(out, format!("SELECT_PLANE(CANON_PLANE_{name})"))?;
+                    c.text(&format!("SELECT_PLANE(CANON_PLANE_{name})"))?;
                 }
                 let (a1, a2, ax) = match p {
                     Plane::Xy => (0, 1, 2),
@@ -137,55 +195,47 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                 };
                 let turns = 1 + i64::from(*extra_turns);
                 let rotation = if *clockwise { -turns } else { turns };
-                call(
-                    out,
-                    format!(
-                        "ARC_FEED({:.4}, {:.4}, {:.4}, {:.4}, {rotation}, {:.4}, {:.4}, {:.4}, {:.4})",
-                        end_mm[a1],
-                        end_mm[a2],
-                        center_mm[a1],
-                        center_mm[a2],
-                        end_mm[ax],
-                        end_abc_deg[0],
-                        end_abc_deg[1],
-                        end_abc_deg[2],
-                    ),
+                arc_call(
+                    c,
+                    [end_mm[a1], end_mm[a2], center_mm[a1], center_mm[a2]],
+                    rotation,
+                    [end_mm[ax], end_abc_deg[0], end_abc_deg[1], end_abc_deg[2]],
                 )?;
             }
-            CanonKind::Dwell { duration_s } => call(out, format!("DWELL({duration_s:.4})"))?,
+            CanonKind::Dwell { duration_s } => c.text(&format!("DWELL({duration_s:.4})"))?,
             CanonKind::Spindle { dir, rpm } => {
                 if speed != Some(*rpm) {
                     speed = Some(*rpm);
-                    call(out, format!("SET_SPINDLE_SPEED(0, {rpm:.4})"))?;
+                    c.text(&format!("SET_SPINDLE_SPEED(0, {rpm:.4})"))?;
                 }
                 let text = match dir {
                     SpindleDir::Cw => "START_SPINDLE_CLOCKWISE(0)",
                     SpindleDir::Ccw => "START_SPINDLE_COUNTERCLOCKWISE(0)",
                     SpindleDir::Off => "STOP_SPINDLE_TURNING(0)",
                 };
-                call(out, text.to_string())?;
+                c.text(text)?;
             }
-            CanonKind::ToolChange { tool } => call(out, format!("CHANGE_TOOL({tool})"))?,
+            CanonKind::ToolChange { tool } => c.text(&format!("CHANGE_TOOL({tool})"))?,
             CanonKind::Coolant { mist, flood } => {
                 if !*mist && !*flood {
-                    call(out, "MIST_OFF()".to_string())?;
-                    call(out, "FLOOD_OFF()".to_string())?;
+                    c.text("MIST_OFF()")?;
+                    c.text("FLOOD_OFF()")?;
                 } else if *mist && !coolant.0 {
-                    call(out, "MIST_ON()".to_string())?;
+                    c.text("MIST_ON()")?;
                 } else if *flood && !coolant.1 {
-                    call(out, "FLOOD_ON()".to_string())?;
+                    c.text("FLOOD_ON()")?;
                 }
                 coolant = (*mist, *flood);
             }
             CanonKind::Pause(kind) => {
                 if *kind == PauseKind::PalletShuttle {
-                    call(out, "PALLET_SHUTTLE()".to_string())?;
+                    c.text("PALLET_SHUTTLE()")?;
                 }
                 let text = match kind {
                     PauseKind::Optional => "OPTIONAL_PROGRAM_STOP()",
                     _ => "PROGRAM_STOP()",
                 };
-                call(out, text.to_string())?;
+                c.text(text)?;
             }
             CanonKind::SpindleOrient {
                 angle_deg,
@@ -197,9 +247,9 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                     OrientDirection::Clockwise => 1,
                     OrientDirection::CounterClockwise => 2,
                 };
-                call(out, format!("ORIENT_SPINDLE(0, {angle_deg:.4}, {p})"))?;
+                c.text(&format!("ORIENT_SPINDLE(0, {angle_deg:.4}, {p})"))?;
                 if let Some(q) = timeout_s {
-                    call(out, format!("SPINDLE.0.WAIT_ORIENT_COMPLETE({q:.4})"))?;
+                    c.text(&format!("SPINDLE.0.WAIT_ORIENT_COMPLETE({q:.4})"))?;
                 }
             }
             CanonKind::Io { m, p, e, l, q } => {
@@ -220,13 +270,38 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                     68 => format!("SET_AUX_OUTPUT_VALUE({}, {:.4})", n(e), n(q)),
                     _ => format!("M{m}(P {})", n(p)),
                 };
-                call(out, text)?;
+                c.text(&text)?;
             }
-            CanonKind::Message(text) => call(out, format!("MESSAGE(\"{text}\")"))?,
-            CanonKind::ProgramEnd => call(out, "PROGRAM_END()".to_string())?,
+            CanonKind::Message(text) => c.text(&format!("MESSAGE(\"{text}\")"))?,
+            CanonKind::ProgramEnd => c.text("PROGRAM_END()")?,
         }
     }
-    Ok(())
+    calls.finish()
+}
+
+/// `ARC_FEED(first end, second end, first centre, second centre, rotation, axis end, a, b, c)`.
+fn arc_call(
+    c: &mut Calls<'_>,
+    in_plane: [f64; 4],
+    rotation: i64,
+    rest: [f64; 4],
+) -> std::io::Result<()> {
+    c.begin();
+    c.buf.extend_from_slice(b"ARC_FEED(");
+    for v in in_plane {
+        fixed::push_fixed4(&mut c.buf, v);
+        c.buf.extend_from_slice(b", ");
+    }
+    if rotation < 0 {
+        c.buf.push(b'-');
+    }
+    fixed::push_u64(&mut c.buf, rotation.unsigned_abs());
+    for v in rest {
+        c.buf.extend_from_slice(b", ");
+        fixed::push_fixed4(&mut c.buf, v);
+    }
+    c.buf.push(b')');
+    c.end()
 }
 
 #[cfg(test)]

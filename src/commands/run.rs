@@ -139,18 +139,50 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     Ok(())
 }
 
-/// The warm-up plans and the program's plan, each starting where the previous one ends; the
-/// run's size checked.
-fn load_plans(cfg: &RunConfig) -> Result<(Vec<Plan>, Plan)> {
+/// A warm-up: its canonical moves, where it starts and how long it takes. Its timed plan is
+/// built piece by piece as it runs ([`program::ProgramMoves::pieces`]), so a week of duty
+/// never holds a week of plan.
+struct Warmup {
+    moves: program::ProgramMoves,
+    start_mm: [f64; 3],
+    duration_s: f64,
+}
+
+impl Warmup {
+    /// The warm-up's plans, piece by piece (each checked).
+    fn pieces<'a>(&'a self, cfg: &'a RunConfig) -> program::PlanPieces<'a> {
+        self.moves.pieces(
+            &cfg.machine,
+            self.start_mm,
+            &cfg.tools,
+            program::MOVES_PER_PIECE,
+        )
+    }
+}
+
+/// The warm-ups (every piece planned and checked once, then dropped) and the program's plan,
+/// each starting where the previous one ends; the run's size checked.
+fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan)> {
     let mut start = cfg.machine.axes.home_mm;
     let mut warmups = Vec::new();
     for w in &cfg.warmups {
-        let plan = program::load_plan_with_tools(w, &cfg.machine, start, &cfg.tools)?;
-        start = plan.end_mm();
-        warmups.push(plan);
+        let moves = program::ProgramMoves::load(w, &cfg.machine, start, &cfg.tools)?;
+        let mut warmup = Warmup {
+            moves,
+            start_mm: start,
+            duration_s: 0.0,
+        };
+        let mut duration_s = 0.0;
+        for piece in warmup.pieces(cfg) {
+            let piece = piece?;
+            duration_s += piece.duration_s();
+            start = piece.end_mm();
+        }
+        warmup.duration_s = duration_s;
+        warmups.push(warmup);
     }
     let plan = program::load_plan_with_tools(&cfg.program, &cfg.machine, start, &cfg.tools)?;
-    let total_s = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
+    let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + plan.duration_s();
     program::check_run_size(
         &cfg.program.display().to_string(),
         total_s,
@@ -183,7 +215,7 @@ fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunC
 /// Runs the warm-ups, then the program (measured), on a fresh twin; with a recording if asked.
 fn simulate(
     cfg: &RunConfig,
-    warmups: &[Plan],
+    warmups: &[Warmup],
     plan: &Plan,
     mut controller: Option<&mut RunController>,
 ) -> Result<(RunLog, Option<(record::Recorder, record::RrdFile)>)> {
@@ -200,7 +232,7 @@ fn simulate(
         // The run report splits each error into cold geometry and thermal part.
         .with_thermal_part(true);
     let warm_cfg = sim_cfg.sampling(SampleMode::Dwells);
-    let total_s: f64 = warmups.iter().map(|p| p.duration_s()).sum::<f64>() + plan.duration_s();
+    let total_s: f64 = warmups.iter().map(|p| p.duration_s).sum::<f64>() + plan.duration_s();
     let mut progress = Progress::new(total_s.ceil() as u64, "s");
     let mut recording = match &cfg.rrd {
         Some(rrd) => Some(open_recording(cfg, rrd, plan, controller.is_some())?),
@@ -216,15 +248,17 @@ fn simulate(
         obs.on_run_start(&RunStart {
             label: format!("warm-up {}", name.display()),
             time_s: twin.time_s(),
-            duration_s: p.duration_s(),
+            duration_s: p.duration_s,
             measured: false,
         });
-        // The controller follows the readings (and the commanded motion) through the warm-up,
-        // as on the machine: a model with history features needs the thermal past.
-        let ctrl = controller
-            .as_deref_mut()
-            .map(|c| c as &mut dyn sim::Controller);
-        sim::execute(&mut twin, p, &warm_cfg, ctrl, &mut obs)?;
+        for piece in p.pieces(cfg) {
+            // The controller follows the readings (and the commanded motion) through the
+            // warm-up, as on the machine: a model with history features needs the thermal past.
+            let ctrl = controller
+                .as_deref_mut()
+                .map(|c| c as &mut dyn sim::Controller);
+            sim::execute(&mut twin, &piece?, &warm_cfg, ctrl, &mut obs)?;
+        }
     }
     let mut log = RunLog::default();
     {

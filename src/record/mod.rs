@@ -48,6 +48,7 @@ pub mod layout;
 pub mod modal_fit;
 mod recorder;
 pub mod scene;
+mod series;
 
 use std::path::{Path, PathBuf};
 

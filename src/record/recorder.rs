@@ -6,21 +6,10 @@ use std::path::PathBuf;
 use rerun::RecordingStream;
 
 use super::scene::{mm_to_scene, screw_counts, temp_rgba, Body, Scene};
+use super::series::{BoundedPath, PointRow, Series};
 use super::{Diagonal, RecordError, RecordSettings, RrdFile, NODE_TEMP_RANGE_DEGC};
-use crate::report::norm;
 use vmc_machine::sensors::SensorReadings;
 use vmc_machine::sim::{EventLevel, Observer, PointRecord, RunStart, SimEvent};
-
-/// One measurement point as buffered for the error and sensor series.
-#[derive(Debug, Clone)]
-pub(super) struct PointRow {
-    time_s: f64,
-    sample: i64,
-    pub(super) diagonal_mm: Option<i64>,
-    before_um: [f64; 3],
-    after_um: Option<[f64; 3]>,
-    readings_degc: Vec<f64>,
-}
 
 /// Colours.
 const GREY: [u8; 4] = [235, 235, 235, 255];
@@ -40,26 +29,29 @@ pub struct Recorder {
     measured: bool,
     run_duration_s: f64,
     last_q_mm: [f64; 3],
-    pub(super) motion_t_s: Vec<f64>,
-    motion_q_mm: Vec<[f64; 3]>,
     last_history_motion_s: f64,
     last_history_sensor_s: f64,
     last_history_nodes_s: f64,
     sensor_names: Vec<String>,
-    sensor_t_s: Vec<f64>,
-    sensor_degc: Vec<Vec<f64>>,
-    pub(super) points: Vec<PointRow>,
+    /// Poses, readings and points, sent in chunks as the run goes.
+    pub(super) series: Series,
     next_sample: i64,
-    path_commanded: Vec<[f64; 3]>,
-    pub(super) path_before: Vec<[f64; 3]>,
-    pub(super) path_after: Vec<[f64; 3]>,
-    arrows_origin: Vec<[f64; 3]>,
-    pub(super) arrows_before: Vec<[f64; 3]>,
-    arrows_after: Vec<[f64; 3]>,
+    path_commanded: BoundedPath,
+    pub(super) path_before: BoundedPath,
+    pub(super) path_after: BoundedPath,
+    arrows_origin: BoundedPath,
+    pub(super) arrows_before: BoundedPath,
+    arrows_after: BoundedPath,
     last_path_log_s: f64,
     event_points: Vec<([f64; 3], String)>,
+    /// Rows logged one by one (node temperatures, events, paths) since the last flush.
+    logs_since_flush: usize,
     error: Option<RecordError>,
 }
+
+/// Rows logged one by one between two waits for the file: 1024 rows of node temperatures are a
+/// few hundred kB.
+const FLUSH_EVERY_LOGS: usize = 1024;
 
 impl Recorder {
     /// A recorder on `file`'s stream for machine `spec`. Logs the static scene at once.
@@ -88,24 +80,21 @@ impl Recorder {
             measured: true,
             run_duration_s: 0.0,
             last_q_mm: spec.axes.home_mm,
-            motion_t_s: Vec::new(),
-            motion_q_mm: Vec::new(),
             last_history_motion_s: f64::NEG_INFINITY,
             last_history_sensor_s: f64::NEG_INFINITY,
             last_history_nodes_s: f64::NEG_INFINITY,
             sensor_names: spec.sensors.iter().map(|s| s.name.clone()).collect(),
-            sensor_t_s: Vec::new(),
-            sensor_degc: Vec::new(),
-            points: Vec::new(),
+            series: Series::default(),
             next_sample: 0,
-            path_commanded: Vec::new(),
-            path_before: Vec::new(),
-            path_after: Vec::new(),
-            arrows_origin: Vec::new(),
-            arrows_before: Vec::new(),
-            arrows_after: Vec::new(),
+            path_commanded: BoundedPath::new(settings.max_path_vertices),
+            path_before: BoundedPath::new(settings.max_path_vertices),
+            path_after: BoundedPath::new(settings.max_path_vertices),
+            arrows_origin: BoundedPath::new(settings.max_path_vertices),
+            arrows_before: BoundedPath::new(settings.max_path_vertices),
+            arrows_after: BoundedPath::new(settings.max_path_vertices),
             last_path_log_s: f64::NEG_INFINITY,
             event_points: Vec::new(),
+            logs_since_flush: 0,
             error: None,
         };
         r.log_static_scene()?;
@@ -284,14 +273,14 @@ impl Recorder {
         self.rec
             .log(
                 "paths/commanded",
-                &strip(&self.path_commanded, GREY, "commanded".into()),
+                &strip(self.path_commanded.as_slice(), GREY, "commanded".into()),
             )
             .map_err(e)?;
         self.rec
             .log(
                 "paths/actual_uncompensated",
                 &strip(
-                    &self.path_before,
+                    self.path_before.as_slice(),
                     RED,
                     format!("actual, uncompensated (errors ×{k:.0})"),
                 ),
@@ -302,7 +291,7 @@ impl Recorder {
                 .log(
                     "paths/actual_compensated",
                     &strip(
-                        &self.path_after,
+                        self.path_after.as_slice(),
                         GREEN,
                         format!("actual, compensated (errors ×{k:.0})"),
                     ),
@@ -310,8 +299,12 @@ impl Recorder {
                 .map_err(e)?;
         }
         if !self.arrows_origin.is_empty() {
-            let origins: Vec<[f32; 3]> =
-                self.arrows_origin.iter().map(|p| mm_to_scene(*p)).collect();
+            let origins: Vec<[f32; 3]> = self
+                .arrows_origin
+                .as_slice()
+                .iter()
+                .map(|p| mm_to_scene(*p))
+                .collect();
             self.rec
                 .log(
                     "paths/measured",
@@ -324,7 +317,10 @@ impl Recorder {
                 .log(
                     "errors/vectors/before",
                     &rerun::Arrows3D::from_vectors(
-                        self.arrows_before.iter().map(|v| mm_to_scene(*v)),
+                        self.arrows_before
+                            .as_slice()
+                            .iter()
+                            .map(|v| mm_to_scene(*v)),
                     )
                     .with_origins(origins.clone())
                     .with_colors([rerun::Color::from_rgb(RED[0], RED[1], RED[2])]),
@@ -335,7 +331,7 @@ impl Recorder {
                     .log(
                         "errors/vectors/after",
                         &rerun::Arrows3D::from_vectors(
-                            self.arrows_after.iter().map(|v| mm_to_scene(*v)),
+                            self.arrows_after.as_slice().iter().map(|v| mm_to_scene(*v)),
                         )
                         .with_origins(origins)
                         .with_colors([rerun::Color::from_rgb(GREEN[0], GREEN[1], GREEN[2])]),
@@ -386,9 +382,10 @@ impl Recorder {
             self.log_paths()?;
             // The pose at the point, on all three timelines.
             self.log_pose(p)?;
+            self.count_log()?;
         }
-        self.points.push(row);
-        Ok(())
+        self.series.points.push(row);
+        self.send_if_full()
     }
 
     fn record_nodes(&mut self, time_s: f64, temps: &[f64]) -> Result<(), RecordError> {
@@ -452,116 +449,44 @@ impl Recorder {
         Ok(())
     }
 
+    /// Sends the buffered series once one of its buffers is full.
+    fn send_if_full(&mut self) -> Result<(), RecordError> {
+        if !self.series.full() {
+            return Ok(());
+        }
+        self.series
+            .send(&self.rec, &self.scene, &self.sensor_names)
+            .map_err(|x| self.err(x))?;
+        self.flush()
+    }
+
+    /// Waits until everything logged so far is in the file, so that what the stream holds in
+    /// flight stays bounded however fast the simulation produces it.
+    fn flush(&mut self) -> Result<(), RecordError> {
+        self.logs_since_flush = 0;
+        self.rec.flush_blocking().map_err(|x| self.err(x))
+    }
+
+    /// Counts one logged row; flushes every [`FLUSH_EVERY_LOGS`].
+    fn count_log(&mut self) -> Result<(), RecordError> {
+        self.logs_since_flush += 1;
+        if self.logs_since_flush >= FLUSH_EVERY_LOGS {
+            return self.flush();
+        }
+        Ok(())
+    }
+
     /// Sends the buffered series (machine motion, errors, sensors), the report (markdown) and
     /// returns the first error met while logging, if any. Call before [`RrdFile::finish`].
     pub fn finish(mut self, report_markdown: Option<&str>) -> Result<(), RecordError> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
+        self.series
+            .send(&self.rec, &self.scene, &self.sensor_names)
+            .map_err(|x| self.err(x))?;
         let rec = &self.rec;
         let e = |e: &dyn std::fmt::Display| self.err(e);
-        rec.reset_time();
-        // Machine motion (sim_time only).
-        if !self.motion_t_s.is_empty() {
-            let times =
-                rerun::TimeColumn::new_duration_secs("sim_time", self.motion_t_s.iter().copied());
-            for (entity, body) in Body::MOVING
-                .iter()
-                .map(|b| (b.entity(), *b))
-                .chain([("paths", Body::Table), ("errors/vectors", Body::Table)])
-            {
-                let tr: Vec<[f32; 3]> = self
-                    .motion_q_mm
-                    .iter()
-                    .map(|q| mm_to_scene(self.scene.body_translation_mm(body, *q)))
-                    .collect();
-                let cols = rerun::Transform3D::update_fields()
-                    .with_many_translation(tr)
-                    .columns_of_unit_batches()
-                    .map_err(|x| e(&x))?;
-                rec.send_columns(entity, [times.clone()], cols)
-                    .map_err(|x| e(&x))?;
-            }
-        }
-        // Sensor readings every thermal step (sim_time only) …
-        if !self.sensor_t_s.is_empty() {
-            let times =
-                rerun::TimeColumn::new_duration_secs("sim_time", self.sensor_t_s.iter().copied());
-            for (i, name) in self.sensor_names.iter().enumerate() {
-                let vals: Vec<f64> = self
-                    .sensor_degc
-                    .iter()
-                    .map(|v| v.get(i).copied().unwrap_or(f64::NAN))
-                    .collect();
-                rec.send_columns(
-                    format!("thermal/sensors/{name}"),
-                    [times.clone()],
-                    rerun::Scalars::new(vals)
-                        .columns_of_unit_batches()
-                        .map_err(|x| e(&x))?,
-                )
-                .map_err(|x| e(&x))?;
-            }
-        }
-        // … and errors and sensors at the measurement points, on every timeline.
-        if !self.points.is_empty() {
-            let mut index = vec![
-                rerun::TimeColumn::new_duration_secs(
-                    "sim_time",
-                    self.points.iter().map(|r| r.time_s),
-                ),
-                rerun::TimeColumn::new_sequence("sample", self.points.iter().map(|r| r.sample)),
-            ];
-            if self.points.iter().all(|r| r.diagonal_mm.is_some()) {
-                index.push(rerun::TimeColumn::new_sequence(
-                    "diagonal_mm",
-                    self.points.iter().map(|r| r.diagonal_mm.unwrap_or(0)),
-                ));
-            }
-            let comps = ["ex", "ey", "ez", "norm"];
-            let value = |e: [f64; 3], c: usize| if c < 3 { e[c] } else { norm(e) };
-            for (c, comp) in comps.iter().enumerate() {
-                let before: Vec<f64> = self.points.iter().map(|r| value(r.before_um, c)).collect();
-                rec.send_columns(
-                    format!("errors/before/{comp}"),
-                    index.clone(),
-                    rerun::Scalars::new(before)
-                        .columns_of_unit_batches()
-                        .map_err(|x| e(&x))?,
-                )
-                .map_err(|x| e(&x))?;
-                if self.points.iter().all(|r| r.after_um.is_some()) {
-                    let after: Vec<f64> = self
-                        .points
-                        .iter()
-                        .map(|r| value(r.after_um.unwrap_or([f64::NAN; 3]), c))
-                        .collect();
-                    rec.send_columns(
-                        format!("errors/after/{comp}"),
-                        index.clone(),
-                        rerun::Scalars::new(after)
-                            .columns_of_unit_batches()
-                            .map_err(|x| e(&x))?,
-                    )
-                    .map_err(|x| e(&x))?;
-                }
-            }
-            for (i, name) in self.sensor_names.iter().enumerate() {
-                let vals: Vec<f64> = self
-                    .points
-                    .iter()
-                    .map(|r| r.readings_degc.get(i).copied().unwrap_or(f64::NAN))
-                    .collect();
-                rec.send_columns(
-                    format!("thermal/sensors/{name}"),
-                    index.clone(),
-                    rerun::Scalars::new(vals)
-                        .columns_of_unit_batches()
-                        .map_err(|x| e(&x))?,
-                )
-                .map_err(|x| e(&x))?;
-            }
-        }
         if let Some(md) = report_markdown {
             rec.log_static("report", &rerun::TextDocument::from_markdown(md))
                 .map_err(|x| e(&x))?;
@@ -598,8 +523,10 @@ impl Observer for Recorder {
             }
             self.last_history_sensor_s = time_s;
         }
-        self.sensor_t_s.push(time_s);
-        self.sensor_degc.push(readings.values_degc.clone());
+        self.series
+            .push_readings(time_s, &readings.values_degc, self.sensor_names.len());
+        let r = self.send_if_full();
+        self.keep(r);
     }
 
     fn on_node_temps(&mut self, time_s: f64, node_temps_degc: &[f64]) {
@@ -613,7 +540,9 @@ impl Observer for Recorder {
             return;
         }
         self.last_history_nodes_s = time_s;
-        let r = self.record_nodes(time_s, node_temps_degc);
+        let r = self
+            .record_nodes(time_s, node_temps_degc)
+            .and_then(|()| self.count_log());
         self.keep(r);
     }
 
@@ -633,16 +562,15 @@ impl Observer for Recorder {
             }
             self.last_history_motion_s = time_s;
         }
-        // Skip unchanged poses (dwells): the viewer holds the latest pose.
-        if self.motion_q_mm.last() == Some(&axis_mm) {
-            return;
+        // Unchanged poses (dwells) are skipped: the viewer holds the latest pose.
+        if self.series.push_pose(time_s, axis_mm) {
+            let r = self.send_if_full();
+            self.keep(r);
         }
-        self.motion_t_s.push(time_s);
-        self.motion_q_mm.push(axis_mm);
     }
 
     fn on_event(&mut self, event: &SimEvent) {
-        let r = self.record_event(event);
+        let r = self.record_event(event).and_then(|()| self.count_log());
         self.keep(r);
     }
 }

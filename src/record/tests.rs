@@ -117,11 +117,15 @@ fn a_recording_is_written_atomically_and_an_unfinished_one_leaves_nothing() {
         measured: true,
     });
     sim::execute(&mut twin, &plan, &SimConfig::default(), None, &mut rec).unwrap();
-    assert_eq!(rec.points.len(), 10);
+    assert_eq!(rec.series.points.len(), 10);
     // Poses: one per 50 ms of motion, unchanged poses (dwells) skipped.
-    assert!(rec.motion_t_s.len() > 100, "{}", rec.motion_t_s.len());
-    assert!(rec.motion_t_s.windows(2).all(|w| w[1] > w[0]));
-    assert_eq!(rec.path_before.len(), 10);
+    assert!(
+        rec.series.motion_t_s.len() > 100,
+        "{}",
+        rec.series.motion_t_s.len()
+    );
+    assert!(rec.series.motion_t_s.windows(2).all(|w| w[1] > w[0]));
+    assert_eq!(rec.path_before.as_slice().len(), 10);
     assert!(rec.path_after.is_empty());
     rec.finish(Some("# report")).unwrap();
     let size = file.finish().unwrap();
@@ -167,10 +171,10 @@ fn magnified_paths_put_the_error_times_k_on_the_commanded_point() {
     };
     let readings = Twin::new(&spec, 1).unwrap().sensor_readings();
     rec.on_point(&p, &readings);
-    assert_eq!(rec.path_before[0], [105.0, 190.0, -298.0]);
-    assert_eq!(rec.path_after[0], [100.5, 200.0, -301.0]);
-    assert_eq!(rec.arrows_before[0], [5.0, -10.0, 2.0]);
-    assert!(rec.points[0].diagonal_mm.is_none());
+    assert_eq!(rec.path_before.as_slice()[0], [105.0, 190.0, -298.0]);
+    assert_eq!(rec.path_after.as_slice()[0], [100.5, 200.0, -301.0]);
+    assert_eq!(rec.arrows_before.as_slice()[0], [5.0, -10.0, 2.0]);
+    assert!(rec.series.points[0].diagonal_mm.is_none());
     rec.finish(None).unwrap();
     file.finish().unwrap();
     std::fs::remove_dir_all(&d).unwrap();

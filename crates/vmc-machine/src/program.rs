@@ -11,6 +11,9 @@ use crate::motion::{self, Plan};
 use crate::tools::ToolTable;
 use vmc_gcode::interp::{self, InterpConfig};
 
+mod pieces;
+pub use pieces::{PlanPieces, ProgramMoves, MOVES_PER_PIECE};
+
 /// A program that cannot be run.
 #[derive(Debug, Error)]
 pub enum ProgramError {
@@ -253,6 +256,17 @@ pub fn plan_source_unchecked_with_tools(
             file: file.to_string(),
             err,
         })?;
+    check_tools(&plan, file, machine, tools)?;
+    Ok(plan)
+}
+
+/// Refuses a plan whose `M6` loads a tool the table does not have.
+fn check_tools(
+    plan: &Plan,
+    file: &str,
+    machine: &MachineSpec,
+    tools: &ToolTable,
+) -> Result<(), ProgramError> {
     for seg in plan.segments() {
         if let motion::SegmentKind::ToolChange { tool } = seg.kind {
             if tools.loaded(tool, machine).is_none() {
@@ -264,7 +278,7 @@ pub fn plan_source_unchecked_with_tools(
             }
         }
     }
-    Ok(plan)
+    Ok(())
 }
 
 /// Interprets, plans and travel-checks program text; `file` names it in errors.

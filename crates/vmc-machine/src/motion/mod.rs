@@ -298,6 +298,34 @@ pub struct Plan {
     segments: Vec<Segment>,
     start_mm: [f64; 3],
     program_end_line: Option<usize>,
+    end: PlanStart,
+}
+
+/// Where a plan starts: the machine at rest at a position, with the spindle running as the
+/// previous plan left it (a program planned in pieces continues from each piece's
+/// [`Plan::end_state`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanStart {
+    /// Position, machine coordinates (mm).
+    pub pos_mm: [f64; 3],
+    /// Rotary axes A, B, C (degrees).
+    pub abc_deg: [f64; 3],
+    /// Spindle direction.
+    pub spindle_dir: SpindleDir,
+    /// Spindle speed (rpm); 0 when off.
+    pub spindle_rpm: f64,
+}
+
+impl PlanStart {
+    /// At rest at `pos_mm`, rotary axes at 0, spindle off.
+    pub fn at_rest(pos_mm: [f64; 3]) -> Self {
+        PlanStart {
+            pos_mm,
+            abc_deg: [0.0; 3],
+            spindle_dir: SpindleDir::Off,
+            spindle_rpm: 0.0,
+        }
+    }
 }
 
 /// Builds the timed plan of `moves`, starting at rest at `start_mm` (machine coordinates, mm),
@@ -319,18 +347,34 @@ pub fn plan_with_rotary(
     limits: &MotionLimits,
     rotary: &RotaryLimits,
 ) -> Result<Plan, MotionError> {
+    let start = PlanStart {
+        abc_deg: start_abc_deg,
+        ..PlanStart::at_rest(start_mm)
+    };
+    plan_from(moves, start, limits, rotary)
+}
+
+/// Builds the timed plan of `moves` from `start` (a position at rest and the spindle's state),
+/// on a machine with the rotary axes of `rotary`.
+pub fn plan_from(
+    moves: &[CanonMove],
+    start: PlanStart,
+    limits: &MotionLimits,
+    rotary: &RotaryLimits,
+) -> Result<Plan, MotionError> {
     limits.validate()?;
     rotary.validate()?;
+    let start_mm = start.pos_mm;
     check_finite(0, "start position", start_mm)?;
-    check_finite(0, "start rotary angles", start_abc_deg)?;
+    check_finite(0, "start rotary angles", start.abc_deg)?;
     let mut builder = PlanBuilder {
         limits,
         rotary,
-        abc_deg: start_abc_deg,
+        abc_deg: start.abc_deg,
         pos_mm: start_mm,
         t_s: 0.0,
-        spindle_dir: SpindleDir::Off,
-        spindle_rpm: 0.0,
+        spindle_dir: start.spindle_dir,
+        spindle_rpm: start.spindle_rpm,
         segments: Vec::with_capacity(moves.len()),
     };
     let mut program_end_line = None;
@@ -348,10 +392,17 @@ pub fn plan_with_rotary(
             break;
         }
     }
+    let end = PlanStart {
+        pos_mm: builder.pos_mm,
+        abc_deg: builder.abc_deg,
+        spindle_dir: builder.spindle_dir,
+        spindle_rpm: builder.spindle_rpm,
+    };
     Ok(Plan {
         segments: builder.segments,
         start_mm,
         program_end_line,
+        end,
     })
 }
 
@@ -676,6 +727,12 @@ impl Plan {
     /// Position at the end of the plan (mm).
     pub fn end_mm(&self) -> [f64; 3] {
         self.segments.last().map_or(self.start_mm, |s| s.end_mm)
+    }
+
+    /// The state the plan leaves the machine in: at rest at its end, the spindle as the last
+    /// move set it (where the next piece of a program planned in pieces starts).
+    pub fn end_state(&self) -> PlanStart {
+        self.end
     }
 
     /// Line of the M2/M30 that ended the plan, if the program had one.
