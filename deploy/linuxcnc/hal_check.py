@@ -11,7 +11,8 @@ STEPS_CSV, one step a line (no header):
     position,X,Y,Z        new commanded position; waits two periods, then reads the outputs
 
 OUT_CSV (header line): kind,clock_s,sample_clock_s,samples,state,iters,corr_x,corr_y,corr_z,
-counts_x,counts_y,counts_z — one line per step, floats as Python's repr (every bit), then a
+counts_x,counts_y,counts_z,thread_time (the servo thread's time of its latest period, CPU
+clocks) — one line per step, floats as Python's repr (every bit), then a
 line `tmax,F,T` with the function's and the thread's tmax (HAL's units: CPU clocks).
 Exit status 0, 1 when a wait times out, 2 bad input.
 """
@@ -103,10 +104,11 @@ def main(argv):
                                   else str(int(get(p))) for p in
                                   ("clock-s", "sample-clock-s", "samples", "state",
                                    "solve-iters", "corr-x", "corr-y", "corr-z",
-                                   "counts-x", "counts-y", "counts-z")])
+                                   "counts-x", "counts-y", "counts-z")]
+                        + [str(int(hal.get_value("servo.time")))])
     with open(out_path, "w", encoding="utf-8") as f:
         f.write("kind,clock_s,sample_clock_s,samples,state,iters,corr_x,corr_y,corr_z,"
-                "counts_x,counts_y,counts_z\n")
+                "counts_x,counts_y,counts_z,thread_time\n")
         for r in rows:
             f.write(",".join(r) + "\n")
         f.write("tmax,%d,%d\n" % (get("tmax"), hal.get_value("servo.tmax")))
