@@ -10,10 +10,14 @@
 # skip into a failure). Any other failure of apt-get exits non-zero.
 set -euo pipefail
 
-packages=(linuxcnc-uspace)
+# The development files (halcompile, hal.h) build the HAL component vmc_comp (build-comp.sh).
+packages=(linuxcnc-uspace linuxcnc-uspace-dev python3-yapps)
 
-if dpkg-query -W -f='${Status}' linuxcnc-uspace 2>/dev/null | grep -q 'install ok installed' \
-  && command -v linuxcnc >/dev/null; then
+installed=yes
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || installed=no
+done
+if [ "$installed" = yes ] && command -v linuxcnc >/dev/null; then
   echo "install: LinuxCNC $(dpkg-query -W -f='${Version}' linuxcnc-uspace) is already installed"
   exit 0
 fi
@@ -29,7 +33,7 @@ fi
 export DEBIAN_FRONTEND=noninteractive
 apt-get update -qq
 if ! apt-cache show "${packages[@]}" >/dev/null 2>&1; then
-  echo "install: the package linuxcnc-uspace is not in this system's package sources" \
+  echo "install: the packages ${packages[*]} are not in this system's package sources" \
     "(Debian 12 has it in main); LinuxCNC checks will skip"
   exit 0
 fi
