@@ -168,6 +168,16 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
     }
     let p = &cfg.plant;
     let bp = p.blade.plant()?;
+    // A chatter controller acts on the first mode at least: a sampling that cannot see it is
+    // refused before any design (whose model of the sampling lag would be meaningless).
+    let first = [(bp.frequencies_hz()[0], 0.0)];
+    check_sampling(
+        &first,
+        p.sample_rate_hz,
+        ACTING_DB,
+        SAMPLES_PER_ACTED_PERIOD / 2.0,
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", cfg.plant_source))?;
     let (k, gamma) =
         design_controller(cfg, &bp).with_context(|| format!("{}", cfg.plant_source))?;
     let (fig, closed) = figures(p, &bp, &k)?;

@@ -538,6 +538,81 @@ mod tests {
         }
     }
 
+    fn reference_cases() -> Vec<Perturbation> {
+        let mut cases = vec![Perturbation::NOMINAL];
+        cases.extend(required_cases());
+        cases.push(Perturbation::frequency(0.99));
+        cases
+    }
+
+    /// Writes the loops of [`reference_cases`] for tests/data/robust_reference.py (run with
+    /// `VMC_ROBUST_DUMP=FILE cargo test -p vmc-dynamics --release -- --ignored dump`).
+    #[test]
+    #[ignore]
+    fn dump_the_perturbed_loops_for_the_reference_script() {
+        let Ok(path) = std::env::var("VMC_ROBUST_DUMP") else {
+            return;
+        };
+        let m = |x: &nalgebra::DMatrix<f64>| {
+            let rows: Vec<String> = (0..x.nrows())
+                .map(|i| {
+                    let r: Vec<String> =
+                        (0..x.ncols()).map(|j| format!("{:e}", x[(i, j)])).collect();
+                    format!("[{}]", r.join(","))
+                })
+                .collect();
+            format!("[{}]", rows.join(","))
+        };
+        let mut items = Vec::new();
+        for (name, k) in designs() {
+            for p in reference_cases() {
+                let bp = p.apply(&study_blade(4)).unwrap().plant().unwrap();
+                items.push(format!(
+                    "{{\"controller\":\"{name}\",\"case\":\"{}\",\"rate_hz\":{RATE_HZ},\"a\":{},\"b\":{},\"c\":{},\"ka\":{},\"kb\":{},\"kc\":{},\"kd\":{}}}",
+                    p.label(), m(&bp.a), m(&bp.b_u), m(&bp.c_y), m(&k.a), m(&k.b), m(&k.c), m(&k.d)
+                ));
+            }
+        }
+        std::fs::write(path, format!("[{}]", items.join(",\n"))).unwrap();
+    }
+
+    /// Differential check against python-control (tests/data/robust_reference.py, values in
+    /// tests/data/robust_reference.csv): the spectral radius of the exact sampled loop (plant
+    /// and controller discretised with a zero-order hold by python-control, one sample of
+    /// delay) and the stability of the continuous loop with a Padé model of the 2-sample lag,
+    /// for each design on each perturbed blade.
+    #[test]
+    fn the_perturbed_loops_stability_agrees_with_python_control() {
+        let reference = include_str!("../../tests/data/robust_reference.csv");
+        let designs = designs();
+        let mut checked = 0;
+        for line in reference.lines().filter(|l| !l.starts_with('#')).skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            let (name, case, rho, continuous_stable) =
+                (f[0], f[1], f[2].parse::<f64>().unwrap(), f[3] == "true");
+            let k = &designs.iter().find(|(n, _)| *n == name).unwrap().1;
+            let p = reference_cases()
+                .into_iter()
+                .find(|p| p.label() == case)
+                .unwrap();
+            let c = SampledController {
+                k,
+                sample_rate_hz: RATE_HZ,
+                max_voltage_v: 150.0,
+            };
+            let r = LoopCheck::new(&p.apply(&study_blade(4)).unwrap(), &c).unwrap();
+            assert!(
+                (r.sampled_spectral_radius - rho).abs() < 1e-6,
+                "{name} {case}: {} vs {rho}",
+                r.sampled_spectral_radius
+            );
+            assert_eq!(r.closed.is_stable(), continuous_stable, "{name} {case}");
+            assert_eq!(r.is_stable(), rho < 1.0, "{name} {case}");
+            checked += 1;
+        }
+        assert_eq!(checked, 21);
+    }
+
     #[test]
     fn a_mode_above_the_nyquist_frequency_with_margin_is_refused() {
         let modes = [(233.0, 27.0), (1464.0, 0.1)];
