@@ -7,7 +7,7 @@ use anyhow::{bail, Result};
 
 use super::ForceArg;
 use crate::commands;
-use crate::commands::control::Kind;
+use crate::commands::control::{JudgedOn, Kind};
 use crate::dynamics::Resolution;
 use vmc_machine::blade::{ControllerFile, Plant};
 
@@ -34,6 +34,9 @@ pub enum KindArg {
     Lqg,
     /// Glover–Doyle H∞ (γ by bisection).
     Hinf,
+    /// Robust H∞: the H∞ weights with a weighted input-multiplicative uncertainty and a
+    /// second-order roll-off (the plant file's [robust_hinf] table).
+    RobustHinf,
 }
 
 /// Arguments of `control design`.
@@ -58,6 +61,19 @@ pub struct DesignArgs {
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub force: ForceArg,
+    /// Judge the design on perturbed blades: frequencies ×0.90–1.10, mass ×0.80–1.20, damping
+    /// ×0.5 and ×2; per case the loop's stability without cutting, the attenuation and the
+    /// open- and closed-loop minimum critical depths.
+    #[arg(long)]
+    pub robustness: bool,
+    /// Speeds of the robustness sweep's lobes, rpm (first:last:count or a list); default: 200
+    /// over the plant's speed band; `none`: stability and attenuation only.
+    #[arg(long, requires = "robustness")]
+    pub rpm: Option<String>,
+    /// Steps per tooth period of the robustness sweep's lobes (fixed, not checked); default:
+    /// converged as `lobes --controller`.
+    #[arg(long, value_name = "M", requires = "robustness")]
+    pub steps: Option<usize>,
 }
 
 impl DesignArgs {
@@ -76,48 +92,83 @@ impl DesignArgs {
             Some(v) if v > 0.0 && v.is_finite() => Some(Some(v)),
             Some(v) => bail!("--lowpass-hz must be >= 0 Hz, got {v}"),
         };
+        let robustness = if self.robustness {
+            let speeds_rpm = match self.rpm.as_deref() {
+                Some("none") => Vec::new(),
+                r => speeds(r, plant.speed_band_rpm)?,
+            };
+            Some(commands::control_robust::SweepConfig {
+                cases: crate::dynamics::control::robust::sweep_cases(),
+                speeds_rpm,
+                resolution: steps_resolution(self.steps)?
+                    .unwrap_or_else(commands::control::blade_resolution),
+            })
+        } else {
+            None
+        };
         Ok(commands::control::DesignConfig {
             plant,
             plant_source: self.plant.display().to_string(),
             kind: match self.controller {
                 KindArg::Lqg => Kind::Lqg,
                 KindArg::Hinf => Kind::Hinf,
+                KindArg::RobustHinf => Kind::RobustHinf,
             },
             strategy: self.strategy,
             lowpass_hz,
             out: self.out,
             force: self.force.force,
+            robustness,
         })
     }
 }
 
-/// The config of `lobes --controller FILE`.
+/// The speeds of `--rpm`, or 200 over the band.
+fn speeds(rpm: Option<&str>, [lo, hi]: [f64; 2]) -> Result<Vec<f64>> {
+    Ok(match rpm {
+        Some(r) => {
+            vmc_machine::milling::parse_speeds(r).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?
+        }
+        None => (0..200)
+            .map(|i| lo + (hi - lo) * i as f64 / 199.0)
+            .collect(),
+    })
+}
+
+/// The structure a controller is judged on: `--plant FILE` or the controller file's own.
 ///
 /// # Errors
-/// An unreadable or invalid controller file, malformed speeds, too few steps.
+/// An unreadable or invalid plant file.
+pub fn judged_on(file: &ControllerFile, plant: Option<&Path>) -> Result<JudgedOn> {
+    Ok(match plant {
+        None => JudgedOn::own(file),
+        Some(path) => JudgedOn {
+            plant: Plant::load(path)?,
+            source: Some(path.display().to_string()),
+        },
+    })
+}
+
+/// The config of `lobes --controller FILE [--plant FILE]`.
+///
+/// # Errors
+/// An unreadable or invalid controller or plant file, malformed speeds, too few steps.
 pub fn lobes_config(
     path: &Path,
+    plant: Option<&Path>,
     rpm: Option<&str>,
     steps: Option<usize>,
     (out, rrd): (Option<PathBuf>, Option<PathBuf>),
     force: bool,
 ) -> Result<commands::control::ControlLobesConfig> {
     let file = ControllerFile::load(path)?;
-    let speeds_rpm = match rpm {
-        Some(r) => {
-            vmc_machine::milling::parse_speeds(r).map_err(|e| anyhow::anyhow!("--rpm: {e}"))?
-        }
-        None => {
-            let [lo, hi] = file.plant.speed_band_rpm;
-            (0..200)
-                .map(|i| lo + (hi - lo) * i as f64 / 199.0)
-                .collect()
-        }
-    };
+    let judged = judged_on(&file, plant)?;
+    let speeds_rpm = speeds(rpm, judged.plant.speed_band_rpm)?;
     let resolution = steps_resolution(steps)?.unwrap_or_else(commands::control::blade_resolution);
     Ok(commands::control::ControlLobesConfig {
         file,
         source: path.display().to_string(),
+        judged,
         speeds_rpm,
         resolution,
         out,

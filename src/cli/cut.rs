@@ -54,6 +54,11 @@ pub struct CutArgs {
     /// from the file, --tool/--immersion/--milling do not apply.
     #[arg(long, conflicts_with_all = ["tool", "rrd"])]
     pub controller: Option<PathBuf>,
+    /// With --controller: cut this plant file's blade with its cutter and cut (TOML, as for
+    /// `control design`) instead of the plant the controller was designed on; the sampling
+    /// stays the controller's.
+    #[arg(long, requires = "controller")]
+    pub plant: Option<PathBuf>,
     #[command(flatten)]
     pub force: ForceArg,
 }
@@ -69,11 +74,12 @@ impl CutArgs {
             return Ok(None);
         };
         let file = vmc_machine::blade::ControllerFile::load(path)?;
+        let judged = super::control::judged_on(&file, self.plant.as_deref())?;
         validate_speed(self.rpm).map_err(|e| anyhow!("--rpm: {e}"))?;
         positive("--depth-mm", self.depth_mm, "mm")?;
         positive("--feed-per-tooth-mm", self.feed_per_tooth_mm, "mm")?;
-        let teeth = f64::from(file.plant.tool.teeth);
-        let period_s = file.plant.tool.tooth_period_s(self.rpm);
+        let teeth = f64::from(judged.plant.tool.teeth);
+        let period_s = judged.plant.tool.tooth_period_s(self.rpm);
         let periods = match (self.revolutions, self.duration_s) {
             (Some(r), _) => r * teeth,
             (None, Some(d)) => d / period_s,
@@ -86,6 +92,7 @@ impl CutArgs {
         Ok(Some(commands::control::ControlCutConfig {
             file,
             source: path.display().to_string(),
+            judged,
             spindle_rpm: self.rpm,
             depth_mm: self.depth_mm,
             feed_per_tooth_mm: self.feed_per_tooth_mm,

@@ -50,6 +50,11 @@ pub struct LobesArgs {
     /// and --milling do not apply: the blade's cut is in the file).
     #[arg(long, conflicts_with = "tool")]
     pub controller: Option<PathBuf>,
+    /// With --controller: judge the controller on this plant file's blade, cutter and cut
+    /// (TOML, as for `control design`) instead of the plant it was designed on; the sampling
+    /// stays the controller's.
+    #[arg(long, requires = "controller", conflicts_with = "shard")]
+    pub plant: Option<PathBuf>,
     /// Semi-discretisation steps per tooth period, the same at every speed and not checked
     /// (--method sdm or --controller). Default: chosen per speed and checked (converged; with
     /// --controller at most 640).
@@ -82,6 +87,7 @@ impl LobesArgs {
         };
         let mut cfg = control::lobes_config(
             path,
+            self.plant.as_deref(),
             self.rpm.as_deref(),
             self.steps,
             (self.out.clone(), self.rrd.clone()),

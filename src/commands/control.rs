@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 
 use super::lobes::{LobesOutputs, ShardOutput};
@@ -16,6 +16,7 @@ use crate::dynamics::control::closed_loop::{
     attenuation, close, lobes_block as closed_lobes_block, open, sampled_model, ClosedLoop, LobeCut,
 };
 use crate::dynamics::control::design::{to_metres, CuttingCoupling, DesignPlant};
+use crate::dynamics::control::robust::{check_sampling, SampledController};
 use crate::dynamics::control::simulate::{
     simulate, ControlledCut, ControlledCutOptions, LoopElement,
 };
@@ -23,7 +24,10 @@ use crate::dynamics::control::StateSpace;
 use crate::dynamics::cut::Verdict;
 use crate::dynamics::{LobePoint, Resolution, StepRule};
 use crate::files;
-use vmc_machine::blade::{ControllerFile, Figures, ModeFigure, Plant, CONTROLLER_FORMAT};
+use vmc_machine::blade::{
+    ControllerFile, Figures, ModeFigure, Plant, ACTING_DB, CONTROLLER_FORMAT,
+    SAMPLES_PER_ACTED_PERIOD,
+};
 
 /// Controller type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -32,6 +36,8 @@ pub enum Kind {
     Lqg,
     /// Glover–Doyle H∞.
     Hinf,
+    /// H∞ with a weighted input-multiplicative uncertainty and a second-order roll-off.
+    RobustHinf,
 }
 
 /// What to design, validated.
@@ -50,16 +56,21 @@ pub struct DesignConfig {
     pub out: Option<PathBuf>,
     /// Overwrite it.
     pub force: bool,
+    /// Judge the design on perturbed blades (`--robustness`) over these lobes.
+    pub robustness: Option<super::control_robust::SweepConfig>,
 }
 
-fn kind_name(k: Kind) -> &'static str {
+/// The name of a controller type in files and reports.
+pub fn kind_name(k: Kind) -> &'static str {
     match k {
         Kind::Lqg => "lqg",
         Kind::Hinf => "hinf",
+        Kind::RobustHinf => "robust-hinf",
     }
 }
 
-fn lobe_cut(p: &Plant) -> LobeCut {
+/// The cut of a plant file's lobes.
+pub fn lobe_cut(p: &Plant) -> LobeCut {
     LobeCut {
         tool: p.tool,
         immersion: p.immersion,
@@ -68,7 +79,7 @@ fn lobe_cut(p: &Plant) -> LobeCut {
 }
 
 /// Designs the controller on the plant; returns it (y in m → u in V) and γ for H∞.
-fn design_controller(cfg: &DesignConfig, bp: &BladePlant) -> Result<(StateSpace, Option<f64>)> {
+pub fn design_controller(cfg: &DesignConfig, bp: &BladePlant) -> Result<(StateSpace, Option<f64>)> {
     let p = &cfg.plant;
     let base = match cfg.strategy {
         1 => DesignPlant::structure(bp),
@@ -110,11 +121,15 @@ fn design_controller(cfg: &DesignConfig, bp: &BladePlant) -> Result<(StateSpace,
             let (k, g) = dp.hinf(&w)?;
             (to_metres(&k), Some(g))
         }
+        Kind::RobustHinf => {
+            let (k, g) = dp.robust_hinf(&p.hinf, &p.robust_hinf)?;
+            (to_metres(&k), Some(g))
+        }
     })
 }
 
 /// The figures of a controller on its blade.
-fn figures(p: &Plant, bp: &BladePlant, k: &StateSpace) -> Result<(Figures, ClosedLoop)> {
+pub fn figures(p: &Plant, bp: &BladePlant, k: &StateSpace) -> Result<(Figures, ClosedLoop)> {
     let closed = close(bp, &sampled_model(k, p.sample_rate_hz)?)?;
     let element = LoopElement::new(k, p.sample_rate_hz, p.blade.actuator.max_voltage_v)?;
     let f = bp.frequencies_hz();
@@ -153,7 +168,18 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
     }
     let p = &cfg.plant;
     let bp = p.blade.plant()?;
-    let (k, gamma) = design_controller(cfg, &bp)?;
+    // A chatter controller acts on the first mode at least: a sampling that cannot see it is
+    // refused before any design (whose model of the sampling lag would be meaningless).
+    let first = [(bp.frequencies_hz()[0], 0.0)];
+    check_sampling(
+        &first,
+        p.sample_rate_hz,
+        ACTING_DB,
+        SAMPLES_PER_ACTED_PERIOD / 2.0,
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", cfg.plant_source))?;
+    let (k, gamma) =
+        design_controller(cfg, &bp).with_context(|| format!("{}", cfg.plant_source))?;
     let (fig, closed) = figures(p, &bp, &k)?;
     let mut text = String::new();
     writeln!(
@@ -194,6 +220,20 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
     if !closed.is_stable() || fig.sampled_loop_spectral_radius >= 1.0 {
         out.write_all(text.as_bytes())?;
         bail!("the closed loop is unstable: change the weights (more effort weight, a low-pass filter)");
+    }
+    let modes: Vec<(f64, f64)> = fig
+        .modes
+        .iter()
+        .map(|m| (m.frequency_hz, m.attenuation_db))
+        .collect();
+    if let Err(e) = check_sampling(
+        &modes,
+        p.sample_rate_hz,
+        ACTING_DB,
+        SAMPLES_PER_ACTED_PERIOD / 2.0,
+    ) {
+        out.write_all(text.as_bytes())?;
+        bail!("{}: {e}", cfg.plant_source);
     }
     writeln!(
         text,
@@ -250,7 +290,60 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
         files::write_atomic(path, json.as_bytes(), cfg.force)?;
         writeln!(out, "wrote {}", path.display())?;
     }
+    if let Some(sweep) = &cfg.robustness {
+        let c = SampledController {
+            k: &k,
+            sample_rate_hz: p.sample_rate_hz,
+            max_voltage_v: p.blade.actuator.max_voltage_v,
+        };
+        super::control_robust::sweep(p, &c, sweep, out)?;
+    }
     Ok(())
+}
+
+/// The structure a controller is judged on: the controller file's own plant, or another
+/// plant file's (`--plant FILE`), whose blade, cutter and cut replace the stored ones (the
+/// sampling stays the controller's).
+#[derive(Debug, Clone)]
+pub struct JudgedOn {
+    /// The plant (blade, cutter, cut).
+    pub plant: Plant,
+    /// Where it came from (`None`: the controller file's own).
+    pub source: Option<String>,
+}
+
+impl JudgedOn {
+    /// The controller file's own plant.
+    pub fn own(file: &ControllerFile) -> Self {
+        Self {
+            plant: file.plant.clone(),
+            source: None,
+        }
+    }
+
+    /// A line for the report when the plant is another file's.
+    pub fn report_line(&self, file: &ControllerFile) -> Option<String> {
+        let src = self.source.as_ref()?;
+        let f = |p: &Plant| {
+            p.blade.plant().map_or_else(
+                |_| String::from("?"),
+                |bp| {
+                    bp.frequencies_hz()
+                        .iter()
+                        .map(|f| format!("{f:.1}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                },
+            )
+        };
+        Some(format!(
+            "judged on {} ({src}): stack-held modes {} Hz; designed on {}: {} Hz",
+            self.plant.name,
+            f(&self.plant),
+            file.plant.name,
+            f(&file.plant)
+        ))
+    }
 }
 
 /// Lobes with a controller, validated.
@@ -259,6 +352,8 @@ pub struct ControlLobesConfig {
     pub file: ControllerFile,
     /// Where it came from.
     pub source: String,
+    /// The structure it is judged on.
+    pub judged: JudgedOn,
     /// Spindle speeds, rpm.
     pub speeds_rpm: Vec<f64>,
     /// Resolution of the semi-discretisation (`--steps N`: [`Resolution::Fixed`]; default
@@ -285,6 +380,9 @@ pub struct ControlLobesHead {
     pub strategy: u8,
     /// Where the controller file came from.
     pub source: String,
+    /// The plant file it is judged on, when not its own (`--plant`).
+    #[serde(default)]
+    pub judged_on: Option<String>,
     /// The semi-discretisation's steps per tooth period when fixed by `--steps`; `None`: chosen
     /// per speed by the converged rule of [`blade_resolution`].
     pub steps_per_period: Option<usize>,
@@ -300,6 +398,7 @@ impl ControlLobesHead {
             kind: cfg.file.kind.clone(),
             strategy: cfg.file.strategy,
             source: cfg.source.clone(),
+            judged_on: cfg.judged.report_line(&cfg.file),
             steps_per_period: match cfg.resolution {
                 Resolution::Fixed(m) => Some(m),
                 Resolution::Converged(_) => None,
@@ -362,10 +461,18 @@ pub fn lobes_block(
     cfg: &ControlLobesConfig,
     block: std::ops::Range<usize>,
 ) -> Result<[Vec<Option<LobePoint>>; 2]> {
-    let p = &cfg.file.plant;
+    let p = &cfg.judged.plant;
     let bp = p.blade.plant()?;
     let k = cfg.file.state_space()?;
-    let closed = close(&bp, &sampled_model(&k, p.sample_rate_hz)?)?;
+    let closed = close(&bp, &sampled_model(&k, cfg.file.plant.sample_rate_hz)?)?;
+    if !closed.is_stable() {
+        bail!(
+            "the {} controller of {} makes the loop of {} unstable without cutting: no lobes",
+            cfg.file.kind,
+            cfg.source,
+            cfg.judged.source.as_deref().unwrap_or("its plant")
+        );
+    }
     let cut = lobe_cut(p);
     let tol = (MAX_DEPTH_MM, DEPTH_TOL_MM);
     let (speeds, res) = (&cfg.speeds_rpm, cfg.resolution);
@@ -406,6 +513,9 @@ pub fn write_lobes(
         },
     };
     writeln!(text, "resolution: {resolution}")?;
+    if let Some(line) = &head.judged_on {
+        writeln!(text, "{line}")?;
+    }
     let (mo, mc) = (minimum(&ol), minimum(&cl));
     for (label, m) in [("open loop  ", mo), ("closed loop", mc)] {
         match m {
@@ -483,6 +593,8 @@ pub struct ControlCutConfig {
     pub file: ControllerFile,
     /// Where it came from.
     pub source: String,
+    /// The structure it is judged on.
+    pub judged: JudgedOn,
     /// Spindle speed, rpm.
     pub spindle_rpm: f64,
     /// Axial depth, mm.
@@ -512,13 +624,14 @@ pub fn cut(cfg: &ControlCutConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(path) = &cfg.out {
         files::check_writable(path, cfg.force)?;
     }
-    let p = &cfg.file.plant;
+    let p = &cfg.judged.plant;
+    let rate_hz = cfg.file.plant.sample_rate_hz;
     let bp = p.blade.plant()?;
     let k = cfg.file.state_space()?;
     let ac = &p.blade.actuator;
-    let element = LoopElement::new(&k, p.sample_rate_hz, ac.max_voltage_v)?;
+    let element = LoopElement::new(&k, rate_hz, ac.max_voltage_v)?;
     let options = ControlledCutOptions {
-        sample_period_s: 1.0 / p.sample_rate_hz,
+        sample_period_s: 1.0 / rate_hz,
         tooth_periods: cfg.tooth_periods,
         ..ControlledCutOptions::default()
     };
@@ -548,8 +661,11 @@ pub fn cut(cfg: &ControlCutConfig, out: &mut dyn Write) -> Result<()> {
         cfg.file.kind,
         cfg.file.strategy,
         cfg.source,
-        p.sample_rate_hz
+        rate_hz
     )?;
+    if let Some(line) = cfg.judged.report_line(&cfg.file) {
+        writeln!(text, "{line}")?;
+    }
     let half = |r: &ControlledCut| {
         let n = r.tip_m.len();
         r.tip_m[n / 2..].iter().fold(0.0f64, |m, v| m.max(v.abs())) * 1e6

@@ -41,6 +41,9 @@ pub enum DynamicsError {
     /// The spindle speed is zero (or negative).
     #[error("spindle speed must be > 0 rpm, got {0}")]
     ZeroSpeed(f64),
+    /// The spindle speed is positive but below [`MIN_SPINDLE_RPM`].
+    #[error("spindle speed {0} rpm is below {MIN_SPINDLE_RPM} rpm: a tooth period of minutes or more is not a milling cut (milling runs at hundreds to tens of thousands of rpm)")]
+    SpeedTooLow(f64),
     /// Neither direction has a mode.
     #[error("at least one mode in x or y is required")]
     NoModes,
@@ -293,12 +296,18 @@ impl Cut {
 /// Checks that a spindle speed is finite and > 0.
 pub fn validate_speed(spindle_rpm: f64) -> Result<(), DynamicsError> {
     finite("spindle_rpm", spindle_rpm)?;
-    if spindle_rpm > 0.0 {
+    if spindle_rpm >= MIN_SPINDLE_RPM {
         Ok(())
+    } else if spindle_rpm > 0.0 {
+        Err(DynamicsError::SpeedTooLow(spindle_rpm))
     } else {
         Err(DynamicsError::ZeroSpeed(spindle_rpm))
     }
 }
+
+/// Slowest spindle speed the dynamics accepts, rpm (below, a tooth period lasts minutes and
+/// the models' notion of a steady cut, its spectra and step counts lose their meaning).
+pub const MIN_SPINDLE_RPM: f64 = 1.0;
 
 /// Checks that a_e/D is finite and in (0, 1].
 pub fn validate_immersion(immersion: f64) -> Result<(), DynamicsError> {

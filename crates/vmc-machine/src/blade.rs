@@ -35,8 +35,12 @@
 //! speed_band_rpm = [1500.0, 4500.0]
 //! [controller]
 //! sample_rate_hz = 50000.0
-//! [lqg]  …   [hinf]  …   [strategy2]  …
+//! [lqg]  …   [hinf]  …   [robust_hinf]  …   [strategy2]  …
 //! ```
+//!
+//! A controller file is refused when its stored plant does not give the closed-loop poles
+//! stored with it (the plant or the matrices were edited), or when its sampling cannot see
+//! the modes it acts on ([`vmc_dynamics::control::robust::check_sampling`]).
 
 use std::path::Path;
 
@@ -48,6 +52,7 @@ use crate::milling::ToolSection;
 use crate::read;
 use vmc_dynamics::control::blade::Blade;
 use vmc_dynamics::control::design::{HinfWeights, LqgWeights};
+use vmc_dynamics::control::robust::RobustWeights;
 use vmc_dynamics::control::StateSpace;
 use vmc_dynamics::{Milling, Tool};
 
@@ -63,8 +68,32 @@ struct PlantFile {
     lqg: LqgWeights,
     hinf: HinfWeights,
     #[serde(default)]
+    robust_hinf: Option<RobustWeights>,
+    #[serde(default)]
     strategy2: Option<Strategy2Section>,
 }
+
+/// The robust H∞ weights when a plant file gives none: relative input uncertainty 1 below
+/// 800 Hz rising to 20 above (the blade's second and higher modes), roll-off at 2 kHz (see
+/// docs/decisions/2026-11-28-robust-chatter-control.md).
+pub const DEFAULT_ROBUST_WEIGHTS: RobustWeights = RobustWeights {
+    uncertainty_low: 1.0,
+    uncertainty_high: 20.0,
+    uncertainty_corner_hz: 800.0,
+    rolloff_hz: 2000.0,
+};
+
+fn default_robust() -> RobustWeights {
+    DEFAULT_ROBUST_WEIGHTS
+}
+
+/// Fewest samples per period of the highest mode a controller acts on: the Nyquist rate
+/// with a margin of 2.5 (a mode sampled at its Nyquist rate is seen but not controlled: the
+/// one-sample delay alone is half a period).
+pub const SAMPLES_PER_ACTED_PERIOD: f64 = 5.0;
+
+/// A mode counts as acted on when the controller changes its peak by more than this, dB.
+pub const ACTING_DB: f64 = 1.0;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -127,6 +156,9 @@ pub struct Plant {
     pub lqg: LqgWeights,
     /// H∞ weights.
     pub hinf: HinfWeights,
+    /// The robust H∞ design's uncertainty and roll-off weights (with the H∞ weights).
+    #[serde(default = "default_robust")]
+    pub robust_hinf: RobustWeights,
     /// Strategy 2's design cut, if given.
     pub strategy2: Option<Strategy2Section>,
 }
@@ -173,6 +205,8 @@ impl Plant {
         if !(rate > 0.0 && rate.is_finite()) {
             bail!("{path}: controller.sample_rate_hz must be > 0, got {rate}");
         }
+        check_weights(&f.lqg, &f.hinf, f.robust_hinf.as_ref())
+            .map_err(|e| anyhow!("{path}: {e}"))?;
         Ok(Self {
             name: f.name.unwrap_or_else(|| path.to_string()),
             blade: f.blade,
@@ -188,9 +222,44 @@ impl Plant {
             sample_rate_hz: rate,
             lqg: f.lqg,
             hinf: f.hinf,
+            robust_hinf: f.robust_hinf.unwrap_or(DEFAULT_ROBUST_WEIGHTS),
             strategy2: f.strategy2,
         })
     }
+}
+
+/// Checks the weights of the three designs (each must be positive; the names are the file's).
+fn check_weights(
+    lqg: &LqgWeights,
+    hinf: &HinfWeights,
+    robust: Option<&RobustWeights>,
+) -> Result<()> {
+    let fields = [
+        ("lqg.tip_weight_per_um2", lqg.tip_weight_per_um2),
+        ("lqg.effort_weight_per_v2", lqg.effort_weight_per_v2),
+        ("lqg.force_intensity_n2", lqg.force_intensity_n2),
+        ("lqg.noise_intensity_um2", lqg.noise_intensity_um2),
+        ("hinf.tip_weight_per_um", hinf.tip_weight_per_um),
+        ("hinf.effort_weight_per_v", hinf.effort_weight_per_v),
+        ("hinf.force_scale_n", hinf.force_scale_n),
+        ("hinf.noise_scale_um", hinf.noise_scale_um),
+    ];
+    let corners = [
+        ("lqg.lowpass_hz", lqg.lowpass_hz),
+        ("hinf.lowpass_hz", hinf.lowpass_hz),
+    ];
+    for (name, v) in fields
+        .into_iter()
+        .chain(corners.into_iter().filter_map(|(n, v)| v.map(|v| (n, v))))
+    {
+        if !(v > 0.0 && v.is_finite()) {
+            bail!("{name} must be > 0, got {v}");
+        }
+    }
+    if let Some(r) = robust {
+        r.validate().map_err(|e| anyhow!("robust_hinf: {e}"))?;
+    }
+    Ok(())
 }
 
 /// A matrix as rows (JSON).
@@ -260,7 +329,7 @@ pub struct Figures {
 pub struct ControllerFile {
     /// Format tag.
     pub format: String,
-    /// `lqg` or `hinf`.
+    /// `lqg`, `hinf` or `robust-hinf`.
     pub kind: String,
     /// 1 (structure alone) or 2 (structure coupled to the cut).
     pub strategy: u8,
@@ -328,7 +397,49 @@ impl ControllerFile {
             .tool
             .validate()
             .map_err(|e| anyhow!("{}: plant.tool: {e}", path.display()))?;
+        f.check_consistent()
+            .with_context(|| format!("{}", path.display()))?;
         Ok(f)
+    }
+
+    /// Checks that the stored plant and matrices give the stored closed-loop poles (an edited
+    /// plant or matrix is refused: figures and guarantees would belong to another loop) and
+    /// that the sampling can act on the modes the figures claim.
+    ///
+    /// # Errors
+    /// A pole that moved, a sampling that cannot see an acted-on mode.
+    pub fn check_consistent(&self) -> Result<()> {
+        use vmc_dynamics::control::closed_loop::{close, sampled_model};
+        let k = self.state_space()?;
+        let plant = self.plant.blade.plant()?;
+        let closed = close(&plant, &sampled_model(&k, self.plant.sample_rate_hz)?)?;
+        let mut poles: Vec<[f64; 2]> = closed.poles().iter().map(|l| [l.re, l.im]).collect();
+        poles.sort_by(|a, b| (a[0].hypot(a[1])).total_cmp(&b[0].hypot(b[1])));
+        let stored = &self.figures.poles_rad_per_s;
+        let scale = poles.iter().fold(1.0f64, |m, p| m.max(p[0].hypot(p[1])));
+        let matches = stored.len() == poles.len()
+            && stored
+                .iter()
+                .zip(&poles)
+                .all(|(s, p)| (s[0] - p[0]).hypot(s[1].abs() - p[1].abs()) <= 1e-6 * scale);
+        if !matches {
+            bail!(
+                "the stored plant and controller matrices do not give the closed-loop poles stored with them (the plant or the matrices were edited): design the controller again with `vmc-twin control design`, and judge it on another blade with --plant FILE"
+            );
+        }
+        let modes: Vec<(f64, f64)> = self
+            .figures
+            .modes
+            .iter()
+            .map(|m| (m.frequency_hz, m.attenuation_db))
+            .collect();
+        vmc_dynamics::control::robust::check_sampling(
+            &modes,
+            self.plant.sample_rate_hz,
+            ACTING_DB,
+            SAMPLES_PER_ACTED_PERIOD / 2.0,
+        )?;
+        Ok(())
     }
 }
 

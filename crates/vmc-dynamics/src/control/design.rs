@@ -235,10 +235,11 @@ impl DesignPlant {
     }
 
     /// The plant behind a controller sampled at `sample_rate_hz`: its command delayed by the
-    /// Padé model of 1.5 samples (see [`super::closed_loop::sampled_model`]).
+    /// Padé model of 2 samples, the lag of a strictly proper sampled controller (see
+    /// [`super::closed_loop::sampled_model`]).
     pub fn sampled(&self, sample_rate_hz: f64) -> Result<Self, ControlError> {
         positive("sample_rate_hz", sample_rate_hz)?;
-        Ok(self.series_input(&pade(1.5 / sample_rate_hz, 2)?))
+        Ok(self.series_input(&pade(2.0 / sample_rate_hz, 2)?))
     }
 
     /// H∞ controller (input y in µm, output u in V) and its γ. With a low-pass filter the
@@ -256,6 +257,69 @@ impl DesignPlant {
                 Ok((h.controller, h.gamma))
             }
         }
+    }
+}
+
+impl DesignPlant {
+    /// Robust H∞ controller (input y in µm, output u in V) and its γ: the design of
+    /// [`DesignPlant::hinf`] (its low-pass corner ignored) on the plant seen through the
+    /// second-order roll-off of `r`, with the input-multiplicative uncertainty channel
+    /// w_Δ → W_Δ(s) → command and its output z_Δ = command (see [`super::robust`]); the
+    /// roll-off is then appended to the controller.
+    ///
+    /// # Errors
+    /// Weights out of range, no stabilising design.
+    pub fn robust_hinf(
+        &self,
+        w: &HinfWeights,
+        r: &super::robust::RobustWeights,
+    ) -> Result<(StateSpace, f64), ControlError> {
+        r.validate()?;
+        let f = lowpass_filter(r.rolloff_hz)?;
+        let shaped = self.series_input(&f).series_input(&f);
+        let g = shaped.generalised(&HinfWeights {
+            lowpass_hz: None,
+            ..*w
+        })?;
+        let wd = r.uncertainty_weight();
+        let n = g.a.nrows();
+        let mut a = DMatrix::zeros(n + 1, n + 1);
+        a.view_mut((0, 0), (n, n)).copy_from(&g.a);
+        a.view_mut((0, n), (n, 1))
+            .copy_from(&(&g.b2 * wd.c[(0, 0)]));
+        a[(n, n)] = wd.a[(0, 0)];
+        let m1 = g.b1.ncols();
+        let mut b1 = DMatrix::zeros(n + 1, m1 + 1);
+        b1.view_mut((0, 0), (n, m1)).copy_from(&g.b1);
+        b1.view_mut((0, m1), (n, 1))
+            .copy_from(&(&g.b2 * wd.d[(0, 0)]));
+        b1[(n, m1)] = wd.b[(0, 0)];
+        let mut b2 = DMatrix::zeros(n + 1, 1);
+        b2.view_mut((0, 0), (n, 1)).copy_from(&g.b2);
+        let p1 = g.c1.nrows();
+        let mut c1 = DMatrix::zeros(p1 + 1, n + 1);
+        c1.view_mut((0, 0), (p1, n)).copy_from(&g.c1);
+        let mut d12 = DMatrix::zeros(p1 + 1, 1);
+        d12.view_mut((0, 0), (p1, 1)).copy_from(&g.d12);
+        d12[(p1, 0)] = 1.0;
+        let mut c2 = DMatrix::zeros(1, n + 1);
+        c2.view_mut((0, 0), (1, n)).copy_from(&g.c2);
+        let mut d21 = DMatrix::zeros(1, m1 + 1);
+        d21.view_mut((0, 0), (1, m1)).copy_from(&g.d21);
+        let p = GeneralisedPlant {
+            a,
+            b1,
+            b2,
+            c1,
+            d12,
+            c2,
+            d21,
+        };
+        let h = hinf(&p, 1e-6, 1e6, 1e-3, 0.05)?;
+        Ok((
+            lowpass(&lowpass(&h.controller, r.rolloff_hz)?, r.rolloff_hz)?,
+            h.gamma,
+        ))
     }
 }
 

@@ -19,6 +19,7 @@ pub mod hinf;
 pub mod lqg;
 pub mod pade;
 pub mod riccati;
+pub mod robust;
 pub mod simulate;
 
 use nalgebra::{Complex, DMatrix};
@@ -50,6 +51,16 @@ pub enum ControlError {
     /// The loop of the structure and the controller is unstable without cutting.
     #[error("the closed loop is unstable without cutting")]
     UnstableLoop,
+    /// The controller's sampling cannot see a mode it acts on.
+    #[error("a controller sampled at {sample_rate_hz} Hz cannot act on the {mode_hz:.1} Hz mode it claims to: its Nyquist frequency with a margin needs >= {needed_hz:.0} Hz (raise controller.sample_rate_hz)")]
+    Undersampled {
+        /// The sample rate, Hz.
+        sample_rate_hz: f64,
+        /// The highest mode the controller acts on, Hz.
+        mode_hz: f64,
+        /// The least sample rate that would do, Hz.
+        needed_hz: f64,
+    },
     /// No γ in the searched range gives an H∞ controller.
     #[error("no H-infinity controller with gamma <= {0}")]
     GammaTooSmall(f64),

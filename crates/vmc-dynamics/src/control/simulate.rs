@@ -34,6 +34,9 @@ use crate::params::{non_negative, positive, validate_speed, DynamicsError};
 /// largest value wanders by a fraction of a percent from quarter to quarter.
 pub const GROWTH_MARGIN: f64 = 1.02;
 
+/// Fewest integration steps per tooth period of a controlled cut.
+pub const MIN_STEPS_PER_TOOTH_PERIOD: usize = 8;
+
 /// Tip displacement beyond which a linear simulation has blown up (1 m).
 pub const BLOWN_UP_M: f64 = 1.0;
 
@@ -189,6 +192,16 @@ pub fn simulate(
     let h = ts / options.steps_per_sample as f64;
     let tau = cut.tool.tooth_period_s(spindle_rpm);
     let omega = 2.0 * std::f64::consts::PI * spindle_rpm / 60.0;
+    // The delayed displacement is interpolated between stored steps: a tooth period shorter
+    // than a few integration steps (a controller sampled far too slowly) cannot be resolved.
+    let steps_per_period = (tau / h).floor() as usize;
+    if steps_per_period < MIN_STEPS_PER_TOOTH_PERIOD {
+        return Err(DynamicsError::TooFewSteps {
+            name: "integration steps per tooth period (the sample period is too long for this speed: raise the sample rate)",
+            min: MIN_STEPS_PER_TOOTH_PERIOD,
+            value: steps_per_period,
+        });
+    }
     let total_steps = (options.tooth_periods as f64 * tau / h).ceil() as usize;
     if total_steps > 50_000_000 {
         return Err(DynamicsError::TooManySteps {
@@ -438,5 +451,45 @@ mod tests {
                 );
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod slow_sampling_tests {
+    use super::*;
+    use crate::control::blade::tests::study_blade;
+    use crate::control::design::to_metres;
+    use nalgebra::DMatrix;
+
+    /// A controller sampled at 10 Hz holds its command over several tooth periods at
+    /// 1877 rpm: refused with the reason, where the delayed displacement's lookup used to read
+    /// past the stored history.
+    #[test]
+    fn a_sample_period_longer_than_a_tooth_period_is_refused_not_a_panic() {
+        let p = study_blade(2).plant().unwrap();
+        let k = to_metres(&StateSpace {
+            a: DMatrix::from_element(1, 1, -100.0),
+            b: DMatrix::from_element(1, 1, 1.0),
+            c: DMatrix::from_element(1, 1, 1.0),
+            d: DMatrix::zeros(1, 1),
+        });
+        let element = LoopElement::new(&k, 10.0, 150.0).unwrap();
+        let cut = LobeCut {
+            tool: crate::params::Tool::new(2, 16.0, 1e9, 3e8),
+            immersion: 1.0 / 16.0,
+            milling: crate::params::Milling::Down,
+        };
+        let e = simulate(
+            &p,
+            Some(&element),
+            &cut,
+            1877.0,
+            3.0,
+            0.08,
+            &ControlledCutOptions::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("sample rate"), "{e}");
     }
 }
