@@ -281,8 +281,18 @@ impl ParameterSet {
     /// Adds the harmonics 2..=`max_order` (cos and sin) of every rotary motion error
     /// (the first harmonic is, by definition of the average line, part of the location errors).
     #[must_use]
-    pub fn with_motion_harmonics(mut self, geom: &Geometry, max_order: u32) -> Self {
+    pub fn with_motion_harmonics(self, geom: &Geometry, max_order: u32) -> Self {
+        let orders = vec![max_order; geom.rotary.len()];
+        self.with_motion_harmonics_per_axis(geom, &orders)
+    }
+
+    /// Adds the harmonics 2..=`max_orders[r]` (cos and sin) of every motion error of rotary
+    /// axis `r` (0 or 1: none for that axis), in the same order as
+    /// [`ParameterSet::with_motion_harmonics`], so equal orders give the same set.
+    #[must_use]
+    pub fn with_motion_harmonics_per_axis(mut self, geom: &Geometry, max_orders: &[u32]) -> Self {
         for (rotary, r) in geom.rotary.iter().enumerate() {
+            let max_order = max_orders.get(rotary).copied().unwrap_or(0);
             for component in 0..6 {
                 for k in 2..=max_order {
                     for sine in [false, true] {

@@ -526,4 +526,4 @@ pub fn identify(
 
 #[cfg(test)]
 #[path = "identify_tests.rs"]
-mod tests;
+pub(crate) mod tests;
