@@ -3,9 +3,10 @@
 //!
 //! # Model family
 //! The location and assembly errors are always fitted; each rotary axis `r` adds the cos/sin
-//! harmonics 2…`h_r` of its six motion errors ([`ParameterSet::with_motion_harmonics_per_axis`];
-//! `h_r = 0` adds none, order 1 is part of the average line). The candidates are every
-//! combination of `h_r ∈ {0, 2, 3, …, max_order}` over the rotary axes (16 for two axes and
+//! harmonics up to `h_r` of its six motion errors ([`ParameterSet::with_motion_harmonics_per_axis`]:
+//! orders 1…`h_r` of the angular positioning error, 2…`h_r` of the translations and tilts, whose
+//! first harmonic is part of the average line; `h_r = 0` adds none). The candidates are every
+//! combination of `h_r ∈ {0, 1, …, max_order}` over the rotary axes (25 for two axes and
 //! `max_order = 4`).
 //!
 //! # Criterion
@@ -92,9 +93,9 @@ pub fn parameter_set(geom: &Geometry, orders: &[u32]) -> ParameterSet {
     ParameterSet::location_and_assembly(geom).with_motion_harmonics_per_axis(geom, orders)
 }
 
-/// Every combination of orders `{0, 2, …, max_order}` over `n_axes` rotary axes.
+/// Every combination of orders `{0, 1, …, max_order}` over `n_axes` rotary axes.
 fn candidate_orders(n_axes: usize, max_order: u32) -> Vec<Vec<u32>> {
-    let levels: Vec<u32> = std::iter::once(0).chain(2..=max_order).collect();
+    let levels: Vec<u32> = (0..=max_order).collect();
     let mut out = vec![Vec::new()];
     for _ in 0..n_axes {
         out = out
@@ -141,7 +142,9 @@ fn fold_error(
     rank_tol: f64,
 ) -> Option<f64> {
     let rows = |cfgs: &[usize]| -> Vec<usize> {
-        cfgs.iter().flat_map(|&i| [3 * i, 3 * i + 1, 3 * i + 2]).collect()
+        cfgs.iter()
+            .flat_map(|&i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect()
     };
     let (tr, te) = (rows(train), rows(test));
     if tr.len() <= cols.len() {
@@ -214,8 +217,7 @@ pub fn choose_order(
         }
         let (score, se) = if per_fold.len() == folds {
             let m = per_fold.iter().sum::<f64>() / folds as f64;
-            let var =
-                per_fold.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (folds - 1) as f64;
+            let var = per_fold.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (folds - 1) as f64;
             (Some(m), Some((var / folds as f64).sqrt()))
         } else {
             (None, None)

@@ -44,7 +44,7 @@ fn third_order_errors_of_the_c_table_alone_are_found_as_such() {
 fn without_motion_errors_the_location_model_is_chosen() {
     let c = chosen_for(&[0, 0], 5);
     assert_eq!(c.orders, vec![0, 0], "{:?}", c.candidates);
-    assert_eq!(c.candidates.len(), 16);
+    assert_eq!(c.candidates.len(), 25);
     assert_eq!(c.candidates[c.chosen].n_params, 19);
 }
 
