@@ -256,7 +256,20 @@ fn too_few_configurations_for_the_parameters_are_refused() {
         ],
     );
     let e = one_line_error(&t.0, &["identify", "--data", "p.csv", "--machine", &m]);
-    assert_eq!(e, "p.csv: too few configurations: 5 configurations give 15 readings for 43 parameters (need at least 16 configurations)");
+    assert_eq!(e, "p.csv: too few configurations to choose the model order: 5 configurations in 5 folds leave too few readings to fit the 19 parameters of the smallest model (need at least 9 configurations, or a fixed order)");
+    let e = one_line_error(
+        &t.0,
+        &[
+            "identify",
+            "--data",
+            "p.csv",
+            "--machine",
+            &m,
+            "--harmonics",
+            "2",
+        ],
+    );
+    assert_eq!(e, "p.csv: too few configurations: 5 configurations give 15 readings for 47 parameters (need at least 17 configurations)");
     let e = one_line_error(
         &t.0,
         &[

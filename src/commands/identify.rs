@@ -130,14 +130,7 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
         chosen = Some(d.chosen);
     }
     let t0 = Instant::now();
-    let order_choice = match cfg.harmonics {
-        Some(_) => None,
-        None => Some(choose_order(&geom, &obs, &cfg.order).with_context(|| name.clone())?),
-    };
-    let orders = match (&order_choice, cfg.harmonics) {
-        (Some(c), _) => c.orders.clone(),
-        (None, h) => vec![h.unwrap_or(0); geom.rotary.len()],
-    };
+    let (order_choice, orders) = model_orders(cfg, &geom, &obs).with_context(|| name.clone())?;
     let set = parameter_set(&geom, &orders);
     let id = fit(&geom, &set, &obs, &IdentifyOptions::default()).with_context(|| name.clone())?;
     let time_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -329,6 +322,23 @@ fn print_report(
         )?;
     }
     Ok(())
+}
+
+/// The harmonic orders per rotary axis: fixed by `--harmonics`, or chosen from the data (with
+/// the candidates' scores).
+fn model_orders(
+    cfg: &IdentifyConfig,
+    geom: &vmc_identify::chain::Geometry,
+    obs: &[Observation],
+) -> Result<(Option<OrderChoice>, Vec<u32>)> {
+    Ok(match cfg.harmonics {
+        Some(h) => (None, vec![h; geom.rotary.len()]),
+        None => {
+            let c = choose_order(geom, obs, &cfg.order)?;
+            let orders = c.orders.clone();
+            (Some(c), orders)
+        }
+    })
 }
 
 /// Puts the model-order lines in front of the report `text`.

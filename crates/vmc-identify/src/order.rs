@@ -176,8 +176,8 @@ fn fold_error(
 ///
 /// # Errors
 /// [`IdentifyError::BadObservation`] for a bad covariance or value;
-/// [`IdentifyError::TooFewConfigurations`] when fewer configurations than folds are given or no
-/// candidate can be scored.
+/// [`IdentifyError::TooFewToChooseOrder`] when the training folds cannot fit even the
+/// location and assembly errors.
 pub fn choose_order(
     geom: &Geometry,
     obs: &[Observation],
@@ -185,11 +185,17 @@ pub fn choose_order(
 ) -> Result<OrderChoice, IdentifyError> {
     let folds = opts.folds.max(2);
     let base = parameter_set(geom, &[]).len();
-    if obs.len() < folds {
-        return Err(IdentifyError::TooFewConfigurations {
-            n_configs: obs.len(),
-            n_params: base,
-        });
+    // The smallest training set is n − ⌈n/folds⌉ configurations; the smallest model needs
+    // more readings than parameters.
+    let trainable = |n: usize| 3 * (n - n.div_ceil(folds)) > base;
+    let too_few = || IdentifyError::TooFewToChooseOrder {
+        n_configs: obs.len(),
+        folds,
+        n_params: base,
+        needed: (folds..).find(|&n| trainable(n)).unwrap_or(folds),
+    };
+    if obs.len() < folds || !trainable(obs.len()) {
+        return Err(too_few());
     }
     let n_axes = geom.rotary.len();
     let largest = parameter_set(geom, &vec![opts.max_order; n_axes]);
@@ -237,10 +243,7 @@ pub fn choose_order(
         .filter_map(|(i, c)| c.cv_score.map(|s| (i, s)))
         .min_by(|x, y| x.1.total_cmp(&y.1))
         .map(|(i, _)| i)
-        .ok_or(IdentifyError::TooFewConfigurations {
-            n_configs: obs.len(),
-            n_params: base,
-        })?;
+        .ok_or_else(too_few)?;
     let limit = candidates[best].cv_score.unwrap_or(f64::INFINITY)
         + candidates[best].cv_std_error.unwrap_or(0.0);
     let chosen = candidates
