@@ -77,13 +77,31 @@ pub struct IdentifyArgs {
     /// sensitivity only, before looking at the measurements).
     #[arg(long)]
     pub design_configs: Option<usize>,
-    /// Also fit the rotary motion errors' harmonics of orders 2..=N (0 or 1: location and
-    /// assembly errors only). Default 2: see docs/decisions/2026-11-24-five-axis-harmonics.md.
-    #[arg(long, default_value_t = 2)]
-    pub harmonics: u32,
+    /// Fix the model: fit the rotary motion errors' harmonics up to order N on every rotary
+    /// axis (orders 2..=N of translations and tilts, 1..=N of the angular positioning errors;
+    /// 0: location and assembly errors only). Default: the orders per axis are chosen from the
+    /// probing data by cross-validation over configurations.
+    #[arg(long)]
+    pub harmonics: Option<u32>,
+    /// Highest harmonic order per axis tried when choosing the order from the data.
+    #[arg(long, default_value_t = 4)]
+    pub max_harmonics: u32,
+    /// Cross-validation folds when choosing the order from the data.
+    #[arg(long, default_value_t = 5)]
+    pub order_folds: usize,
+    /// Seed of the shuffle of configurations into folds.
+    #[arg(long, default_value_t = 1)]
+    pub order_seed: u64,
     /// Held-out poses for the judge.
     #[arg(long, default_value_t = 500)]
     pub heldout_poses: usize,
+    /// Radius of the judged region about the table's axis, mm (default: the larger half
+    /// stroke of X and Y).
+    #[arg(long)]
+    pub judge_radius_mm: Option<f64>,
+    /// Height of the judged region above the table, mm (default: half the Z stroke).
+    #[arg(long)]
+    pub judge_height_mm: Option<f64>,
     /// Machine realisation the held-out judge compares with (default: the probing file's
     /// `# seed:`); never used by the identification.
     #[arg(long)]
@@ -104,18 +122,42 @@ impl IdentifyArgs {
         if let Some(k) = self.design_configs {
             anyhow::ensure!(k >= 1, "--design-configs must be at least 1");
         }
+        if let Some(h) = self.harmonics {
+            anyhow::ensure!(h <= 8, "--harmonics must be 0 to 8, got {h}");
+        }
         anyhow::ensure!(
-            self.harmonics <= 8,
-            "--harmonics must be 0 to 8, got {}",
-            self.harmonics
+            (2..=8).contains(&self.max_harmonics),
+            "--max-harmonics must be 2 to 8, got {}",
+            self.max_harmonics
         );
+        anyhow::ensure!(
+            self.order_folds >= 2,
+            "--order-folds must be at least 2, got {}",
+            self.order_folds
+        );
+        for (v, flag) in [
+            (self.judge_radius_mm, "--judge-radius-mm"),
+            (self.judge_height_mm, "--judge-height-mm"),
+        ] {
+            if let Some(v) = v {
+                anyhow::ensure!(v.is_finite() && v > 0.0, "{flag} must be > 0, got {v}");
+            }
+        }
         Ok(IdentifyConfig {
             data: self.data,
             machine,
             out: self.out,
             design_configs: self.design_configs,
             harmonics: self.harmonics,
+            order: vmc_identify::order::OrderOptions {
+                max_order: self.max_harmonics,
+                folds: self.order_folds,
+                seed: self.order_seed,
+                ..Default::default()
+            },
             heldout_poses: self.heldout_poses,
+            judge_radius_mm: self.judge_radius_mm,
+            judge_height_mm: self.judge_height_mm,
             seed: self.seed,
             force: self.force.force,
             rrd: self.rrd.checked()?,

@@ -13,10 +13,10 @@ use serde::Serialize;
 use crate::files;
 use vmc_identify::chain::Pose;
 use vmc_identify::design::d_optimal;
-use vmc_identify::errors::ParameterSet;
 use vmc_identify::identify::{
     identify as fit, Identification, IdentifyOptions, Observation, Relation, Status,
 };
+use vmc_identify::order::{choose_order, parameter_set, OrderChoice, OrderOptions};
 use vmc_machine::fiveaxis::campaign::parse_csv;
 use vmc_machine::fiveaxis::heldout::{judge_poses, HeldOut, HeldOutPlan};
 use vmc_machine::fiveaxis::{FiveAxisSpec, TrueMachine};
@@ -31,10 +31,17 @@ pub struct IdentifyConfig {
     pub out: PathBuf,
     /// Choose K configurations D-optimally.
     pub design_configs: Option<usize>,
-    /// Highest harmonic order of rotary motion errors to fit (0 or 1: none).
-    pub harmonics: u32,
+    /// Highest harmonic order of rotary motion errors to fit on every axis (0 or 1: none);
+    /// `None`: chosen per axis from the data by cross-validation.
+    pub harmonics: Option<u32>,
+    /// How the order is chosen when `harmonics` is `None`.
+    pub order: OrderOptions,
     /// Held-out poses.
     pub heldout_poses: usize,
+    /// Radius of the judged region, mm (default: from the machine's travel).
+    pub judge_radius_mm: Option<f64>,
+    /// Height of the judged region, mm (default: from the machine's travel).
+    pub judge_height_mm: Option<f64>,
     /// Realisation for the judge (default: the file's).
     pub seed: Option<u64>,
     /// Overwrite.
@@ -61,6 +68,8 @@ struct IdentifiedFile {
     data: String,
     configurations_used: usize,
     design_chosen_rows: Option<Vec<usize>>,
+    harmonic_orders: Vec<u32>,
+    order_choice: Option<OrderChoice>,
     n_params: usize,
     rank: usize,
     condition_number: f64,
@@ -78,6 +87,7 @@ struct IdentifiedFile {
     heldout_characterised_share: f64,
     heldout_mean_residual_um: f64,
     heldout_max_residual_um: f64,
+    heldout: HeldOut,
 }
 
 /// A tiny variance added to each centre covariance (0.01 µm)², so that noise-free files stay
@@ -106,21 +116,22 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
         );
     }
     let geom = spec.geometry();
-    let mut set = ParameterSet::location_and_assembly(&geom);
-    if cfg.harmonics >= 2 {
-        set = set.with_motion_harmonics(&geom, cfg.harmonics);
-    }
     let mut obs: Vec<Observation> = file.observations.clone();
     for o in &mut obs {
         o.cov_mm2 += Matrix3::identity() * COV_FLOOR_MM2;
     }
     let mut chosen = None;
     if let Some(k) = cfg.design_configs {
-        let d = d_optimal(&geom, &set, &obs, k).with_context(|| name.clone())?;
+        // The design sees the nominal sensitivity only; with the order still to be chosen it
+        // designs for the second harmonics on every axis.
+        let design_set = parameter_set(&geom, &vec![cfg.harmonics.unwrap_or(2); geom.rotary.len()]);
+        let d = d_optimal(&geom, &design_set, &obs, k).with_context(|| name.clone())?;
         obs = d.chosen.iter().map(|&i| obs[i]).collect();
         chosen = Some(d.chosen);
     }
     let t0 = Instant::now();
+    let (order_choice, orders) = model_orders(cfg, &geom, &obs).with_context(|| name.clone())?;
+    let set = parameter_set(&geom, &orders);
     let id = fit(&geom, &set, &obs, &IdentifyOptions::default()).with_context(|| name.clone())?;
     let time_ms = t0.elapsed().as_secs_f64() * 1e3;
     let seed = cfg.seed.or(file.seed).with_context(|| {
@@ -131,17 +142,22 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
     let model = |pose: &Pose| set.state_at(&values, pose);
     let plan = HeldOutPlan {
         poses: cfg.heldout_poses,
+        radius_mm: cfg.judge_radius_mm,
+        height_mm: cfg.judge_height_mm,
         ..HeldOutPlan::default()
     };
     let (held, judged) = judge_poses(spec, &truth, &model, &plan)?;
     let mut text = Vec::new();
     print_report(&mut text, spec, &name, &id, &chosen, time_ms, &held, seed)?;
+    let text = order_report(&order_choice, &orders, &geom, text)?;
     out.write_all(&text)?;
     let result = IdentifiedFile {
         machine: spec.machine.name.clone(),
         data: name,
         configurations_used: obs.len(),
         design_chosen_rows: chosen,
+        harmonic_orders: orders.clone(),
+        order_choice,
         n_params: id.n_params,
         rank: id.rank,
         condition_number: id.condition_number,
@@ -177,14 +193,15 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
         heldout_characterised_share: held.characterised_share,
         heldout_mean_residual_um: held.after_mean_um,
         heldout_max_residual_um: held.after_max_um,
+        heldout: held.clone(),
     };
     let json = serde_json::to_string_pretty(&result)?;
     files::write_atomic(&cfg.out, json.as_bytes(), cfg.force)?;
     writeln!(out, "→ {}", cfg.out.display())?;
     if let Some(rrd) = &cfg.rrd {
         let id = format!(
-            "vmc-twin identify {} on {} harmonics {} design {:?} held-out seed {seed}",
-            result.data, spec.machine.name, cfg.harmonics, cfg.design_configs
+            "vmc-twin identify {} on {} harmonics {:?} design {:?} held-out seed {seed}",
+            result.data, spec.machine.name, orders, cfg.design_configs
         );
         let bytes = crate::record::fiveaxis::record_heldout(
             &rrd.path,
@@ -287,5 +304,94 @@ fn print_report(
         held.after_max_um,
         held.characterised_share * 100.0
     )?;
+    writeln!(
+        out,
+        "  over the cylinder r ≤ {:.0} mm, h ≤ {:.0} mm on the table, where the axes reach:",
+        held.region_mm[0], held.region_mm[1]
+    )?;
+    for r in &held.regions {
+        writeln!(
+            out,
+            "    {:<6} {:>4} poses: {:.1} µm → {:.2} µm mean, {:.2} µm max; {:.1} % characterised",
+            r.region.name(),
+            r.poses,
+            r.before_mean_um,
+            r.after_mean_um,
+            r.after_max_um,
+            r.characterised_share * 100.0
+        )?;
+    }
     Ok(())
+}
+
+/// The harmonic orders per rotary axis: fixed by `--harmonics`, or chosen from the data (with
+/// the candidates' scores).
+fn model_orders(
+    cfg: &IdentifyConfig,
+    geom: &vmc_identify::chain::Geometry,
+    obs: &[Observation],
+) -> Result<(Option<OrderChoice>, Vec<u32>)> {
+    Ok(match cfg.harmonics {
+        Some(h) => (None, vec![h; geom.rotary.len()]),
+        None => {
+            let c = choose_order(geom, obs, &cfg.order)?;
+            let orders = c.orders.clone();
+            (Some(c), orders)
+        }
+    })
+}
+
+/// Puts the model-order lines in front of the report `text`.
+fn order_report(
+    choice: &Option<OrderChoice>,
+    orders: &[u32],
+    geom: &vmc_identify::chain::Geometry,
+    text: Vec<u8>,
+) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    let axes: Vec<String> = geom
+        .rotary
+        .iter()
+        .zip(orders)
+        .map(|(r, h)| format!("{} {}", r.axis.letter(), h))
+        .collect();
+    match choice {
+        None => writeln!(
+            out,
+            "model order fixed by --harmonics: highest harmonic per rotary axis {}",
+            axes.join(", ")
+        )?,
+        Some(c) => {
+            writeln!(
+                out,
+                "model order from the data ({}-fold cross-validation over configurations, seed {}): highest harmonic per rotary axis {} (0: location errors only)",
+                c.folds,
+                c.seed,
+                axes.join(", ")
+            )?;
+            writeln!(
+                out,
+                "  candidates (score: mean squared whitened prediction error per held-out reading; chosen: fewest parameters within one standard error of the best):"
+            )?;
+            for (i, cand) in c.candidates.iter().enumerate() {
+                let mark = match (i == c.chosen, i == c.best) {
+                    (true, true) => " ← chosen, best",
+                    (true, false) => " ← chosen",
+                    (false, true) => " ← best",
+                    _ => "",
+                };
+                let score = match (cand.cv_score, cand.cv_std_error) {
+                    (Some(s), Some(e)) => format!("{s:>10.1} ± {e:<8.1}"),
+                    _ => format!("{:>21}", "too few readings"),
+                };
+                writeln!(
+                    out,
+                    "    orders {:?} {:>3} parameters {score}{mark}",
+                    cand.orders, cand.n_params
+                )?;
+            }
+        }
+    }
+    out.extend(text);
+    Ok(out)
 }

@@ -278,13 +278,30 @@ impl ParameterSet {
         ParameterSet { params }
     }
 
-    /// Adds the harmonics 2..=`max_order` (cos and sin) of every rotary motion error
-    /// (the first harmonic is, by definition of the average line, part of the location errors).
+    /// Adds the harmonics up to `max_order` of every rotary motion error (see
+    /// [`ParameterSet::with_motion_harmonics_per_axis`]).
     #[must_use]
-    pub fn with_motion_harmonics(mut self, geom: &Geometry, max_order: u32) -> Self {
+    pub fn with_motion_harmonics(self, geom: &Geometry, max_order: u32) -> Self {
+        let orders = vec![max_order; geom.rotary.len()];
+        self.with_motion_harmonics_per_axis(geom, &orders)
+    }
+
+    /// Adds the harmonics up to `max_orders[r]` (cos and sin) of the motion errors of rotary
+    /// axis `r`, in the same order as [`ParameterSet::with_motion_harmonics`], so equal orders
+    /// give the same set: orders 2…N of the five translations and tilts (their first harmonic
+    /// is part of the average line) and orders 1…N of the angular positioning error (its first
+    /// harmonic, e.g. an encoder's eccentricity, is not a location error). 0: none for that axis.
+    #[must_use]
+    pub fn with_motion_harmonics_per_axis(mut self, geom: &Geometry, max_orders: &[u32]) -> Self {
         for (rotary, r) in geom.rotary.iter().enumerate() {
+            let max_order = max_orders.get(rotary).copied().unwrap_or(0);
             for component in 0..6 {
-                for k in 2..=max_order {
+                let first = if component == r.axis.index() + 3 {
+                    1
+                } else {
+                    2
+                };
+                for k in first..=max_order {
                     for sine in [false, true] {
                         self.params.push(Parameter {
                             component: Component::Motion {
@@ -390,12 +407,14 @@ mod tests {
     fn a_harmonic_feeds_its_motion_error_with_the_angle() {
         let g = trunnion();
         let set = ParameterSet { params: vec![] }.with_motion_harmonics(&g, 2);
-        assert_eq!(set.len(), 24);
+        // 12 errors × order 2 × (cos, sin), and order 1 of E_CC and E_AA.
+        assert_eq!(set.len(), 28);
+        assert_eq!(set.params[10].name(), "E_CC·cos1C");
         let pose = Pose {
             linear_mm: [0.0; 3],
             rotary_deg: [45.0, 0.0],
         };
-        let mut v = vec![0.0; 24];
+        let mut v = vec![0.0; 28];
         v[1] = 2.0; // E_XC·sin2C
         let s = set.state_at(&v, &pose);
         assert!((s.rotary_motion[0].lin_mm[0] - 2.0).abs() < 1e-12);

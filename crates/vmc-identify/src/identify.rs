@@ -164,6 +164,18 @@ pub enum IdentifyError {
         /// Parameters asked.
         n_params: usize,
     },
+    /// Too few configurations to cross-validate even the smallest model.
+    #[error("too few configurations to choose the model order: {n_configs} configurations in {folds} folds leave too few readings to fit the {n_params} parameters of the smallest model (need at least {needed} configurations, or a fixed order)")]
+    TooFewToChooseOrder {
+        /// Configurations given.
+        n_configs: usize,
+        /// Folds asked.
+        folds: usize,
+        /// Parameters of the smallest candidate.
+        n_params: usize,
+        /// Fewest configurations that would do.
+        needed: usize,
+    },
     /// A covariance that is not positive definite or a non-finite value.
     #[error("configuration {index}: {msg}")]
     BadObservation {
@@ -526,4 +538,4 @@ pub fn identify(
 
 #[cfg(test)]
 #[path = "identify_tests.rs"]
-mod tests;
+pub(crate) mod tests;

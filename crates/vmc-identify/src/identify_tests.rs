@@ -7,20 +7,20 @@ use crate::inverse::nominal_linear_axes;
 
 /// A small deterministic generator for the tests (SplitMix64 + Box–Muller); the crate itself
 /// draws nothing at random.
-struct Rng(u64);
+pub(crate) struct Rng(pub(crate) u64);
 
 impl Rng {
-    fn next_u64(&mut self) -> u64 {
+    pub(crate) fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
         z ^ (z >> 31)
     }
-    fn uniform(&mut self) -> f64 {
+    pub(crate) fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
-    fn normal(&mut self) -> f64 {
+    pub(crate) fn normal(&mut self) -> f64 {
         let u1 = self.uniform().max(1e-300);
         let u2 = self.uniform();
         (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
@@ -57,7 +57,7 @@ fn centre_cov(sigma_mm: f64) -> Matrix3<f64> {
     Matrix3::from_diagonal(&Vector3::new(0.36, 0.36, 1.0)) * sigma_mm.powi(2)
 }
 
-fn observe(
+pub(crate) fn observe(
     set: &ParameterSet,
     values: &[f64],
     configs: &[[f64; 2]],

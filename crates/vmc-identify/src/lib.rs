@@ -10,7 +10,8 @@
 //! the exact homogeneous-transform product ([`htm`]); its first-order form `δq = S·E`
 //! ([`sensitivity`]) is what identification inverts ([`identify`]), after the sphere centre of
 //! each configuration has been fitted to the probed points ([`sphere`]). [`design`] chooses the
-//! configurations worth probing.
+//! configurations worth probing; [`order`] chooses the harmonic orders of the rotary motion
+//! errors from the probing data by cross-validation over configurations.
 //!
 //! Like `vmc-predict`, this crate does not depend on the twin: it sees probing data and nominal
 //! geometry only. Everything here is pure numerics (no files, no printing). Units: mm, rad
@@ -22,5 +23,6 @@ pub mod errors;
 pub mod htm;
 pub mod identify;
 pub mod inverse;
+pub mod order;
 pub mod sensitivity;
 pub mod sphere;

@@ -1,17 +1,22 @@
 //! The held-out judge: how much of the volumetric error an identified model removes on
-//! configurations that were not probed.
+//! configurations that were not probed, over the machine's working volume.
 //!
-//! Poses are drawn at random (seeded): C and A uniform over their travels, a target point in the
-//! workpiece frame uniform over the table's working cylinder (radius `radius_mm` about the C
-//! axis, `height_mm` above the table at C = A = 0), kept when the linear axes stay in travel.
+//! Poses are drawn at random (seeded): each rotary axis uniform over its travel, a target point
+//! in the workpiece frame uniform over a cylinder on the table (radius `radius_mm` about the
+//! table's axis, `height_mm` above the table surface at zero rotary angles), kept when the
+//! linear axes stay in travel — so the judged region is the part of that cylinder the machine
+//! reaches at the drawn angles. By default the cylinder is the machine's: its radius is the
+//! larger half stroke of X and Y and its height half the Z stroke (a user may give another).
 //! At each pose:
 //! - before: the controller commands the nominal linear axes; the error is the real tool tip
 //!   minus the target, in the workpiece frame (the exact model with the twin's truth);
 //! - after: the controller solves the exact model with the *identified* errors for the linear
 //!   axes, and the real tip is measured again.
 //!
-//! The share characterised is `1 − mean|after| / mean|before|`. The judge reads the twin's truth
-//! (as the study judged on its virtual machine); the identified model never does.
+//! The share characterised is `1 − mean|after| / mean|before|`, over all poses and by region:
+//! *centre* (radius ≤ half the cylinder's, lower half), *edge* (radius beyond half, lower half)
+//! and *top* (upper half of the height). The judge reads the twin's truth (as the study judged on
+//! its virtual machine); the identified model never does.
 
 use nalgebra::Vector3;
 use rand::rngs::StdRng;
@@ -32,10 +37,24 @@ pub struct HeldOutPlan {
     pub poses: usize,
     /// Seed of the poses.
     pub seed: u64,
-    /// Radius of the working cylinder about the C axis, mm (default 150).
-    pub radius_mm: f64,
-    /// Height of the working cylinder above the table, mm (default 100).
-    pub height_mm: f64,
+    /// Radius of the judged cylinder about the table's axis, mm (default `None`: the larger
+    /// half stroke of X and Y).
+    pub radius_mm: Option<f64>,
+    /// Height of the judged cylinder above the table, mm (default `None`: half the Z stroke).
+    pub height_mm: Option<f64>,
+}
+
+impl HeldOutPlan {
+    /// The cylinder judged on `spec`: (radius, height), mm.
+    #[must_use]
+    pub fn region_mm(&self, spec: &FiveAxisSpec) -> (f64, f64) {
+        let stroke = |i: usize| spec.axes.travel_max_mm[i] - spec.axes.travel_min_mm[i];
+        (
+            self.radius_mm
+                .unwrap_or_else(|| 0.5 * stroke(0).max(stroke(1))),
+            self.height_mm.unwrap_or_else(|| 0.5 * stroke(2)),
+        )
+    }
 }
 
 impl Default for HeldOutPlan {
@@ -43,15 +62,73 @@ impl Default for HeldOutPlan {
         HeldOutPlan {
             poses: 500,
             seed: 7,
-            radius_mm: 150.0,
-            height_mm: 100.0,
+            radius_mm: None,
+            height_mm: None,
         }
     }
 }
 
-/// The verdict, µm.
+/// Where in the judged cylinder a pose lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Region {
+    /// Radius ≤ half the cylinder's, lower half of the height.
+    Centre,
+    /// Radius beyond half the cylinder's, lower half of the height.
+    Edge,
+    /// Upper half of the height.
+    Top,
+}
+
+impl Region {
+    /// Every region, in report order.
+    pub const ALL: [Region; 3] = [Region::Centre, Region::Edge, Region::Top];
+
+    /// Its name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Region::Centre => "centre",
+            Region::Edge => "edge",
+            Region::Top => "top",
+        }
+    }
+
+    fn of(rho_mm: f64, h_mm: f64, radius_mm: f64, height_mm: f64) -> Region {
+        if h_mm > 0.5 * height_mm {
+            Region::Top
+        } else if rho_mm > 0.5 * radius_mm {
+            Region::Edge
+        } else {
+            Region::Centre
+        }
+    }
+}
+
+/// The verdict over one region, µm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RegionVerdict {
+    /// The region.
+    pub region: Region,
+    /// Poses judged in it.
+    pub poses: usize,
+    /// Mean volumetric error without compensation, µm.
+    pub before_mean_um: f64,
+    /// Mean residual with the identified model, µm.
+    pub after_mean_um: f64,
+    /// Largest residual with the identified model, µm.
+    pub after_max_um: f64,
+    /// `1 − after_mean / before_mean` (0 with no pose).
+    pub characterised_share: f64,
+}
+
+/// The verdict, µm.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HeldOut {
+    /// The judged cylinder: radius and height, mm.
+    pub region_mm: [f64; 2],
+    /// By region.
+    pub regions: Vec<RegionVerdict>,
     /// Poses judged.
     pub poses: usize,
     /// Mean volumetric error without compensation, µm.
@@ -77,6 +154,8 @@ pub struct JudgedPose {
     pub before_um: [f64; 3],
     /// Error with the identified model, workpiece frame, µm.
     pub after_um: [f64; 3],
+    /// Where in the judged cylinder it lies.
+    pub region: Region,
 }
 
 /// Judges the compensation model `model` (errors as a function of the pose) on held-out poses.
@@ -111,6 +190,7 @@ pub fn judge_poses(
         .find(|r| r.axis.letter() == 'C')
         .map_or([0.0; 3], |r| r.point_mm);
     let datum = Vector3::from(geom.datum_mm);
+    let (radius_mm, height_mm) = plan.region_mm(spec);
     let (mut before, mut after) = (Vec::new(), Vec::new());
     let mut poses = Vec::new();
     let mut attempts = 0;
@@ -120,9 +200,9 @@ pub fn judge_poses(
         for (r, &(lo, hi)) in lim.iter().enumerate().take(2) {
             rot[r] = rng.random_range(lo..hi);
         }
-        let rho = plan.radius_mm * rng.random::<f64>().sqrt();
+        let rho = radius_mm * rng.random::<f64>().sqrt();
         let phi = rng.random_range(0.0..std::f64::consts::TAU);
-        let h = rng.random_range(0.0..plan.height_mm);
+        let h = rng.random_range(0.0..height_mm);
         let p0 = Vector3::new(
             table[0] + rho * phi.cos(),
             table[1] + rho * phi.sin(),
@@ -150,11 +230,37 @@ pub fn judge_poses(
             target_w_mm: target.into(),
             before_um: e_before.into(),
             after_um: e_after.into(),
+            region: Region::of(rho, h, radius_mm, height_mm),
         });
     }
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let regions = Region::ALL
+        .iter()
+        .map(|&region| {
+            let (b, a): (Vec<f64>, Vec<f64>) = poses
+                .iter()
+                .zip(before.iter().zip(&after))
+                .filter(|(p, _)| p.region == region)
+                .map(|(_, (b, a))| (*b, *a))
+                .unzip();
+            RegionVerdict {
+                region,
+                poses: b.len(),
+                before_mean_um: mean(&b),
+                after_mean_um: mean(&a),
+                after_max_um: max(&a),
+                characterised_share: if b.is_empty() {
+                    0.0
+                } else {
+                    1.0 - mean(&a) / mean(&b).max(1e-300)
+                },
+            }
+        })
+        .collect();
     let verdict = HeldOut {
+        region_mm: [radius_mm, height_mm],
+        regions,
         poses: before.len(),
         before_mean_um: mean(&before),
         before_max_um: max(&before),

@@ -4,8 +4,8 @@
 //! The file lists every parameter of the fitted set by name (`E_Y0A`, `E_CC·cos2C`, …) with its
 //! value in µm or µrad; parameters that could not be separated are there with the value the
 //! identification gave them (merged or fixed at 0). The set is rebuilt from the machine's
-//! nominal geometry (location and assembly errors, plus the rotary motion harmonics up to the
-//! highest order named) and must list the same names in the same order, so a file of another
+//! nominal geometry (location and assembly errors, plus each rotary axis's motion harmonics up to
+//! the highest order named for that axis) and must list the same names in the same order, so a file of another
 //! machine or of another parameter set is refused rather than misread. Values are converted to
 //! mm and rad.
 //!
@@ -63,7 +63,7 @@ pub struct IdentifiedModel {
     pub set: ParameterSet,
     /// Their values, mm or rad.
     pub values: Vec<f64>,
-    /// Highest harmonic order of the rotary motion errors fitted (0: none).
+    /// Highest harmonic order of the rotary motion errors fitted over the axes (0: none).
     pub harmonics: u32,
 }
 
@@ -102,16 +102,23 @@ impl IdentifiedModel {
             machine: machine.to_string(),
             why,
         };
-        let harmonics = file
-            .parameters
-            .iter()
-            .filter_map(|p| harmonic_order(&p.name))
-            .max()
-            .unwrap_or(0);
-        let mut set = ParameterSet::location_and_assembly(geom);
-        if harmonics >= 2 {
-            set = set.with_motion_harmonics(geom, harmonics);
+        // Highest order named per rotary axis (the axis letter ends the name: `E_XC·cos2C`).
+        let mut orders = vec![0_u32; geom.rotary.len()];
+        for p in &file.parameters {
+            if let Some(k) = harmonic_order(&p.name) {
+                let letter = p.name.chars().last();
+                if let Some(r) = geom
+                    .rotary
+                    .iter()
+                    .position(|r| Some(r.axis.letter()) == letter)
+                {
+                    orders[r] = orders[r].max(k);
+                }
+            }
         }
+        let harmonics = orders.iter().copied().max().unwrap_or(0);
+        let set =
+            ParameterSet::location_and_assembly(geom).with_motion_harmonics_per_axis(geom, &orders);
         let names = set.names();
         if names.len() != file.parameters.len() {
             return Err(bad(format!(
@@ -216,6 +223,24 @@ mod tests {
         let tip = |st: &ErrorState| vmc_identify::htm::tip_in_workpiece_mm(&g, &pose, st);
         // 1e-12 mm: the µm/µrad round trip of the values.
         assert!((tip(&m.state_at(&pose)) - tip(&set.state_at(&values, &pose))).norm() < 1e-12);
+    }
+
+    #[test]
+    fn a_model_with_other_orders_per_axis_reads_back_with_them() {
+        let s = spec();
+        let g = s.geometry();
+        let set =
+            ParameterSet::location_and_assembly(&g).with_motion_harmonics_per_axis(&g, &[3, 0]);
+        let values: Vec<f64> = (0..set.len()).map(|i| i as f64 * 1e-6).collect();
+        let m = IdentifiedModel::from_json_str(
+            &file_of(&set, &values, "trunnion-ac"),
+            "trunnion-ac",
+            &g,
+        )
+        .unwrap();
+        // C: 6 errors × orders 2, 3 × (cos, sin) and order 1 of E_CC.
+        assert_eq!((m.harmonics, m.set.len()), (3, 19 + 26));
+        assert_eq!(m.set, set);
     }
 
     #[test]
