@@ -13,8 +13,8 @@ use crate::progress::Progress;
 use crate::record;
 use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
 use crate::studies::calibration::ThermalCycle;
-use crate::studies::probing::Probing;
 use crate::studies::campaign::{self, CampaignReport, ForMachine, TrainedModels, PREDICTORS};
+use crate::studies::probing::Probing;
 use vmc_machine::machine::MachineSpec;
 
 /// Name of a campaign shard's per-seed results (one JSON object per line,
@@ -118,7 +118,7 @@ fn write_probing(p: &Probing, out: &mut dyn Write) -> Result<()> {
     let c = p.sphere_centre_mm;
     writeln!(
         out,
-        "probing: a {:.0} mm reference sphere at ({:.0}, {:.0}, {:.0}) mm, 5 touches every {:.0} \
+        "probing: a {:.0} mm reference sphere at ({:.0}, {:.0}, {:.0}) mm, 10 touches every {:.0} \
          min from the start of each run (and right before the diagonal), {:.0} s per cycle: \
          {:.2} machine min per hour; probe {:.1} µm 2σ, pre-travel {:.1} µm, drift walk {:.1} µm/√h",
         2.0 * p.sphere_radius_mm,

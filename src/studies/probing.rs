@@ -1,7 +1,7 @@
 //! On-machine probing as a duty of its own in the campaign: every `every_s` of the thermal
 //! history (from its start, so also right before the measured program when the state's time is
 //! a multiple of the interval) the spindle stops, the probe is loaded, a reference sphere on the
-//! table is touched five times (±X and ±Y at its equator, Z on its top) and the spindle
+//! table is touched five times (±X and ±Y at its equator, Z on its top, each touch twice) and the spindle
 //! resumes its duty. The touches run on the twin's real, drifted geometry
 //! ([`vmc_machine::touch_probe`]); the controller sees only the latched axis positions and
 //! evaluates them with its own model ([`vmc_predict::drift`]), updating its drift filter.
@@ -18,9 +18,7 @@ use vmc_machine::thermal::Activity;
 use vmc_machine::touch_probe::{Artefact, ProbeOnTwin, Touch, TouchProbe, Trip};
 use vmc_machine::twin::{sub_seed, Twin, TwinError};
 use vmc_predict::controller::Compensator;
-use vmc_predict::drift::{
-    artefact_position_mm, ArtefactFix, DriftFilter, LatchedTouch, WithDrift,
-};
+use vmc_predict::drift::{artefact_position_mm, ArtefactFix, DriftFilter, LatchedTouch, WithDrift};
 use vmc_predict::predictor::ErrorPredictor;
 
 use super::calibration::{drive_with, EvalState};
@@ -33,6 +31,10 @@ const CYCLE_OVERHEAD_S: f64 = 28.0;
 const TOUCH_TIME_S: f64 = 5.0;
 /// Touches per cycle: ±X, ±Y at the equator, the top.
 const TOUCHES: [(usize, f64); 5] = [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0), (2, -1.0)];
+/// Cycles averaged into the artefact's reference position.
+const QUALIFY_CYCLES: usize = 8;
+/// Touches repeated per direction in one cycle (averaged).
+const REPEATS: usize = 2;
 /// Clearance of each touch's start from the nominal contact, mm.
 const CLEARANCE_MM: f64 = 5.0;
 
@@ -68,7 +70,7 @@ impl Probing {
 
     /// Machine time of one cycle, s.
     pub fn cycle_s(&self) -> f64 {
-        CYCLE_OVERHEAD_S + TOUCHES.len() as f64 * TOUCH_TIME_S
+        CYCLE_OVERHEAD_S + (REPEATS * TOUCHES.len()) as f64 * TOUCH_TIME_S
     }
 
     /// Machine minutes spent probing per hour of duty.
@@ -104,7 +106,8 @@ impl Probing {
         let rc = self.sphere_radius_mm + self.probe.ball_radius_mm;
         TOUCHES
             .iter()
-            .map(|&(axis, sign)| {
+            .flat_map(|t| std::iter::repeat_n(*t, REPEATS))
+            .map(|(axis, sign)| {
                 let mut start = self.sphere_centre_mm;
                 start[axis] -= sign * (rc + CLEARANCE_MM);
                 Touch {
@@ -176,10 +179,23 @@ pub fn qualify<P: ErrorPredictor + Clone>(
     sim::hand_over(&twin, Some(&mut ctrl));
     let mut on_twin = ProbeOnTwin::new(p.probe, sub_seed(noise, 1))
         .map_err(|e| TwinError::Sensors(format!("probing: {e}")))?;
-    park(&mut twin, p, 0.5 * p.cycle_s(), &mut ctrl)?;
-    let touches = touch_all(p, &mut twin, &mut on_twin)?;
+    // Qualification is done once and with care: the mean of QUALIFY_CYCLES cycles, so that
+    // its scatter does not become an offset of every later correction.
+    let mut sum = [0.0; 3];
+    let mut n = [0usize; 3];
+    for _ in 0..QUALIFY_CYCLES {
+        park(&mut twin, p, 0.5 * p.cycle_s(), &mut ctrl)?;
+        let touches = touch_all(p, &mut twin, &mut on_twin)?;
+        let position = artefact_position_mm(ctrl.predictor_mut(), &touches);
+        for a in 0..3 {
+            if let Some(v) = position[a] {
+                sum[a] += v;
+                n[a] += 1;
+            }
+        }
+    }
     Ok(ArtefactFix {
-        reference_mm: artefact_position_mm(ctrl.predictor_mut(), &touches),
+        reference_mm: [0, 1, 2].map(|a| (n[a] > 0).then(|| sum[a] / n[a] as f64)),
     })
 }
 
@@ -219,8 +235,7 @@ pub fn drive_probed<P: ErrorPredictor>(
         // The duty resumes where it paused; its clock is cycle time.
         drive_with(twin, &state.cycle, t0_s, to_s, 1.0, Some(ctrl))?;
         duty_s = to_s;
-        if (state.at_s - duty_s).abs() < 1e-9 && ((state.at_s / p.every_s).fract()).abs() > 1e-9
-        {
+        if (state.at_s - duty_s).abs() < 1e-9 && ((state.at_s / p.every_s).fract()).abs() > 1e-9 {
             // The state's time is not a multiple of the interval: no cycle right before it.
             break;
         }

@@ -85,8 +85,16 @@ impl TouchProbe {
             ("stylus_length_mm", self.stylus_length_mm, true),
             ("ball_radius_mm", self.ball_radius_mm, false),
             ("trigger_force_n", self.trigger_force_n, true),
-            ("stylus_stiffness_n_per_um", self.stylus_stiffness_n_per_um, false),
-            ("repeatability_2sigma_um", self.repeatability_2sigma_um, true),
+            (
+                "stylus_stiffness_n_per_um",
+                self.stylus_stiffness_n_per_um,
+                false,
+            ),
+            (
+                "repeatability_2sigma_um",
+                self.repeatability_2sigma_um,
+                true,
+            ),
             ("servo_period_s", self.servo_period_s, true),
             ("feed_mm_per_min", self.feed_mm_per_min, false),
         ];
@@ -259,7 +267,10 @@ impl ProbeOnTwin {
         let gap = |twin: &Twin, lambda: f64| {
             let q = at(lambda);
             let e = twin.tool_error_mm(q, q, approach);
-            artefact.gap_mm([q[0] + e.x, q[1] + e.y, q[2] + e.z], self.probe.ball_radius_mm)
+            artefact.gap_mm(
+                [q[0] + e.x, q[1] + e.y, q[2] + e.z],
+                self.probe.ball_radius_mm,
+            )
         };
         let g0 = gap(twin, 0.0);
         let g1 = gap(twin, touch.max_travel_mm);

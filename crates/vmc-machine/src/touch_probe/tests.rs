@@ -146,5 +146,9 @@ fn a_sphere_is_touched_on_its_side_at_its_radius_plus_the_ball() {
     let trip = p.touch(&mut twin, &sphere, &touch).unwrap().unwrap();
     // Within the machine's cold error (tens of µm) of the nominal contact plus pre-travel.
     let nominal = 100.0 - 15.5 + probe.pretravel_mm();
-    assert!((trip.axis_mm[0] - nominal).abs() < 0.1, "{:?}", trip.axis_mm);
+    assert!(
+        (trip.axis_mm[0] - nominal).abs() < 0.1,
+        "{:?}",
+        trip.axis_mm
+    );
 }

@@ -49,7 +49,11 @@ fn a_constant_drift_measured_with_noise_is_estimated_as_the_mean_of_the_measurem
         // With a walk this slow the filter is the least-squares constant: the measurements'
         // mean (within 0.02 µm), itself within 5σ of the mean (0.35 µm) of the truth.
         let got = f.drift_mm()[a];
-        assert!((got - mean[a]).abs() < 0.02e-3, "axis {a}: {got} vs mean {}", mean[a]);
+        assert!(
+            (got - mean[a]).abs() < 0.02e-3,
+            "axis {a}: {got} vs mean {}",
+            mean[a]
+        );
         assert!((got - truth[a]).abs() < 0.35e-3, "axis {a}: {got}");
     }
 }
@@ -114,7 +118,12 @@ fn bad_settings_are_refused_by_name() {
 
 /// Latched touches of a sphere at `centre` (contact radius `rc`) on a machine whose true error
 /// is the model's plus `missed_mm`: the ball reaches the contact where q + E_true(q) = contact.
-fn touches(model: &mut Affine, centre: [f64; 3], rc: f64, missed_mm: [f64; 3]) -> Vec<LatchedTouch> {
+fn touches(
+    model: &mut Affine,
+    centre: [f64; 3],
+    rc: f64,
+    missed_mm: [f64; 3],
+) -> Vec<LatchedTouch> {
     let mut out = Vec::new();
     for (axis, sign) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0), (2, -1.0)] {
         let mut contact = centre;
