@@ -39,6 +39,10 @@ pub struct CampaignArgs {
     /// --out for `vmc-twin merge`.
     #[arg(long, value_name = "I/N")]
     pub shard: Option<String>,
+    /// Probe a reference sphere on the table every MIN minutes of every held-out run (from its
+    /// start) and correct the drift the model missed (see docs/usage.md, probing).
+    #[arg(long, value_name = "MIN")]
+    pub probe_every: Option<f64>,
     #[command(flatten)]
     pub rrd: RrdArgs,
 }
@@ -64,6 +68,14 @@ impl CampaignArgs {
                 bail!("--runs prints the merged campaign's runs: pass it to `vmc-twin merge`");
             }
         }
+        if let Some(min) = self.probe_every {
+            if !(min.is_finite() && (1.0..=1440.0).contains(&min)) {
+                bail!("--probe-every {min}: the interval must be 1 to 1440 minutes");
+            }
+            if shard.is_some() {
+                bail!("--probe-every runs the whole campaign: run it without --shard");
+            }
+        }
         let machine = self.machine.load(Some(&self.sensors))?;
         let inputs = commands::input_fingerprints(
             self.machine.machine.as_deref(),
@@ -79,6 +91,7 @@ impl CampaignArgs {
             print_runs: self.runs,
             rrd: self.rrd.checked()?,
             shard,
+            probe_every_min: self.probe_every,
             inputs,
             command_line: std::env::args().collect(),
         })

@@ -14,6 +14,7 @@ use crate::record;
 use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFEST_FORMAT};
 use crate::studies::calibration::ThermalCycle;
 use crate::studies::campaign::{self, CampaignReport, ForMachine, TrainedModels, PREDICTORS};
+use crate::studies::probing::Probing;
 use vmc_machine::machine::MachineSpec;
 
 /// Name of a campaign shard's per-seed results (one JSON object per line,
@@ -38,6 +39,8 @@ pub struct CampaignConfig {
     pub rrd: Option<RrdOutput>,
     /// Run only this shard of the seeds and write its results for `merge` (needs `out_dir`).
     pub shard: Option<Shard>,
+    /// Probe a reference sphere every this many minutes of every held-out run (None: no probing).
+    pub probe_every_min: Option<f64>,
     /// Fingerprints of the input files (machine, sensor set), for a shard's manifest.
     pub inputs: Vec<InputFingerprint>,
     /// The command line, for a shard's manifest.
@@ -77,11 +80,21 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
     }
     let settings = settings_of(cfg);
     let progress = Progress::new(0, "units");
-    let (rep, models) =
-        campaign::run_campaign_with_progress(&cfg.machine, &cfg.seeds, &settings, &progress)?;
+    let probing = cfg.probe_every_min.map(|m| Probing::every(&cfg.machine, m));
+    let (rep, models) = campaign::run_campaign_probed(
+        &cfg.machine,
+        &cfg.seeds,
+        &settings,
+        &ThermalCycle::calibration_plan(&cfg.machine),
+        probing.as_ref(),
+        &progress,
+    )?;
     progress.finish();
     let summary = campaign::Summary::of(rep.header(), &rep.runs);
     campaign::write_summary(&summary, out)?;
+    if let Some(p) = &probing {
+        write_probing(p, out)?;
+    }
     if cfg.print_runs {
         campaign::write_run_table(&rep, out)?;
     }
@@ -97,6 +110,28 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
         write_models(&dir, &models, cfg.force)?;
         writeln!(out, "wrote {} and the trained models", path.display())?;
     }
+    Ok(())
+}
+
+/// The probing line of a campaign with probing: artefact, interval, cycle and its cost.
+fn write_probing(p: &Probing, out: &mut dyn Write) -> Result<()> {
+    let c = p.sphere_centre_mm;
+    writeln!(
+        out,
+        "probing: a {:.0} mm reference sphere at ({:.0}, {:.0}, {:.0}) mm, 10 touches every {:.0} \
+         min from the start of each run (and right before the diagonal), {:.0} s per cycle: \
+         {:.2} machine min per hour; probe {:.1} µm 2σ, pre-travel {:.1} µm, drift walk {:.1} µm/√h",
+        2.0 * p.sphere_radius_mm,
+        c[0],
+        c[1],
+        c[2],
+        p.every_s / 60.0,
+        p.cycle_s(),
+        p.cost_min_per_h(),
+        p.probe.repeatability_2sigma_um,
+        p.probe.pretravel_mm() * 1e3,
+        p.walk_sigma_um_per_sqrt_h
+    )?;
     Ok(())
 }
 

@@ -22,6 +22,7 @@ use crate::predict::predictor::{
 };
 use crate::predict::provenance::TrainedOn;
 use crate::studies::calibration::{self, CampaignConfig, EvalState, ThermalCycle};
+use crate::studies::probing::{self, Probing};
 use vmc_machine::machine::MachineSpec;
 use vmc_machine::motion::Plan;
 use vmc_machine::program::{self, ProgramError};
@@ -147,7 +148,27 @@ pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>
     plans: &[(&str, Plan)],
     progress: &dyn CampaignProgress,
 ) -> Result<Vec<RunReport>, EvalError> {
+    evaluate_predictor_probed(spec, seed, kind, predictor, states, plans, None, progress)
+}
+
+/// [`evaluate_predictor_with_progress`], with a probing duty in every run when `probing` is
+/// given ([`probing::run_at_state_probed`]; the artefact qualified once on the cold machine).
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_predictor_probed<P: ErrorPredictor + Clone + Send + Sync>(
+    spec: &MachineSpec,
+    seed: u64,
+    kind: ModelKind,
+    predictor: &P,
+    states: &[EvalState],
+    plans: &[(&str, Plan)],
+    probing: Option<&Probing>,
+    progress: &dyn CampaignProgress,
+) -> Result<Vec<RunReport>, EvalError> {
     let sensor_names: Vec<String> = spec.sensors.iter().map(|s| s.name.clone()).collect();
+    let fix = match probing {
+        Some(p) => Some(probing::qualify(spec, seed, p, predictor)?),
+        None => None,
+    };
     let jobs: Vec<(usize, usize)> = (0..states.len())
         .flat_map(|si| (0..plans.len()).map(move |di| (si, di)))
         .collect();
@@ -155,10 +176,18 @@ pub fn evaluate_predictor_with_progress<P: ErrorPredictor + Clone + Send + Sync>
         .par_iter()
         .map(|&(si, di)| {
             let (state, (diag, plan)) = (&states[si], &plans[di]);
-            let mut ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
             let noise = eval_noise_seed(seed, si, di);
-            let points =
-                calibration::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?;
+            let points = match (probing, &fix) {
+                (Some(p), Some(fix)) => {
+                    let mut ctrl =
+                        probing::probed_compensator(predictor.clone(), p, &sensor_names)?;
+                    probing::run_at_state_probed(spec, seed, noise, state, plan, p, fix, &mut ctrl)?
+                }
+                _ => {
+                    let mut ctrl = Compensator::for_machine(predictor.clone(), &sensor_names)?;
+                    calibration::run_at_state(spec, seed, noise, state, plan, Some(&mut ctrl))?
+                }
+            };
             progress.advance(
                 units::RUN,
                 &format!("seed {seed}: {} {diag} at {}", kind.name(), state.name),
@@ -338,6 +367,7 @@ fn campaign_for_seed(
     settings: &Settings,
     cal_cycles: &[ThermalCycle],
     plans: &[(&str, Plan)],
+    probing: Option<&Probing>,
     progress: &dyn CampaignProgress,
 ) -> Result<SeedResult, EvalError> {
     let geometry = spec.geometry();
@@ -369,31 +399,34 @@ fn campaign_for_seed(
     ];
     progress.advance(units::TRAINING, &format!("seed {seed}: evaluation"));
     let states = calibration::evaluation_states(spec, seed);
-    let mut runs = evaluate_predictor_with_progress(
+    let mut runs = evaluate_predictor_probed(
         spec,
         seed,
         ModelKind::Hybrid,
         &hybrid,
         &states,
         plans,
+        probing,
         progress,
     )?;
-    runs.extend(evaluate_predictor_with_progress(
+    runs.extend(evaluate_predictor_probed(
         spec,
         seed,
         ModelKind::Volumetric,
         &volumetric,
         &states,
         plans,
+        probing,
         progress,
     )?);
-    runs.extend(evaluate_predictor_with_progress(
+    runs.extend(evaluate_predictor_probed(
         spec,
         seed,
         ModelKind::Linear,
         &linear,
         &states,
         plans,
+        probing,
         progress,
     )?);
     Ok(SeedResult {
@@ -443,6 +476,19 @@ pub fn run_campaign_with_cycles(
     cal_cycles: &[ThermalCycle],
     progress: &dyn CampaignProgress,
 ) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
+    run_campaign_probed(spec, seeds, settings, cal_cycles, None, progress)
+}
+
+/// [`run_campaign_with_cycles`] with a probing duty in every held-out run when `probing` is
+/// given (see [`probing`]); without it, the same campaign.
+pub fn run_campaign_probed(
+    spec: &MachineSpec,
+    seeds: &[u64],
+    settings: &Settings,
+    cal_cycles: &[ThermalCycle],
+    probing: Option<&Probing>,
+    progress: &dyn CampaignProgress,
+) -> Result<(CampaignReport, Vec<TrainedModels>), EvalError> {
     let cal_cycles = cal_cycles.to_vec();
     let plans = diagonal_plans(spec)?;
     let n_runs = (calibration::evaluation_states(spec, 0).len() * plans.len()) as u64;
@@ -462,7 +508,9 @@ pub fn run_campaign_with_cycles(
     // Seeds are independent: run them in parallel, collect in seed order.
     let per_seed: Vec<Result<SeedResult, EvalError>> = seeds
         .par_iter()
-        .map(|&seed| campaign_for_seed(spec, seed, settings, &cal_cycles, &plans, progress))
+        .map(|&seed| {
+            campaign_for_seed(spec, seed, settings, &cal_cycles, &plans, probing, progress)
+        })
         .collect();
     let mut models = Vec::new();
     for r in per_seed {

@@ -6,3 +6,4 @@ pub mod calibration;
 pub mod campaign;
 pub mod chatter;
 pub mod placement;
+pub mod probing;

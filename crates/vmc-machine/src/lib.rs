@@ -3,7 +3,7 @@
 //! Machine descriptions ([`machine`], loaded from `machines/*.toml`), the kinematic chain and
 //! its full HTM product ([`kinematics`]), the geometric error field ([`errors`]), the lumped
 //! [`thermal`] network, the [`sensors`] and the virtual [`instruments`] that measure it, the
-//! [`twin`] that ties them together, the [`motion`] planner, the [`sim`] loop, [`tools`],
+//! [`twin`] that ties them together, the [`motion`] planner, the [`sim`] loop, [`tools`], the [`touch_probe`],
 //! [`collision`] checks ([`collision_spec`] for fixtures and stock), the twin side of cutting
 //! ([`cutting`] engagement, [`milling`] tools, the piezo [`blade`]), the five-axis truth
 //! ([`fiveaxis`]) and the programs that run on it ([`program`]: G-code through `vmc-gcode` into a
@@ -30,4 +30,5 @@ pub mod sensors;
 pub mod sim;
 pub mod thermal;
 pub mod tools;
+pub mod touch_probe;
 pub mod twin;

@@ -135,6 +135,12 @@ impl Twin {
         Ok(offset_mm)
     }
 
+    /// Puts a tool whose tip sits at `offset_mm` from the spindle gauge point in the spindle
+    /// (a touch probe's stylus, for one touch) and returns the offset it replaces.
+    pub fn set_tool_offset_mm(&mut self, offset_mm: [f64; 3]) -> [f64; 3] {
+        std::mem::replace(&mut self.geometry.tool_offset_mm, offset_mm)
+    }
+
     /// Simulated time since the twin was built, s.
     pub fn time_s(&self) -> f64 {
         self.thermal.time_s()

@@ -7,6 +7,7 @@
 pub mod compiled;
 pub mod controller;
 pub mod dataset;
+pub mod drift;
 pub mod guard;
 pub mod history;
 pub mod linreg;
