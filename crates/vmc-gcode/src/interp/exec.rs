@@ -22,6 +22,7 @@ mod modal_state;
 mod probing;
 use probing::PendingProbe;
 mod rotary;
+mod state_params;
 mod tool_table;
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
@@ -161,6 +162,7 @@ impl Interpreter {
         }
         params.set(5220, (self.coord_index + 1) as f64);
         self.sync_rotary_params_out(params);
+        self.sync_state_params_out(params);
     }
 
     /// True once M2/M30 has run; later blocks are ignored.

@@ -280,6 +280,8 @@ impl Runner {
         for (i, v) in values.into_iter().enumerate() {
             self.params.set(PROBE_PARAM_FIRST + i, v);
         }
+        // The tool rests elsewhere now: #5420… follow it.
+        self.interp.sync_params_out(&mut self.params);
         Ok(())
     }
 
