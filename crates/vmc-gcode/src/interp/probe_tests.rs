@@ -27,6 +27,13 @@ fn err(src: &str) -> GcodeError {
     run_program(src, &InterpConfig::default()).expect_err("program must be rejected")
 }
 
+/// Work offsets with G54 at `offset_mm`, the others at 0.
+fn g54(offset_mm: [f64; 3]) -> [[f64; 3]; WORK_OFFSETS] {
+    let mut all = [[0.0; 3]; WORK_OFFSETS];
+    all[0] = offset_mm;
+    all
+}
+
 fn close(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {
     (0..3).all(|i| (a[i] - b[i]).abs() <= tol)
 }
@@ -224,14 +231,7 @@ fn after_g40_the_probe_leaves_from_the_compensated_point() {
 #[test]
 fn a_tripped_probe_sets_the_trip_point_and_5070_and_the_tool_goes_on_from_rest() {
     let cfg = InterpConfig {
-        work_offsets_mm: [
-            [100.0, 0.0, 10.0],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-        ],
+        work_offsets_mm: g54([100.0, 0.0, 10.0]),
         ..InterpConfig::default()
     };
     // Program Z-2.5 is machine Z 7.5; the tool stops 0.2 mm lower.
@@ -360,14 +360,7 @@ fn a_probe_already_in_the_state_it_seeks_is_refused_by_g38_2_and_g38_4_and_trips
     // G38.3 / G38.5: #5061… the start point (work coordinates: G54 at X100 here), #5070 = 1,
     // and the tool goes on from the start.
     let cfg = InterpConfig {
-        work_offsets_mm: [
-            [100.0, 0.0, 0.0],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-        ],
+        work_offsets_mm: g54([100.0, 0.0, 0.0]),
         ..InterpConfig::default()
     };
     for code in ["G38.3", "G38.5"] {
