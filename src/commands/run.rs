@@ -107,6 +107,7 @@ fn sampling(cfg: &RunConfig, plan: &Plan) -> Result<Sampling> {
 }
 
 /// A run on the machine the file describes.
+#[allow(clippy::large_enum_variant)] // one per run, built once
 pub enum RunTarget {
     /// The three-axis thermal twin.
     ThreeAxis(RunConfig),
