@@ -211,13 +211,19 @@ pub(super) fn run_config(args: super::RunArgs) -> Result<FiveAxisRunConfig> {
     if let Some((_, option, why)) = refused.iter().find(|r| r.0) {
         anyhow::bail!("{option} does not apply to the five-axis machine {name}: {why}");
     }
+    let interp_cycle_ms = args.interp_cycle_ms.unwrap_or(1.0);
     anyhow::ensure!(
-        args.interp_cycle_ms.is_finite() && args.interp_cycle_ms > 0.0,
-        "--interp-cycle-ms must be > 0, got {}",
-        args.interp_cycle_ms
+        interp_cycle_ms.is_finite() && interp_cycle_ms > 0.0,
+        "--interp-cycle-ms must be > 0, got {interp_cycle_ms}"
     );
+    let p = &args.placement;
+    if p.setup.is_some() || !p.work_offset.is_empty() || !p.subroutines.is_empty() {
+        anyhow::bail!(
+            "--setup, --work-offset and --subroutines do not apply to the five-axis machine {name} yet: its work offsets come from the machine file"
+        );
+    }
     let sampling = if args.every_cycle {
-        Sampling::EveryCycle(args.interp_cycle_ms * 1e-3)
+        Sampling::EveryCycle(interp_cycle_ms * 1e-3)
     } else {
         Sampling::Dwells
     };

@@ -13,6 +13,7 @@ mod fiveaxis;
 mod identify_thermal;
 mod lobes;
 mod modal_fit;
+mod placement;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -238,9 +239,12 @@ pub struct RunArgs {
     /// Also measure at every interpolation cycle during motion (not only at dwells).
     #[arg(long)]
     pub every_cycle: bool,
-    /// Interpolation cycle, ms (with --every-cycle).
-    #[arg(long, default_value_t = 1.0)]
-    pub interp_cycle_ms: f64,
+    /// Interpolation cycle, ms: with --every-cycle (default 1 ms), and the measurement period
+    /// during motion of a program without G4 dwells (default 1000 ms).
+    #[arg(long)]
+    pub interp_cycle_ms: Option<f64>,
+    #[command(flatten)]
+    pub placement: placement::PlacementArgs,
     /// Thermal integration and sensor sampling step, s.
     #[arg(long, default_value_t = 1.0)]
     pub thermal_step_s: f64,
@@ -289,19 +293,16 @@ impl RunArgs {
 
     fn three_axis_config(self) -> Result<commands::run::RunConfig> {
         let machine = self.machine.load(Some(&self.sensors))?;
-        let sim = SimConfig::new(self.thermal_step_s, self.interp_cycle_ms * 1e-3).map_err(
-            |e| match e {
+        let interp_cycle_ms = self.interp_cycle_ms.unwrap_or(1.0);
+        let sim =
+            SimConfig::new(self.thermal_step_s, interp_cycle_ms * 1e-3).map_err(|e| match e {
                 SimConfigError::ThermalStep(_) => {
                     anyhow::anyhow!("--thermal-step-s must be > 0, got {}", self.thermal_step_s)
                 }
                 SimConfigError::InterpCycle(_) => {
-                    anyhow::anyhow!(
-                        "--interp-cycle-ms must be > 0, got {}",
-                        self.interp_cycle_ms
-                    )
+                    anyhow::anyhow!("--interp-cycle-ms must be > 0, got {interp_cycle_ms}")
                 }
-            },
-        )?;
+            })?;
         if let (Some(path), false) = (&self.model, self.compensate) {
             anyhow::bail!(
                 "{}: a model was given without --compensate; add --compensate to put it in the loop",
@@ -310,7 +311,13 @@ impl RunArgs {
         }
         let force = self.force.force;
         let rrd = self.rrd.checked()?;
+        let offsets = placement::nine_offsets(machine.axes.work_offsets_mm);
+        let placement = self.placement.placement(&self.program, offsets)?;
         Ok(commands::run::RunConfig {
+            motion_sample_s: self
+                .interp_cycle_ms
+                .map_or(commands::run::MOTION_SAMPLE_S, |ms| ms * 1e-3),
+            placement,
             program: self.program,
             machine,
             seed: self.seed,
@@ -543,6 +550,8 @@ pub struct CheckArgs {
     /// Overwrite an existing recording.
     #[arg(long)]
     pub force: bool,
+    #[command(flatten)]
+    pub placement: placement::PlacementArgs,
 }
 
 impl CheckArgs {
@@ -555,7 +564,10 @@ impl CheckArgs {
         if let Some(path) = &self.rrd {
             record::check_rrd_path(path, self.force)?;
         }
+        let offsets = placement::nine_offsets(machine.axes.work_offsets_mm);
+        let placement = self.placement.placement(&self.program, offsets)?;
         Ok(commands::check::CheckConfig {
+            placement,
             program: self.program,
             machine,
             fixture: self.fixture,
@@ -588,6 +600,8 @@ pub struct InterpretArgs {
     /// G41/G42 D; default: every tool has length 0 and diameter 0.
     #[arg(long)]
     pub tools: Option<PathBuf>,
+    #[command(flatten)]
+    pub placement: placement::PlacementArgs,
 }
 
 impl InterpretArgs {
@@ -596,21 +610,21 @@ impl InterpretArgs {
     /// # Errors
     /// An unreadable or invalid machine or tool table.
     pub fn config(self) -> Result<commands::interpret::InterpretConfig> {
-        // Subroutine files `<name>.ngc` are looked up next to the program.
-        let folder = self.program.parent().unwrap_or(Path::new("")).to_path_buf();
-        let mut interp = vmc_gcode::interp::InterpConfig {
-            subroutine_dirs: vec![folder],
-            ..Default::default()
-        };
+        let mut interp = vmc_gcode::interp::InterpConfig::default();
         if let Some(path) = &self.tools {
             (interp.tool_lengths_mm, interp.tool_diameters_mm) =
                 commands::interpret::load_tools(path)?;
         }
+        let mut offsets = interp.work_offsets_mm;
         if let Some(path) = &self.machine {
             let machine = commands::load_machine(Some(path), None)?;
             interp.start_mm = machine.axes.home_mm;
-            interp.work_offsets_mm = machine.axes.work_offsets_mm;
+            offsets = placement::nine_offsets(machine.axes.work_offsets_mm);
         }
+        // Subroutine files: the program's folder, then --subroutines.
+        let placement = self.placement.placement(&self.program, offsets)?;
+        interp.work_offsets_mm = placement.work_offsets_mm;
+        interp.subroutine_dirs = placement.search_path(Some(&self.program));
         Ok(commands::interpret::InterpretConfig {
             program: self.program,
             interp,

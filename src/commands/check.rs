@@ -26,6 +26,9 @@ pub struct CheckConfig {
     pub force: bool,
     /// The tools `M6` loads (empty: the machine's own tool for every number).
     pub tools: vmc_machine::tools::ToolTable,
+    /// Where the program sits (work offsets, setup file with its bodies) and its subroutine
+    /// folders.
+    pub placement: vmc_machine::setup::Placement,
 }
 
 /// Checks every move, prints each problem and a summary.
@@ -34,24 +37,34 @@ pub struct CheckConfig {
 /// An unreadable or invalid program or fixture; a program with a problem (after the report).
 pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
     let machine = &cfg.machine;
-    let fixture = cfg.fixture.as_deref().map(FixtureSpec::load).transpose()?;
+    let fixture_file = cfg.fixture.as_deref().map(FixtureSpec::load).transpose()?;
+    // The setup file's bodies and the fixture file's, as one fixture.
+    let fixture = cfg.placement.fixture(fixture_file);
     let scene = match (&machine.collision, &fixture) {
         (None, None) => None,
         _ => Some(Scene::new(machine, fixture.as_ref())?.with_tools(cfg.tools.clone())),
     };
-    let plan =
-        program::load_plan_unchecked(&cfg.program, machine, machine.axes.home_mm, &cfg.tools)?;
+    let (plan, units) = program::load_plan_placed(
+        &cfg.program,
+        machine,
+        machine.axes.home_mm,
+        &cfg.tools,
+        &cfg.placement,
+        false,
+    )?;
     let file = cfg.program.display().to_string();
     let fixture_name = cfg
         .fixture
         .as_ref()
         .map(|p| format!("fixture {}", p.display()))
         .unwrap_or_else(|| "no fixture file".into());
+    let placement = super::program_placement::placement_line(&cfg.placement);
     writeln!(
         out,
         "vmc-twin check: {file} on {} ({fixture_name})",
         machine.machine.name
     )?;
+    writeln!(out, "{placement}")?;
     match &scene {
         Some(sc) => {
             writeln!(out, "bodies (machine frame: tool tip relative to the table, mm):")?;
@@ -74,7 +87,7 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
         }
         None => writeln!(
             out,
-            "travel check only: the machine file has no [collision] section and no --fixture was given"
+            "travel check only: the machine file has no [collision] section, and no --fixture or setup file bodies were given"
         )?,
     }
     struct Print<'a>(
@@ -82,16 +95,27 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
         &'a str,
         std::io::Result<()>,
         Vec<Problem>,
+        &'a program::LineUnits,
     );
     impl collision::CheckObserver for Print<'_> {
         fn on_problem(&mut self, p: &Problem) {
             self.3.push(p.clone());
+            // A travel violation in the program's unit of length.
+            let text = match p {
+                Problem::Travel(v) => vmc_machine::motion::travel_message(
+                    v.line,
+                    v.axis,
+                    [v.pos_mm, v.min_mm, v.max_mm],
+                    self.4.at(v.line),
+                ),
+                other => other.to_string(),
+            };
             if self.2.is_ok() {
-                self.2 = writeln!(self.0, "{}: {p}", self.1);
+                self.2 = writeln!(self.0, "{}: {text}", self.1);
             }
         }
     }
-    let mut printer = Print(out, &file, Ok(()), Vec::new());
+    let mut printer = Print(out, &file, Ok(()), Vec::new(), &units);
     let sum = collision::check_plan(&plan, machine, scene.as_ref(), &mut printer)?;
     printer.2?;
     let problems = std::mem::take(&mut printer.3);

@@ -20,6 +20,7 @@ pub mod merge;
 pub mod modal_fit;
 pub(crate) mod model;
 pub mod probe_campaign;
+pub mod program_placement;
 pub mod run;
 pub mod run_fiveaxis;
 pub mod select_sensors;

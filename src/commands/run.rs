@@ -16,8 +16,9 @@ use crate::progress::Progress;
 use crate::record;
 use crate::report::{self, RunLog, RunSummary};
 use vmc_machine::machine::MachineSpec;
-use vmc_machine::motion::Plan;
+use vmc_machine::motion::{Plan, SegmentKind};
 use vmc_machine::program;
+use vmc_machine::setup::Placement;
 use vmc_machine::sim::{self, Observer, RunStart, SampleMode, SimConfig};
 use vmc_machine::twin::Twin;
 
@@ -49,9 +50,64 @@ pub struct RunConfig {
     pub allow_other_machine: bool,
     /// The tools `M6` loads (empty: the machine's own tool for every number).
     pub tools: vmc_machine::tools::ToolTable,
+    /// Where the program sits (work offsets, setup file) and its subroutine folders.
+    pub placement: Placement,
+    /// Measurement period during motion of a program without G4 dwells (without
+    /// `--every-cycle`), s.
+    pub motion_sample_s: f64,
+}
+
+/// Default measurement period during motion of a program without G4 dwells, s: one point per
+/// second of program time (a CAM program of hours gives thousands of points, not millions).
+pub const MOTION_SAMPLE_S: f64 = 1.0;
+
+/// How the measured program is sampled: the mode, the simulation settings, and why (for the
+/// report).
+struct Sampling {
+    mode: SampleMode,
+    sim: SimConfig,
+    note: String,
+}
+
+/// At the program's dwells (G4) as in a diagonal test; during motion with `--every-cycle`;
+/// during motion every [`RunConfig::motion_sample_s`] for a program without dwells (it would
+/// have no measurement point at all).
+fn sampling(cfg: &RunConfig, plan: &Plan) -> Result<Sampling> {
+    let has_dwell = plan
+        .segments()
+        .iter()
+        .any(|s| matches!(s.kind, SegmentKind::Dwell));
+    let cycle_ms = cfg.sim.interp_cycle_s() * 1e3;
+    Ok(if cfg.every_cycle {
+        Sampling {
+            mode: SampleMode::EveryCycle,
+            sim: cfg.sim,
+            note: format!(
+                "at every {cycle_ms} ms interpolation cycle during motion and at each G4 dwell"
+            ),
+        }
+    } else if has_dwell {
+        Sampling {
+            mode: SampleMode::Dwells,
+            sim: cfg.sim,
+            note: "at each G4 dwell (--every-cycle: also during motion)".into(),
+        }
+    } else {
+        let sim = SimConfig::new(cfg.sim.thermal_step_s(), cfg.motion_sample_s)
+            .map_err(|e| anyhow::anyhow!("--interp-cycle-ms: {e}"))?;
+        Sampling {
+            mode: SampleMode::EveryCycle,
+            sim,
+            note: format!(
+                "during motion every {} s (the program has no G4 dwell; --interp-cycle-ms sets the period)",
+                cfg.motion_sample_s
+            ),
+        }
+    })
 }
 
 /// A run on the machine the file describes.
+#[allow(clippy::large_enum_variant)] // one per run, built once
 pub enum RunTarget {
     /// The three-axis thermal twin.
     ThreeAxis(RunConfig),
@@ -82,14 +138,14 @@ type RunController = Guarded<Compensator<AnyPredictor>>;
 pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     let machine = &cfg.machine;
     // Check everything the user gave before minutes of simulation: programs and outputs.
-    let (warmups, plan) = load_plans(cfg)?;
+    let (warmups, plan, sampling) = load_plans(cfg)?;
     let out_files =
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let mut controller = match &cfg.model {
         Some(path) => Some(compensator(cfg, path, out)?),
         None => None,
     };
-    let (log, recorder) = simulate(cfg, &warmups, &plan, controller.as_mut())?;
+    let (log, recorder) = simulate(cfg, &sampling, &warmups, &plan, controller.as_mut())?;
 
     let warmup_names: Vec<String> = cfg
         .warmups
@@ -98,8 +154,17 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         .collect();
     let program_name = cfg.program.display().to_string();
     let mut summary = log
-        .summary(&program_name, &machine.machine.name, cfg.seed, &warmup_names)
-        .with_context(|| format!("{program_name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion"))?;
+        .summary(
+            &program_name,
+            &machine.machine.name,
+            cfg.seed,
+            &warmup_names,
+        )
+        .with_context(|| {
+            format!(
+                "{program_name}: the program has no measurement points (no motion and no G4 dwell)"
+            )
+        })?;
     summary.extrapolation = controller.as_ref().map(|c| c.extrapolation().clone());
     if let (true, Some(e)) = (cfg.strict, &summary.extrapolation) {
         if let Some(first) = e.inputs.first() {
@@ -121,7 +186,7 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         }
     }
     // The report goes to `out` and, with --rrd, into the recording.
-    let text = report_text(cfg, &log, &summary)?;
+    let text = report_text(cfg, &sampling, &log, &summary)?;
     out.write_all(text.as_bytes())?;
     if let (Some((rec, file)), Some(rrd)) = (recorder, &cfg.rrd) {
         let md = record::run_markdown(&text, rrd.settings.magnify, controller.is_some());
@@ -162,7 +227,7 @@ impl Warmup {
 
 /// The warm-ups (every piece planned and checked once, then dropped) and the program's plan,
 /// each starting where the previous one ends; the run's size checked.
-fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan)> {
+fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan, Sampling)> {
     let mut start = cfg.machine.axes.home_mm;
     let mut warmups = Vec::new();
     for w in &cfg.warmups {
@@ -181,16 +246,24 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan)> {
         warmup.duration_s = duration_s;
         warmups.push(warmup);
     }
-    let plan = program::load_plan_with_tools(&cfg.program, &cfg.machine, start, &cfg.tools)?;
+    let (plan, _) = program::load_plan_placed(
+        &cfg.program,
+        &cfg.machine,
+        start,
+        &cfg.tools,
+        &cfg.placement,
+        true,
+    )?;
+    let sampling = sampling(cfg, &plan)?;
     let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + plan.duration_s();
     program::check_run_size(
         &cfg.program.display().to_string(),
         total_s,
         cfg.sim.thermal_step_s(),
         plan.duration_s(),
-        cfg.every_cycle.then_some(cfg.sim.interp_cycle_s()),
+        matches!(sampling.mode, SampleMode::EveryCycle).then_some(sampling.sim.interp_cycle_s()),
     )?;
-    Ok((warmups, plan))
+    Ok((warmups, plan, sampling))
 }
 
 /// The model of `path` as a compensator for the run's machine (see
@@ -215,6 +288,7 @@ fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunC
 /// Runs the warm-ups, then the program (measured), on a fresh twin; with a recording if asked.
 fn simulate(
     cfg: &RunConfig,
+    sampling: &Sampling,
     warmups: &[Warmup],
     plan: &Plan,
     mut controller: Option<&mut RunController>,
@@ -222,13 +296,9 @@ fn simulate(
     let machine = &cfg.machine;
     let mut twin = Twin::new(machine, cfg.seed)?;
     twin.set_tool_table(cfg.tools.clone());
-    let sim_cfg = cfg
+    let sim_cfg = sampling
         .sim
-        .sampling(if cfg.every_cycle {
-            SampleMode::EveryCycle
-        } else {
-            SampleMode::Dwells
-        })
+        .sampling(sampling.mode)
         // The run report splits each error into cold geometry and thermal part.
         .with_thermal_part(true);
     let warm_cfg = sim_cfg.sampling(SampleMode::Dwells);
@@ -312,7 +382,12 @@ fn open_recording(
 }
 
 /// The printed report: the thermal state, the first readings, the per-point table, the summary.
-fn report_text(cfg: &RunConfig, log: &RunLog, summary: &RunSummary) -> Result<String> {
+fn report_text(
+    cfg: &RunConfig,
+    sampling: &Sampling,
+    log: &RunLog,
+    summary: &RunSummary,
+) -> Result<String> {
     let mut out: Vec<u8> = Vec::new();
     writeln!(
         out,
@@ -336,6 +411,12 @@ fn report_text(cfg: &RunConfig, log: &RunLog, summary: &RunSummary) -> Result<St
             summary.time_span_s[0] / 3600.0
         )?;
     }
+    writeln!(
+        out,
+        "{}",
+        super::program_placement::placement_line(&cfg.placement)
+    )?;
+    writeln!(out, "measured {}", sampling.note)?;
     if let Some(temps) = log.sensor_degc.first() {
         let list: Vec<String> = log
             .sensor_names

@@ -227,7 +227,7 @@ impl BodySpec {
     }
 }
 
-fn validate_bodies(bodies: &[BodySpec], prefix: &str) -> Result<(), FieldError> {
+pub(crate) fn validate_bodies(bodies: &[BodySpec], prefix: &str) -> Result<(), FieldError> {
     for (k, b) in bodies.iter().enumerate() {
         let p = format!("{prefix}[{k}]");
         b.validate(&p)?;

@@ -27,6 +27,7 @@ pub mod motion;
 pub mod program;
 pub mod read;
 pub mod sensors;
+pub mod setup;
 pub mod sim;
 pub mod thermal;
 pub mod tools;

@@ -2,14 +2,15 @@
 //!
 //! Every error names the file and, where it has one, the line (and column for syntax).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
 use crate::machine::MachineSpec;
 use crate::motion::{self, Plan};
+use crate::setup::Placement;
 use crate::tools::ToolTable;
-use vmc_gcode::interp::{self, InterpConfig};
+use vmc_gcode::interp::{self, InterpConfig, LengthUnit};
 
 mod pieces;
 pub use pieces::{PlanPieces, ProgramMoves, MOVES_PER_PIECE};
@@ -46,13 +47,16 @@ pub enum ProgramError {
         /// The machine's name.
         machine: String,
     },
-    /// Planning or travel problem (line in the message).
-    #[error("{file}: {err}")]
+    /// Planning or travel problem (line in the message; a travel problem in the program's
+    /// unit of length).
+    #[error("{file}: {}", motion_message(.err, *.unit))]
     Motion {
         /// The file.
         file: String,
         /// The planner's error.
         err: motion::MotionError,
+        /// The program's unit of length (G20/G21) at the line of the error.
+        unit: LengthUnit,
     },
     /// `M6` loads a tool the tool table does not have.
     #[error("{file}: line {line}: M6 loads tool {tool}, which is not in the tool table")]
@@ -64,6 +68,41 @@ pub enum ProgramError {
         /// The tool number.
         tool: u32,
     },
+}
+
+/// A planner's error, a position beyond the travel told in `unit`.
+fn motion_message(err: &motion::MotionError, unit: LengthUnit) -> String {
+    match *err {
+        motion::MotionError::AxisOutOfTravel {
+            line,
+            axis,
+            pos_mm,
+            min_mm,
+            max_mm,
+        } => motion::travel_message(line, axis, [pos_mm, min_mm, max_mm], unit),
+        ref other => other.to_string(),
+    }
+}
+
+/// The program's unit of length (G20/G21) at each line that emitted a move (the first move's
+/// unit when a line emitted several); mm for a line without moves.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LineUnits(std::collections::HashMap<usize, LengthUnit>);
+
+impl LineUnits {
+    /// From the moves and their units (see [`interp::run_program_with_units`]).
+    pub fn new(moves: &[interp::CanonMove], units: &[LengthUnit]) -> Self {
+        let mut map = std::collections::HashMap::new();
+        for (m, u) in moves.iter().zip(units) {
+            map.entry(m.line).or_insert(*u);
+        }
+        Self(map)
+    }
+
+    /// The unit at `line`.
+    pub fn at(&self, line: usize) -> LengthUnit {
+        self.0.get(&line).copied().unwrap_or(LengthUnit::Mm)
+    }
 }
 
 /// The diagonal tests of the campaign (face diagonals XY, YZ, XZ and the four body diagonals
@@ -194,8 +233,28 @@ pub fn load_plan_with_tools(
     start_mm: [f64; 3],
     tools: &ToolTable,
 ) -> Result<Plan, ProgramError> {
+    let placement = Placement::of_machine(machine);
+    load_plan_placed(path, machine, start_mm, tools, &placement, true).map(|(plan, _)| plan)
+}
+
+/// Reads, interprets and plans a program file placed by `placement` (work offsets, extra
+/// subroutine folders after the program's own folder); travel-checked if `travel_checked`.
+/// Returns the plan and the program's unit of length at each line.
+pub fn load_plan_placed(
+    path: &Path,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+    placement: &Placement,
+    travel_checked: bool,
+) -> Result<(Plan, LineUnits), ProgramError> {
     let (file, text) = read_program(path)?;
-    plan_source_with_tools(&text, &file, machine, start_mm, tools)
+    let dirs = placement.search_path(Some(path));
+    let (plan, units) = plan_text(&text, &file, machine, start_mm, tools, placement, dirs)?;
+    if travel_checked {
+        travel_check(&plan, &file, machine, &units)?;
+    }
+    Ok((plan, units))
 }
 
 /// The program file's display name and text.
@@ -215,8 +274,8 @@ pub fn load_plan_unchecked(
     start_mm: [f64; 3],
     tools: &ToolTable,
 ) -> Result<Plan, ProgramError> {
-    let (file, text) = read_program(path)?;
-    plan_source_unchecked_with_tools(&text, &file, machine, start_mm, tools)
+    let placement = Placement::of_machine(machine);
+    load_plan_placed(path, machine, start_mm, tools, &placement, false).map(|(plan, _)| plan)
 }
 
 /// Interprets and plans program text, without the travel check; `file` names it in errors.
@@ -238,26 +297,46 @@ pub fn plan_source_unchecked_with_tools(
     start_mm: [f64; 3],
     tools: &ToolTable,
 ) -> Result<Plan, ProgramError> {
+    let placement = Placement::of_machine(machine);
+    plan_text(text, file, machine, start_mm, tools, &placement, Vec::new()).map(|(plan, _)| plan)
+}
+
+/// Interprets and plans program text placed by `placement`, subroutine files from `dirs`.
+fn plan_text(
+    text: &str,
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+    placement: &Placement,
+    subroutine_dirs: Vec<PathBuf>,
+) -> Result<(Plan, LineUnits), ProgramError> {
     let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
     let cfg = InterpConfig {
         start_mm,
-        work_offsets_mm: machine.axes.work_offsets_mm,
+        work_offsets_mm: placement.work_offsets_mm,
         tool_lengths_mm,
         tool_diameters_mm,
+        subroutine_dirs,
         ..InterpConfig::default()
     };
-    let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
-        file: file.to_string(),
-        err,
-    })?;
-    refuse_rotary(&moves, file, &machine.machine.name)?;
-    let plan =
-        motion::plan(&moves, start_mm, &machine.motion).map_err(|err| ProgramError::Motion {
+    let (moves, units) =
+        interp::run_program_with_units(text, &cfg).map_err(|err| ProgramError::Gcode {
             file: file.to_string(),
             err,
         })?;
+    let units = LineUnits::new(&moves, &units);
+    refuse_rotary(&moves, file, &machine.machine.name)?;
+    let plan = motion::plan(&moves, start_mm, &machine.motion).map_err(|err| {
+        let unit = units.at(err_line(&err));
+        ProgramError::Motion {
+            file: file.to_string(),
+            err,
+            unit,
+        }
+    })?;
     check_tools(&plan, file, machine, tools)?;
-    Ok(plan)
+    Ok((plan, units))
 }
 
 /// Refuses a plan whose `M6` loads a tool the table does not have.
@@ -281,6 +360,30 @@ fn check_tools(
     Ok(())
 }
 
+/// The line a planner's error names (0 if none).
+fn err_line(err: &motion::MotionError) -> usize {
+    match *err {
+        motion::MotionError::AxisOutOfTravel { line, .. } => line,
+        _ => 0,
+    }
+}
+
+/// The travel check of a plan; `file` names it in errors, told in the program's units.
+fn travel_check(
+    plan: &Plan,
+    file: &str,
+    machine: &MachineSpec,
+    units: &LineUnits,
+) -> Result<(), ProgramError> {
+    motion::check_travel(plan, machine.axes.travel_min_mm, machine.axes.travel_max_mm).map_err(
+        |err| ProgramError::Motion {
+            file: file.to_string(),
+            unit: units.at(err_line(&err)),
+            err,
+        },
+    )
+}
+
 /// Interprets, plans and travel-checks program text; `file` names it in errors.
 pub fn plan_source(
     text: &str,
@@ -299,16 +402,8 @@ pub fn plan_source_with_tools(
     start_mm: [f64; 3],
     tools: &ToolTable,
 ) -> Result<Plan, ProgramError> {
-    let plan = plan_source_unchecked_with_tools(text, file, machine, start_mm, tools)?;
-    let motion_err = |err| ProgramError::Motion {
-        file: file.to_string(),
-        err,
-    };
-    motion::check_travel(
-        &plan,
-        machine.axes.travel_min_mm,
-        machine.axes.travel_max_mm,
-    )
-    .map_err(motion_err)?;
+    let placement = Placement::of_machine(machine);
+    let (plan, units) = plan_text(text, file, machine, start_mm, tools, &placement, Vec::new())?;
+    travel_check(&plan, file, machine, &units)?;
     Ok(plan)
 }

@@ -22,6 +22,7 @@ mod modal_state;
 mod probing;
 use probing::PendingProbe;
 mod rotary;
+mod state_params;
 mod tool_table;
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
@@ -85,10 +86,8 @@ enum MotionStep {
 impl Interpreter {
     /// A fresh interpreter in LinuxCNC's start-up state (see the parent module).
     pub fn new(cfg: InterpConfig) -> Self {
-        let mut work_offsets_mm = [[0.0; 3]; COORD_SYSTEMS];
-        work_offsets_mm[..cfg.work_offsets_mm.len()].copy_from_slice(&cfg.work_offsets_mm);
         Self {
-            work_offsets_mm,
+            work_offsets_mm: cfg.work_offsets_mm,
             rotations_deg: [0.0; COORD_SYSTEMS],
             tools: tool_table::ToolTable::new(&cfg),
             pos_mm: cfg.start_mm,
@@ -161,6 +160,15 @@ impl Interpreter {
         }
         params.set(5220, (self.coord_index + 1) as f64);
         self.sync_rotary_params_out(params);
+        self.sync_state_params_out(params);
+    }
+
+    /// The program's length unit now (G20: inch, G21: mm).
+    pub fn length_unit(&self) -> super::LengthUnit {
+        match self.units {
+            Units::Mm => super::LengthUnit::Mm,
+            Units::Inch => super::LengthUnit::Inch,
+        }
     }
 
     /// True once M2/M30 has run; later blocks are ignored.

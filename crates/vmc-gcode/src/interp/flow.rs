@@ -40,6 +40,8 @@ pub(super) struct Program {
     subs: HashMap<String, usize>,
     /// The subroutine files whose definitions follow the program's own lines.
     pub(super) files: Vec<SubFile>,
+    /// The folders searched for subroutine files (named in the error of a call not found).
+    searched: Vec<std::path::PathBuf>,
 }
 
 /// An O-word structure error: (the index from which execution meets it, the index of the
@@ -68,6 +70,7 @@ impl Program {
             tail_error,
             subs: HashMap::new(),
             files,
+            searched: cfg.subroutine_dirs.clone(),
         };
         let structure_error = pair(&mut prog).err();
         Ok((prog, structure_error))
@@ -280,6 +283,8 @@ impl Runner {
         for (i, v) in values.into_iter().enumerate() {
             self.params.set(PROBE_PARAM_FIRST + i, v);
         }
+        // The tool rests elsewhere now: #5420… follow it.
+        self.interp.sync_params_out(&mut self.params);
         Ok(())
     }
 
@@ -532,10 +537,10 @@ impl Runner {
                         return Err(e.clone());
                     }
                     return Err(match name {
-                        OName::Named(_) => GcodeError::unsupported(
+                        OName::Named(ref n) => GcodeError::unsupported(
                             l.line,
                             o.col,
-                            format!("{name} call: subroutine not in this file nor in a subroutine folder (InterpConfig::subroutine_dirs)"),
+                            not_found_msg(&name, n, &prog.searched),
                         ),
                         _ => GcodeError::invalid(
                             l.line,
@@ -678,4 +683,27 @@ fn take_m(words: &mut Vec<Word>, code: f64) -> Option<usize> {
 fn take_letter(words: &mut Vec<Word>, letter: char) -> Option<Word> {
     let i = words.iter().position(|w| w.letter == letter)?;
     Some(words.remove(i))
+}
+
+/// Why `o<n> call` found no subroutine: neither in the program nor as `<n>.ngc` in a
+/// subroutine folder (the folders searched are listed, in order).
+fn not_found_msg(name: &OName, n: &str, searched: &[std::path::PathBuf]) -> String {
+    if searched.is_empty() {
+        return format!(
+            "{name} call: no subroutine {name} in this program, and no subroutine folder to \
+             look for {n}.ngc in"
+        );
+    }
+    let dirs: Vec<String> = searched
+        .iter()
+        .map(|d| match d.as_os_str().is_empty() {
+            true => ".".to_string(),
+            false => d.display().to_string(),
+        })
+        .collect();
+    format!(
+        "{name} call: no subroutine {name} in this program, and no file {n}.ngc in the \
+         subroutine folders ({})",
+        dirs.join(", ")
+    )
 }

@@ -149,3 +149,40 @@ fn a_probe_without_contact_in_a_subroutine_file_is_located_there() {
     assert_eq!(e.msg, "G38.2 move finished without making contact.");
     assert_eq!(run.resume(&mut out).unwrap_err(), e);
 }
+
+#[test]
+fn each_move_carries_the_length_unit_of_the_block_it_came_from() {
+    let (moves, units) = run_program_with_units(
+        "G0 X1\nG20 G0 X1\nG1 X2 F10\nG21 G0 X2\nM2",
+        &InterpConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(moves.len(), units.len());
+    assert_eq!(
+        units,
+        [
+            LengthUnit::Mm,
+            LengthUnit::Inch,
+            LengthUnit::Inch,
+            LengthUnit::Mm,
+            LengthUnit::Mm
+        ]
+    );
+    assert_eq!(LengthUnit::Inch.format_mm(25.4), "1 in");
+    assert_eq!(LengthUnit::Mm.format_mm(-0.0001), "0 mm");
+}
+
+#[test]
+fn a_subroutine_not_found_names_the_folders_searched_and_no_internal_setting() {
+    let e = run_program("o<part> call\nM2", &InterpConfig::default()).unwrap_err();
+    assert!(e.msg.contains("no subroutine folder"), "{e}");
+    let dir = SubDir::new("missing", &[]);
+    let cfg = InterpConfig {
+        subroutine_dirs: vec![dir.0.clone()],
+        ..InterpConfig::default()
+    };
+    let e = run_program("o<part> call\nM2", &cfg).unwrap_err();
+    assert!(e.msg.contains("part.ngc"), "{e}");
+    assert!(e.msg.contains(&dir.0.display().to_string()), "{e}");
+    assert!(!e.msg.contains("InterpConfig"), "{e}");
+}

@@ -122,11 +122,14 @@ pub use probe::{
     straight_probe_call, ProbeKind, ProbeOutcome, ProbeParams, ProbeRequest, PROBE_PARAM_FIRST,
     STANDALONE_BACKOFF_MM,
 };
-pub use program_run::{ProgramRun, RunEvent};
+pub use program_run::{LengthUnit, ProgramRun, RunEvent};
 
 /// Largest P (turn count) accepted on G2/G3: guards against programs that would expand to
 /// absurd paths (and hangs downstream).
 pub const MAX_ARC_TURNS: u32 = 1000;
+
+/// How many work coordinate systems there are: G54…G59 and G59.1…G59.3.
+pub const WORK_OFFSETS: usize = 9;
 
 /// Start-up settings of the interpreter.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,8 +139,9 @@ pub struct InterpConfig {
     pub start_mm: [f64; 3],
     /// Angles of the rotary axes A, B, C when the program starts, degrees (default: 0).
     pub start_abc_deg: [f64; 3],
-    /// Work offsets G54…G59 (index 0…5) in machine coordinates, mm (default: all zero).
-    pub work_offsets_mm: [[f64; 3]; 6],
+    /// Work offsets G54…G59, G59.1…G59.3 (index 0…8) in machine coordinates, mm (default:
+    /// all zero).
+    pub work_offsets_mm: [[f64; 3]; WORK_OFFSETS],
     /// Tool lengths (tool number, length in mm) for G43 H. Empty (the default): every tool has
     /// length 0, the machine's positions being those of its own tool's tip.
     pub tool_lengths_mm: Vec<(u32, f64)>,
@@ -158,7 +162,7 @@ impl Default for InterpConfig {
         Self {
             start_mm: [0.0; 3],
             start_abc_deg: [0.0; 3],
-            work_offsets_mm: [[0.0; 3]; 6],
+            work_offsets_mm: [[0.0; 3]; WORK_OFFSETS],
             tool_lengths_mm: Vec::new(),
             tool_diameters_mm: Vec::new(),
             block_delete: false,
@@ -186,12 +190,22 @@ impl Default for InterpConfig {
 /// # Ok::<(), vmc_gcode::interp::GcodeError>(())
 /// ```
 pub fn run_program(src: &str, cfg: &InterpConfig) -> Result<Vec<CanonMove>, GcodeError> {
+    run_program_with_units(src, cfg).map(|(moves, _)| moves)
+}
+
+/// [`run_program`], with the program's length unit (G20/G21) when it emitted each move (for
+/// messages in the units the program was written in).
+pub fn run_program_with_units(
+    src: &str,
+    cfg: &InterpConfig,
+) -> Result<(Vec<CanonMove>, Vec<LengthUnit>), GcodeError> {
     let mut run = ProgramRun::new(src, cfg)?;
     let mut out = Vec::new();
     while let RunEvent::Probe(_) = run.resume(&mut out)? {
         run.probe_result(ProbeOutcome::Standalone)?;
     }
-    Ok(out)
+    let units = (0..out.len()).map(|i| run.length_unit_at(i)).collect();
+    Ok((out, units))
 }
 
 /// Active plane for arcs (G17 / G18 / G19).

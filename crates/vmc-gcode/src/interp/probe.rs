@@ -11,7 +11,10 @@
 //! says it came to rest. G38.2 and G38.4 that end without the state change are errors
 //! ("G38.2 move finished without making contact.", "G38.4 move finished without breaking
 //! contact.", LinuxCNC's motion controller's words); G38.3 and G38.5 then set #5070 = 0 and
-//! #5061… to the target.
+//! #5061… to the target. A probe already in the state the move seeks when it starts is
+//! refused by G38.2 and G38.4 and trips at once for G38.3 and G38.5
+//! ([`ProbeOutcome::AlreadyInState`]); zero feed, feed per revolution and cutter radius
+//! compensation are refused before the move (`exec::probing`).
 //!
 //! Units: machine coordinates in mm (spindle positions, the tool length included, as every
 //! [`CanonKind`](super::CanonKind) move), angles in degrees, feeds in mm/min.
@@ -100,6 +103,12 @@ pub enum ProbeOutcome {
     /// The move reached its target without the probe changing state: an error for G38.2 and
     /// G38.4; for G38.3 and G38.5 #5061… the target and #5070 = 0.
     NoContact,
+    /// The probe already read the state the move seeks when the move was to start (a G38.2 or
+    /// G38.3 with the stylus deflected, a G38.4 or G38.5 with it clear). LinuxCNC's motion
+    /// controller refuses G38.2 and G38.4 then ("Probe is already tripped when starting G38.2
+    /// or G38.3 move", "Probe is already clear when starting G38.4 or G38.5 move"); G38.3 and
+    /// G38.5 trip at once: #5061… the start point, #5070 = 1, the tool stays where it is.
+    AlreadyInState,
     /// No machine, as LinuxCNC's stand-alone `rs274` runs a program: #5061… the target,
     /// #5070 = 0 (its probe input never reads tripped), no error whatever the kind (that error
     /// is the motion controller's, which it has not), and the tool rests at

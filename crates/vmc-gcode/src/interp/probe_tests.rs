@@ -27,6 +27,13 @@ fn err(src: &str) -> GcodeError {
     run_program(src, &InterpConfig::default()).expect_err("program must be rejected")
 }
 
+/// Work offsets with G54 at `offset_mm`, the others at 0.
+fn g54(offset_mm: [f64; 3]) -> [[f64; 3]; WORK_OFFSETS] {
+    let mut all = [[0.0; 3]; WORK_OFFSETS];
+    all[0] = offset_mm;
+    all
+}
+
 fn close(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {
     (0..3).all(|i| (a[i] - b[i]).abs() <= tol)
 }
@@ -224,14 +231,7 @@ fn after_g40_the_probe_leaves_from_the_compensated_point() {
 #[test]
 fn a_tripped_probe_sets_the_trip_point_and_5070_and_the_tool_goes_on_from_rest() {
     let cfg = InterpConfig {
-        work_offsets_mm: [
-            [100.0, 0.0, 10.0],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-            [0.0; 3],
-        ],
+        work_offsets_mm: g54([100.0, 0.0, 10.0]),
         ..InterpConfig::default()
     };
     // Program Z-2.5 is machine Z 7.5; the tool stops 0.2 mm lower.
@@ -337,4 +337,84 @@ fn straight_probe_reads_as_rs274_prints_it() {
         straight_probe_call([0.0, 0.0, -1.0], [10.0, 0.0, 0.0]),
         "STRAIGHT_PROBE(0.0000, 0.0000, -1.0000, 10.0000, 0.0000, 0.0000)"
     );
+}
+
+#[test]
+fn a_probe_already_in_the_state_it_seeks_is_refused_by_g38_2_and_g38_4_and_trips_at_once_otherwise()
+{
+    let cfg = InterpConfig::default();
+    for (src, msg) in [
+        (
+            "G0 Z5\nG38.2 Z-1 F10\nM2",
+            "Probe is already tripped when starting G38.2 or G38.3 move",
+        ),
+        (
+            "G0 Z5\nG38.4 Z-1 F10\nM2",
+            "Probe is already clear when starting G38.4 or G38.5 move",
+        ),
+    ] {
+        let (_, result) = run_with(src, &cfg, |_| ProbeOutcome::AlreadyInState);
+        let e = result.unwrap_err();
+        assert_eq!((e.line, e.col, e.msg.as_str()), (2, 1, msg), "{src}");
+    }
+    // G38.3 / G38.5: #5061… the start point (work coordinates: G54 at X100 here), #5070 = 1,
+    // and the tool goes on from the start.
+    let cfg = InterpConfig {
+        work_offsets_mm: g54([100.0, 0.0, 0.0]),
+        ..InterpConfig::default()
+    };
+    for code in ["G38.3", "G38.5"] {
+        let src = format!("G0 X2 Z5\n{code} Z-1 F10\nG0 X#5061 Y#5070 Z#5063\nG91 G1 X1\nM2");
+        let (moves, result) = run_with(&src, &cfg, |_| ProbeOutcome::AlreadyInState);
+        result.unwrap();
+        let ends: Vec<[f64; 3]> = moves
+            .iter()
+            .filter_map(|m| match m.kind {
+                CanonKind::Traverse { end_mm, .. } | CanonKind::Feed { end_mm, .. } => Some(end_mm),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(ends[1], [102.0, 1.0, 5.0], "{code}: {ends:?}");
+        assert_eq!(ends[2], [103.0, 1.0, 5.0], "{code}: {ends:?}");
+    }
+}
+
+#[test]
+fn the_current_point_and_tool_read_in_work_coordinates_and_program_units_as_in_linuxcnc() {
+    // rs274 (T1 Ø12 mm × 150 mm): the second traverse goes to program (1.5, 0.5, 1.4724)
+    // A11, the feed to X5.9055 — #5420 + #5400, #<_y> · 2, #5422 + #5410, #<_a> +
+    // #<_current_tool>, #5403, all in inches in the G54 frame.
+    let cfg = InterpConfig {
+        tool_lengths_mm: vec![(1, 150.0)],
+        tool_diameters_mm: vec![(1, 12.0)],
+        ..InterpConfig::default()
+    };
+    let src = "G20\nG10 L2 P1 X1 Y2 Z3\nT1 M6\nG43\nG0 X0.5 Y0.25 Z1 A10\n\
+               G0 X[#5420 + #5400] Y[#<_y> * 2] Z[#5422 + #5410] A[#<_a> + #<_current_tool>]\n\
+               G1 X#5403 F10\nM2";
+    let moves: Vec<CanonKind> = run_program(src, &cfg)
+        .unwrap()
+        .into_iter()
+        .map(|m| m.kind)
+        .filter(|k| matches!(k, CanonKind::Traverse { .. } | CanonKind::Feed { .. }))
+        .collect();
+    let machine = |p: [f64; 3]| [p[0] + 1.0, p[1] + 2.0, p[2] + 3.0].map(|v| v * 25.4);
+    let mut second = machine([1.5, 0.5, 1.0 + 12.0 / 25.4]);
+    second[2] += 150.0;
+    let mut feed = second;
+    feed[0] = machine([150.0 / 25.4, 0.0, 0.0])[0];
+    match (&moves[1], &moves[2]) {
+        (
+            CanonKind::Traverse {
+                end_mm,
+                end_abc_deg,
+            },
+            CanonKind::Feed { end_mm: f, .. },
+        ) => {
+            assert!(close(*end_mm, second, 1e-9), "{end_mm:?} {second:?}");
+            assert_eq!(end_abc_deg[0], 11.0);
+            assert!(close(*f, feed, 1e-9), "{f:?} {feed:?}");
+        }
+        other => panic!("{other:?}"),
+    }
 }

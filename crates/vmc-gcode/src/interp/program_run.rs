@@ -8,6 +8,58 @@ use super::probe::{ProbeOutcome, ProbeRequest};
 use super::{CanonKind, CanonMove, InterpConfig};
 use crate::syntax::GcodeError;
 
+/// A program's unit of length (G20 / G21), for messages in the units it was written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LengthUnit {
+    /// G21.
+    Mm,
+    /// G20.
+    Inch,
+}
+
+impl LengthUnit {
+    /// mm per unit.
+    pub fn mm_per_unit(self) -> f64 {
+        match self {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::Inch => super::arc::MM_PER_INCH,
+        }
+    }
+
+    /// `"mm"` or `"in"`.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            LengthUnit::Mm => "mm",
+            LengthUnit::Inch => "in",
+        }
+    }
+
+    /// A length given in mm, in this unit rounded as a person reads it: to the µm in mm
+    /// (3 decimals), to the tenth of a thou in inches (4 decimals), trailing zeros dropped.
+    ///
+    /// ```
+    /// use vmc_gcode::interp::LengthUnit;
+    /// assert_eq!(LengthUnit::Mm.format_mm(-76.09585999999999), "-76.096 mm");
+    /// assert_eq!(LengthUnit::Inch.format_mm(-76.09585999999999), "-2.9959 in");
+    /// assert_eq!(LengthUnit::Mm.format_mm(600.0), "600 mm");
+    /// ```
+    pub fn format_mm(self, value_mm: f64) -> String {
+        format!("{} {}", self.number_mm(value_mm), self.symbol())
+    }
+
+    /// [`Self::format_mm`] without the unit's symbol.
+    pub fn number_mm(self, value_mm: f64) -> String {
+        let decimals = match self {
+            LengthUnit::Mm => 3,
+            LengthUnit::Inch => 4,
+        };
+        let text = format!("{:.*}", decimals, value_mm / self.mm_per_unit());
+        let text = text.trim_end_matches('0').trim_end_matches('.');
+        let text = if text == "-0" { "0" } else { text };
+        text.to_string()
+    }
+}
+
 /// Where a [`ProgramRun`] stopped.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum RunEvent {
@@ -64,6 +116,8 @@ pub struct ProgramRun {
     state: State,
     /// Line index of the last probe block.
     probe_index: usize,
+    /// Where the length unit changed: (number of moves emitted before, the unit after).
+    unit_changes: Vec<(usize, LengthUnit)>,
 }
 
 impl ProgramRun {
@@ -82,6 +136,7 @@ impl ProgramRun {
             structure_error,
             state: State::Running,
             probe_index: 0,
+            unit_changes: vec![(0, LengthUnit::Mm)],
         })
     }
 
@@ -144,6 +199,16 @@ impl ProgramRun {
         }
     }
 
+    /// The program's length unit when it emitted move `index` (of the moves appended to one
+    /// output by [`Self::resume`] from the start): the unit of the block it came from.
+    pub fn length_unit_at(&self, index: usize) -> LengthUnit {
+        self.unit_changes
+            .iter()
+            .rev()
+            .find(|c| c.0 <= index)
+            .map_or(LengthUnit::Mm, |c| c.1)
+    }
+
     fn run_until_event(&mut self, out: &mut Vec<CanonMove>) -> Result<RunEvent, GcodeError> {
         loop {
             if let Some(line) = self.runner.main_m99_end.take() {
@@ -166,10 +231,15 @@ impl ProgramRun {
                 }
             }
             let pc = self.pc;
+            let emitted = out.len();
             self.pc = match self.runner.step(&self.prog, pc, out) {
                 Ok(next) => next,
                 Err(e) => return Err(self.locate(e, Some(pc))),
             };
+            let unit = self.runner.interp.length_unit();
+            if self.unit_changes.last().map(|c| c.1) != Some(unit) {
+                self.unit_changes.push((emitted, unit));
+            }
             if let Some(request) = self.runner.probe {
                 self.probe_index = pc;
                 return Ok(RunEvent::Probe(request));

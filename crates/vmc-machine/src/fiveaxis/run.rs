@@ -110,7 +110,11 @@ pub fn plan_program(
     let start_mm = spec.axes.home_mm;
     let cfg = InterpConfig {
         start_mm,
-        work_offsets_mm: spec.axes.work_offsets_mm,
+        work_offsets_mm: {
+            let mut all = [[0.0; 3]; interp::WORK_OFFSETS];
+            all[..6].copy_from_slice(&spec.axes.work_offsets_mm);
+            all
+        },
         ..InterpConfig::default()
     };
     let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
@@ -120,6 +124,7 @@ pub fn plan_program(
     let motion_err = |err| ProgramError::Motion {
         file: file.to_string(),
         err,
+        unit: interp::LengthUnit::Mm,
     };
     let plan = motion::plan_with_rotary(&moves, start_mm, [0.0; 3], &spec.motion, &rotary)
         .map_err(motion_err)?;

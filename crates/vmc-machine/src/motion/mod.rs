@@ -59,7 +59,7 @@ pub use travel::{check_rotary_travel, check_travel, segment_travel_violations};
 
 use thiserror::Error;
 
-use vmc_gcode::interp::{CanonKind, CanonMove, SpindleDir};
+use vmc_gcode::interp::{CanonKind, CanonMove, LengthUnit, SpindleDir};
 
 /// Errors of the motion planner.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -178,9 +178,7 @@ pub enum MotionError {
         max_deg: f64,
     },
     /// A segment reaches outside an axis's travel.
-    #[error(
-        "line {line}: axis {axis} reaches {pos_mm} mm, outside travel [{min_mm}, {max_mm}] mm"
-    )]
+    #[error("{}", travel_message(*.line, *.axis, [*.pos_mm, *.min_mm, *.max_mm], LengthUnit::Mm))]
     AxisOutOfTravel {
         /// Source line of the offending segment.
         line: usize,
@@ -193,6 +191,16 @@ pub enum MotionError {
         /// Upper travel limit (mm).
         max_mm: f64,
     },
+}
+
+/// The message of a move beyond the travel, in the program's unit `unit` and rounded as a
+/// person reads it (µm in mm, a tenth of a thou in inches): `line 4: axis X reaches 580 mm,
+/// outside travel [0, 560] mm`. `values_mm`: the position reached and the travel's minimum
+/// and maximum, machine coordinates, mm.
+pub fn travel_message(line: usize, axis: char, values_mm: [f64; 3], unit: LengthUnit) -> String {
+    let [pos, min, max] = values_mm.map(|v| unit.number_mm(v));
+    let u = unit.symbol();
+    format!("line {line}: axis {axis} reaches {pos} {u}, outside travel [{min}, {max}] {u}")
 }
 
 /// Longest machine time a program may take (s): 7 days. Longer plans (a G4 of 10⁸ s, a feed

@@ -54,7 +54,7 @@ impl ProgramMoves {
         let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
         let cfg = InterpConfig {
             start_mm,
-            work_offsets_mm: machine.axes.work_offsets_mm,
+            work_offsets_mm: crate::setup::Placement::of_machine(machine).work_offsets_mm,
             tool_lengths_mm,
             tool_diameters_mm,
             ..InterpConfig::default()
@@ -124,9 +124,11 @@ pub struct PlanPieces<'a> {
 impl PlanPieces<'_> {
     fn plan_next(&mut self, moves: &[interp::CanonMove]) -> Result<Plan, ProgramError> {
         let file = &self.program.file;
+        // Warm-ups are told in mm: their pieces do not carry the program's units.
         let motion_err = |err| ProgramError::Motion {
             file: file.clone(),
             err,
+            unit: interp::LengthUnit::Mm,
         };
         let plan = motion::plan_from(
             moves,

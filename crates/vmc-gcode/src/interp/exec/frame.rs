@@ -13,7 +13,7 @@ use super::super::decode::{Decoded, Distance};
 use super::Interpreter;
 
 /// Number of work coordinate systems: G54…G59, G59.1…G59.3.
-pub(in crate::interp) const COORD_SYSTEMS: usize = 9;
+pub(in crate::interp) const COORD_SYSTEMS: usize = super::super::WORK_OFFSETS;
 
 /// `v` rotated by `angle_deg` about Z (X and Y only).
 fn rotate_xy(v: [f64; 3], angle_deg: f64) -> [f64; 3] {

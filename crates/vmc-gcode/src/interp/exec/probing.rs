@@ -122,8 +122,9 @@ impl Interpreter {
     /// parameters; [`super::super::ProgramRun`] writes them).
     ///
     /// # Errors
-    /// No probe move pending; a G38.2/G38.4 that ended without contact (LinuxCNC's message, at
-    /// the probe block); a point that is not finite.
+    /// No probe move pending; a G38.2/G38.4 that ended without contact or whose probe was
+    /// already in the state it seeks (LinuxCNC's messages, at the probe block); a point that
+    /// is not finite.
     pub fn probe_result(&mut self, outcome: ProbeOutcome) -> Result<ProbeParams, GcodeError> {
         let Some(PendingProbe { request: r, col }) = self.probe.take() else {
             return Err(GcodeError::invalid(
@@ -147,6 +148,18 @@ impl Interpreter {
             ProbeOutcome::NoContact => {
                 let end = (r.end_mm, r.end_abc_deg);
                 (end, end, false)
+            }
+            ProbeOutcome::AlreadyInState if r.kind.error_on_no_contact => {
+                let msg = if r.kind.toward {
+                    "Probe is already tripped when starting G38.2 or G38.3 move"
+                } else {
+                    "Probe is already clear when starting G38.4 or G38.5 move"
+                };
+                return Err(GcodeError::invalid(r.line, col, msg));
+            }
+            ProbeOutcome::AlreadyInState => {
+                let start = (r.start_mm, r.start_abc_deg);
+                (start, start, true)
             }
             ProbeOutcome::Standalone => (
                 (r.end_mm, r.end_abc_deg),
