@@ -189,12 +189,13 @@ pub fn write_atomic_with(
     result
 }
 
-/// Gives the finished temporary file `tmp` its final name `path`. Without `force` the name is
+/// Gives the finished temporary file `tmp` its final name `path` (the caller removes `tmp`
+/// afterwards: after a hard link it still exists). Without `force` the name is
 /// created exclusively: a hard link fails if the name exists (someone else won the race),
 /// and where hard links are not supported the name is first claimed with an exclusive create.
 /// With `force` an existing regular file is replaced by a rename, after checking again that
 /// nothing else (a link, a device) took its place.
-fn publish(tmp: &Path, path: &Path, force: bool) -> Result<(), OutputError> {
+pub fn publish(tmp: &Path, path: &Path, force: bool) -> Result<(), OutputError> {
     let io = |err| OutputError::Io {
         path: path.to_path_buf(),
         err,
