@@ -10,11 +10,15 @@ use std::sync::Mutex;
 
 use thiserror::Error;
 
-/// Reads a text file; bytes that are not UTF-8 are an `InvalidData` error naming their line,
+/// Reads a text file, without a leading UTF-8 byte-order mark; bytes that are not UTF-8 are an `InvalidData` error naming their line,
 /// column and value (instead of the standard library's location-free message).
 pub fn read_text(path: &Path) -> std::io::Result<String> {
-    let bytes = std::fs::read(path)?;
+    let mut bytes = std::fs::read(path)?;
     note_input(path);
+    // A UTF-8 byte-order mark (as spreadsheet programs write) is not text: drop it.
+    if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
+        bytes.drain(..3);
+    }
     String::from_utf8(bytes).map_err(|e| {
         let bad_at = e.utf8_error().valid_up_to();
         let bytes = e.as_bytes();
