@@ -173,7 +173,7 @@ const MACHINES: &[(&str, &str, &str)] = &[
     (
         "travel_max_mm = [560.0",
         "travel_max_mm = [nan",
-        "field `axes.travel_max_mm[0]`: X: must be a finite number",
+        "field `axes.travel_max_mm[0]`: NaN is not plausible for a length, mm (±100 m): the range is [-1e5, 1e5]",
     ),
     (
         "travel_max_mm = [560.0",
@@ -219,7 +219,7 @@ const MACHINES: &[(&str, &str, &str)] = &[
     (
         "poly = [-6.0, 14.0]",
         "poly = [-6.0, nan]",
-        "field `errors.motion.EBX.poly[1]`: NaN is not plausible for an error term in um: the range is [-1e4, 1e4]",
+        "field `errors.motion.EBX.poly[1]`: NaN is not plausible for an error term in urad: the range is [-1e4, 1e4]",
     ),
 ];
 
