@@ -1,9 +1,19 @@
 //! Files the application writes: checking outputs before any work, and writing atomically.
 //!
 //! Every file the tool writes goes through [`write_atomic`] (temporary file in the same folder,
-//! then rename), and an existing file is never replaced unless the caller allows it (`--force`).
-//! Outputs are checked with [`check_writable`] / [`prepare_output_folder`] before any
-//! simulation starts, so a wrong path costs no minutes of work.
+//! then link or rename), and an existing file is never replaced unless the caller allows it
+//! (`--force`). Outputs are checked with [`check_writable`] / [`prepare_output_folder`] before
+//! any simulation starts, so a wrong path costs no minutes of work.
+//!
+//! What may never happen, whatever the options:
+//! - an input of the command is written over (the same file under any name: compared by
+//!   device and inode, see `vmc_machine::read::is_input`), even with `--force`;
+//! - a symbolic link, socket or folder is replaced: refused, even with `--force`;
+//! - a device node or FIFO (`/dev/null`, a named pipe) is replaced by a regular file: with
+//!   `--force` the contents are written through to it (not atomically), without it refused;
+//! - two writers racing for a new name both succeed: without `--force` the final name is
+//!   created exclusively (a hard link from the finished temporary file, which fails if the
+//!   name exists), so the loser gets "already exists" and the winner's file stays.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -39,6 +49,17 @@ pub enum OutputError {
         /// Why.
         err: std::io::Error,
     },
+    /// The path is one of the command's own inputs.
+    #[error("{0}: is an input of this command; write the output to another file")]
+    IsInput(PathBuf),
+    /// The path is a symbolic link, socket or other file that is never replaced.
+    #[error("{path}: is a {kind}, not a regular file; give the path of a regular file")]
+    NotRegular {
+        /// The file.
+        path: PathBuf,
+        /// What it is.
+        kind: &'static str,
+    },
     /// An I/O failure.
     #[error("{path}: {err}")]
     Io {
@@ -63,10 +84,51 @@ pub fn check_writable(path: &Path, force: bool) -> Result<(), OutputError> {
             });
         }
     }
-    if path.exists() && !force {
-        return Err(OutputError::Exists(path.to_path_buf()));
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        return Ok(());
+    };
+    if vmc_machine::read::is_input(path) {
+        return Err(OutputError::IsInput(path.to_path_buf()));
     }
-    Ok(())
+    match target_kind(&meta) {
+        Target::Regular | Target::Device if !force => Err(OutputError::Exists(path.to_path_buf())),
+        Target::Regular | Target::Device => Ok(()),
+        Target::Never(kind) => Err(OutputError::NotRegular {
+            path: path.to_path_buf(),
+            kind,
+        }),
+    }
+}
+
+/// What an existing output path is, for writing.
+enum Target {
+    /// A regular file: replaced atomically (with `--force`).
+    Regular,
+    /// A device node or FIFO: written through (with `--force`).
+    Device,
+    /// Never written: what it is.
+    Never(&'static str),
+}
+
+fn target_kind(meta: &std::fs::Metadata) -> Target {
+    let t = meta.file_type();
+    if t.is_file() {
+        return Target::Regular;
+    }
+    if t.is_symlink() {
+        return Target::Never("symbolic link");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() || t.is_block_device() || t.is_fifo() {
+            return Target::Device;
+        }
+        if t.is_socket() {
+            return Target::Never("socket");
+        }
+    }
+    Target::Never("special file")
 }
 
 /// Writes `contents` to `path` atomically (temporary file + rename). Refuses to replace an
@@ -87,6 +149,17 @@ pub fn write_atomic_with(
         path: path.to_path_buf(),
         err,
     };
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        if let Target::Device = target_kind(&meta) {
+            // Never rename over a device or FIFO: write through it.
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(io)?;
+            let mut w = std::io::BufWriter::new(&mut f);
+            return write(&mut w).and_then(|()| w.flush()).map_err(io);
+        }
+    }
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -95,18 +168,67 @@ pub fn write_atomic_with(
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+    static WRITES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
+    let written = (|| {
+        let mut f = std::io::BufWriter::new(
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&tmp)?,
+        );
         write(&mut f)?;
         let f = f.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        f.sync_all()
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    let result = written
+        .map_err(io)
+        .and_then(|()| publish(&tmp, path, force));
+    let _ = std::fs::remove_file(&tmp);
+    result
+}
+
+/// Gives the finished temporary file `tmp` its final name `path` (the caller removes `tmp`
+/// afterwards: after a hard link it still exists). Without `force` the name is
+/// created exclusively: a hard link fails if the name exists (someone else won the race),
+/// and where hard links are not supported the name is first claimed with an exclusive create.
+/// With `force` an existing regular file is replaced by a rename, after checking again that
+/// nothing else (a link, a device) took its place.
+pub fn publish(tmp: &Path, path: &Path, force: bool) -> Result<(), OutputError> {
+    let io = |err| OutputError::Io {
+        path: path.to_path_buf(),
+        err,
+    };
+    let exists = || OutputError::Exists(path.to_path_buf());
+    if !force {
+        return match std::fs::hard_link(tmp, path) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(exists()),
+            Err(_) => {
+                // No hard links here (some network and FAT file systems): claim the name.
+                match std::fs::OpenOptions::new()
+                    .write(true)
+                    .create_new(true)
+                    .open(path)
+                {
+                    Ok(_) => std::fs::rename(tmp, path).map_err(io),
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(exists()),
+                    Err(e) => Err(io(e)),
+                }
+            }
+        };
     }
-    result.map_err(io)
+    check_writable(path, true)?;
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        if !matches!(target_kind(&meta), Target::Regular) {
+            return Err(OutputError::NotRegular {
+                path: path.to_path_buf(),
+                kind: "file that is not a regular file",
+            });
+        }
+    }
+    std::fs::rename(tmp, path).map_err(io)
 }
 
 /// Creates the output folder `dir` (with its parents) and checks that each of `names` may be

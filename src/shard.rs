@@ -22,7 +22,9 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 /// Version of the `shard.json` layout.
-pub const MANIFEST_FORMAT: u32 = 1;
+pub const MANIFEST_FORMAT: u32 = 2;
+
+pub mod integrity;
 
 /// Name of the manifest file in a shard's output folder.
 pub const MANIFEST_FILE: &str = "shard.json";
@@ -235,6 +237,10 @@ pub struct ShardManifest {
     /// What the command needs to merge, beyond the per-item results (the campaign: the
     /// report's header).
     pub header: serde_json::Value,
+    /// The result files with their size and hash, checked by `merge` (see [`integrity`]);
+    /// absent (empty) in layout version 1, which `merge` refuses.
+    #[serde(default)]
+    pub results: Vec<integrity::ResultFile>,
 }
 
 /// Checks that `shards` (each with the folder it was read from) form one complete split of one
@@ -380,6 +386,7 @@ mod tests {
             version: "1.0".into(),
             inputs: vec![InputFingerprint::of("machine", "embedded", b"m")],
             header: serde_json::Value::Null,
+            results: Vec::new(),
         }
     }
 

@@ -173,14 +173,14 @@ const MACHINES: &[(&str, &str, &str)] = &[
     (
         "travel_max_mm = [560.0",
         "travel_max_mm = [nan",
-        "field `axes.travel_max_mm[0]`: X: must be a finite number",
+        "field `axes.travel_max_mm[0]`: NaN is not plausible for a length, mm (±100 m): the range is [-1e5, 1e5]",
     ),
     (
         "travel_max_mm = [560.0",
         "travel_max_mm = [-10.0",
         "field `axes.travel_max_mm[0]`: X travel must be positive: max -10 mm ≤ min 0 mm (travel -10 mm)",
     ),
-    ("diameter_mm = 12.0", "diameter_mm = inf", "field `tool.diameter_mm`: must be > 0"),
+    ("diameter_mm = 12.0", "diameter_mm = inf", "field `tool.diameter_mm`: inf is not plausible for a length, mm (±100 m): the range is [-1e5, 1e5]"),
     (
         "step_s = 1.0",
         "step_s = 1e-300",
@@ -194,7 +194,7 @@ const MACHINES: &[(&str, &str, &str)] = &[
     (
         "max_spindle_rpm = 12000.0",
         "max_spindle_rpm = -1.0",
-        "field `motion`: motion limit `max_spindle_rpm` = -1 is invalid: must be positive and finite",
+        "field `motion.max_spindle_rpm`: -1 is not plausible for a spindle speed, rpm: the range is [0, 2e5]",
     ),
     (
         "holder = { diameter_mm = 50.0, length_mm = 45.0 }",
@@ -219,7 +219,7 @@ const MACHINES: &[(&str, &str, &str)] = &[
     (
         "poly = [-6.0, 14.0]",
         "poly = [-6.0, nan]",
-        "field `errors.motion.EBX.poly[1]`: must be a finite number, got NaN",
+        "field `errors.motion.EBX.poly[1]`: NaN is not plausible for an error term in urad: the range is [-1e4, 1e4]",
     ),
 ];
 

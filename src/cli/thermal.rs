@@ -78,6 +78,10 @@ pub struct FitThermalArgs {
     /// form again on every row.
     #[arg(long)]
     pub no_refit: bool,
+    /// Most data rows read (a work limit: the fit's memory and time grow with the rows times
+    /// the candidates); raise it for a longer file, or resample the file to a coarser step.
+    #[arg(long, default_value_t = crate::commands::thermal::DEFAULT_MAX_ROWS)]
+    pub max_rows: usize,
 }
 
 /// Arguments of `predict-thermal`.
@@ -137,6 +141,7 @@ impl FitThermalArgs {
             holdout_from_s: self.holdout_from_s,
             cycle_col: self.cycle_col,
             settings,
+            max_rows: self.max_rows,
         })
     }
 }

@@ -194,6 +194,7 @@ fn campaign_shard(cfg: &CampaignConfig, shard: Shard, out: &mut dyn Write) -> Re
         version: VERSION.into(),
         inputs: campaign_inputs(cfg, &settings)?,
         header: serde_json::to_value(&header)?,
+        results: Vec::new(),
     };
     let progress = Progress::new(0, "units");
     let (rep, models) =
@@ -207,9 +208,7 @@ fn campaign_shard(cfg: &CampaignConfig, shard: Shard, out: &mut dyn Write) -> Re
         Ok(())
     })?;
     write_models(dir, &models, cfg.force)?;
-    let path = dir.join(MANIFEST_FILE);
-    let json = serde_json::to_string_pretty(&manifest)?;
-    files::write_atomic(&path, json.as_bytes(), cfg.force)?;
+    let path = crate::shard::integrity::write_manifest(dir, manifest, &names[1..], cfg.force)?;
     let list: Vec<String> = seeds.iter().map(|s| s.to_string()).collect();
     writeln!(
         out,

@@ -178,6 +178,7 @@ fn write_shard(
         version: VERSION.into(),
         inputs,
         header: serde_json::to_value(header)?,
+        results: Vec::new(),
     };
     let points = if mine.is_empty() {
         Vec::new()
@@ -198,9 +199,8 @@ fn write_shard(
         Ok(())
     })?;
     // The manifest last: a folder with a manifest has its points.
-    let path = dir.join(MANIFEST_FILE);
-    let json = serde_json::to_string_pretty(&manifest)?;
-    files::write_atomic(&path, json.as_bytes(), force)?;
+    let path =
+        crate::shard::integrity::write_manifest(dir, manifest, &[POINTS_FILE.to_string()], force)?;
     let covered = match (mine.first(), mine.last()) {
         (Some(a), Some(b)) => {
             // The trace of the block starts at the first speed of its run.

@@ -19,7 +19,7 @@ use super::campaign::{model_file_names, SEED_RESULTS_FILE};
 use crate::files;
 use crate::record;
 use crate::shard::MergeConfig;
-use crate::shard::{check_set, ShardManifest, MANIFEST_FILE};
+use crate::shard::{check_set, integrity, ShardManifest, MANIFEST_FILE};
 use crate::studies::campaign::{self, ReportHeader, RunPasses, SeedResults, SummaryBuilder};
 
 /// Reads and checks the shards, then merges them with the command that wrote them.
@@ -43,6 +43,9 @@ pub fn merge(cfg: &MergeConfig, out: &mut dyn Write) -> Result<()> {
         shards.push((dir.display().to_string(), m));
     }
     let order = check_set(&shards)?;
+    for (dir, (_, m)) in cfg.shard_dirs.iter().zip(&shards) {
+        check_integrity(dir, m)?;
+    }
     let dirs: Vec<&Path> = order.iter().map(|&k| cfg.shard_dirs[k].as_path()).collect();
     let first = &shards[order[0]].1;
     match first.command.as_str() {
@@ -60,6 +63,33 @@ pub fn merge(cfg: &MergeConfig, out: &mut dyn Write) -> Result<()> {
         super::lobes_shard::COMMAND => super::lobes_shard::merge(cfg, first, &dirs, out),
         other => bail!("shards of `{other}` cannot be merged by this version"),
     }
+}
+
+/// Every result file of a shard is the one its shard wrote: each listed file has its size and
+/// hash (see [`integrity`]), and the folder holds no other file (hidden files aside) that a
+/// merge could read unchecked.
+///
+/// # Errors
+/// A listed file missing or changed, an unlisted file, another layout version.
+fn check_integrity(dir: &Path, m: &ShardManifest) -> Result<()> {
+    integrity::verify(dir, m)?;
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?;
+    for e in entries {
+        let e = e.with_context(|| format!("{}: cannot list", dir.display()))?;
+        let name = e.file_name().to_string_lossy().to_string();
+        if name == MANIFEST_FILE || name.starts_with('.') || !e.path().is_file() {
+            continue;
+        }
+        if !integrity::lists(m, &name) {
+            bail!(
+                "{}: not among the result files {MANIFEST_FILE} lists (a file its shard did not \
+                 write, or a shard of an older version); remove it or run that shard again",
+                e.path().display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// `seed 17` → 17.
@@ -110,6 +140,9 @@ fn merge_campaign(
         let to = cfg.out_dir.join(&name);
         let text = std::fs::read(dir.join(&name))
             .with_context(|| format!("{}: cannot read", dir.join(&name).display()))?;
+        // The model's own check: it reads as a model (its checksum matched already).
+        crate::predict::predictor::AnyPredictor::from_json_str(&String::from_utf8_lossy(&text))
+            .with_context(|| format!("{}: not a trained model", dir.join(&name).display()))?;
         files::write_atomic(&to, &text, cfg.force)?;
     }
     for name in &names[1..] {

@@ -74,6 +74,15 @@ pub(crate) fn load_for_machine(
                     "note: {}: {why} (--allow-other-machine)",
                     path.display()
                 )?;
+            } else if id.realisation.is_none() {
+                writeln!(
+                    out,
+                    "note: {}: trained on data of an unknown realisation of machine `{}` (its \
+                     calibration file had no `# machine:` line): which machine it was is not \
+                     checked",
+                    path.display(),
+                    id.name
+                )?;
             }
         }
         None => writeln!(

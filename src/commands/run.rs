@@ -141,9 +141,12 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     let (warmups, plan, sampling) = load_plans(cfg)?;
     let out_files =
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
-    let mut controller = match &cfg.model {
-        Some(path) => Some(compensator(cfg, path, out)?),
-        None => None,
+    let (mut controller, ranges_known) = match &cfg.model {
+        Some(path) => {
+            let (c, known) = compensator(cfg, path, out)?;
+            (Some(c), known)
+        }
+        None => (None, false),
     };
     let (log, recorder) = simulate(cfg, &sampling, &warmups, &plan, controller.as_mut())?;
 
@@ -165,7 +168,12 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
                 "{program_name}: the program has no measurement points (no motion and no G4 dwell)"
             )
         })?;
-    summary.extrapolation = controller.as_ref().map(|c| c.extrapolation().clone());
+    // Without recorded training ranges nothing was checked: no verdict (the report says "not
+    // checked"), never "inside the trained ranges".
+    summary.extrapolation = controller
+        .as_ref()
+        .filter(|_| ranges_known)
+        .map(|c| c.extrapolation().clone());
     if let (true, Some(e)) = (cfg.strict, &summary.extrapolation) {
         if let Some(first) = e.inputs.first() {
             anyhow::bail!(
@@ -267,8 +275,9 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan, Sampling)> {
 }
 
 /// The model of `path` as a compensator for the run's machine (see
-/// [`super::model::load_for_machine`]), guarded by its trained ranges.
-fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunController> {
+/// [`super::model::load_for_machine`]), guarded by its trained ranges; and whether the file
+/// records them (a model without them is not checked).
+fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<(RunController, bool)> {
     let machine = &cfg.machine;
     let (model, trained_on) =
         super::model::load_for_machine(machine, cfg.seed, path, cfg.allow_other_machine, out)?;
@@ -282,7 +291,7 @@ fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<RunC
         axis_feeds: None,
     };
     let ranges = trained_on.as_ref().map(|t| &t.inputs).unwrap_or(&none);
-    Ok(Guarded::new(ctrl, ranges, &names))
+    Ok((Guarded::new(ctrl, ranges, &names), trained_on.is_some()))
 }
 
 /// Runs the warm-ups, then the program (measured), on a fresh twin; with a recording if asked.

@@ -93,6 +93,7 @@ pub fn select_shard(cfg: &SelectConfig, shard: Shard, out: &mut dyn Write) -> Re
         version: VERSION.into(),
         inputs: select_inputs(cfg)?,
         header: serde_json::to_value(&header)?,
+        results: Vec::new(),
     };
     let mut runs = Vec::new();
     if !seeds.is_empty() {
@@ -122,9 +123,12 @@ pub fn select_shard(cfg: &SelectConfig, shard: Shard, out: &mut dyn Write) -> Re
         }
         Ok(())
     })?;
-    let path = dir.join(MANIFEST_FILE);
-    let json = serde_json::to_string_pretty(&manifest)?;
-    files::write_atomic(&path, json.as_bytes(), cfg.force)?;
+    let written: Vec<String> = [SELECTION_FILE, COMPARE_FILE]
+        .into_iter()
+        .filter(|n| dir.join(n).is_file())
+        .map(String::from)
+        .collect();
+    let path = crate::shard::integrity::write_manifest(dir, manifest, &written, cfg.force)?;
     let list: Vec<String> = seeds.iter().map(u64::to_string).collect();
     writeln!(
         out,

@@ -56,10 +56,18 @@ pub fn train(cfg: &TrainConfig, out: &mut dyn Write) -> Result<()> {
     }
     let geometry = cfg.machine.geometry();
     // The machine the data names, else the one given (realisation unknown).
-    let machine = data
-        .origin
-        .clone()
-        .unwrap_or_else(|| cfg.machine.identity(None));
+    let machine = match data.origin.clone() {
+        Some(id) => id,
+        None => {
+            writeln!(
+                out,
+                "note: {name} has no `# machine:` line: the model records machine `{}` with an \
+                 unknown realisation, and `run` says so wherever it is used",
+                cfg.machine.machine.name
+            )?;
+            cfg.machine.identity(None)
+        }
+    };
     let trained_on = |sensors: &[String]| TrainedOn {
         machine: Some(machine.clone()),
         inputs: data.input_ranges(sensors),

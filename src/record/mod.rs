@@ -83,6 +83,9 @@ pub enum RecordError {
     /// The file exists and overwriting was not allowed.
     #[error("{0}: already exists (pass --force to overwrite)")]
     Exists(PathBuf),
+    /// The output may not be written (an input, a link, a device; see `crate::files`).
+    #[error(transparent)]
+    Output(#[from] crate::files::OutputError),
     /// The Rerun SDK refused something.
     #[error("recording {path}: {msg}")]
     Rerun {
@@ -127,6 +130,15 @@ pub fn check_rrd_path(path: &Path, force: bool) -> Result<(), RecordError> {
     if path.exists() && !force {
         return Err(RecordError::Exists(path.to_path_buf()));
     }
+    if std::fs::symlink_metadata(path).is_ok_and(|m| !m.file_type().is_file()) {
+        return Err(RecordError::Path {
+            path: path.to_path_buf(),
+            msg: "is not a regular file (a link, device or pipe); a recording is written only \
+                  to a regular file"
+                .to_string(),
+        });
+    }
+    crate::files::check_writable(path, force)?;
     // Writable? Create and remove a probe file (permissions alone do not tell, e.g. for root or
     // read-only mounts).
     let probe = dir.join(format!(".{}.probe-{}", file_name(path), std::process::id()));
@@ -233,15 +245,11 @@ impl RrdFile {
             if size == 0 {
                 return Err(self.err("the Rerun SDK wrote an empty file"));
             }
-            if self.path.exists() && !self.force {
-                return Err(RecordError::Exists(self.path.clone()));
-            }
-            std::fs::rename(&self.tmp, &self.path).map_err(|e| self.err(e))?;
+            crate::files::publish(&self.tmp, &self.path, self.force)?;
             Ok(size)
         })();
-        if result.is_err() {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
+        // After a hard link the temporary name remains: remove it in every case.
+        let _ = std::fs::remove_file(&self.tmp);
         result
     }
 }

@@ -269,6 +269,12 @@ pub fn write_summary(s: &RunSummary, out: &mut dyn Write) -> std::io::Result<()>
     if let Some(r) = s.reduction {
         writeln!(out, "  reduction of RMS |E|: {:.1} %", r * 100.0)?;
     }
+    if s.after.is_some() && s.extrapolation.is_none() {
+        writeln!(
+            out,
+            "  model inputs: not checked (the model file records no trained ranges)"
+        )?;
+    }
     if let Some(e) = &s.extrapolation {
         match e.first_time_s {
             None => writeln!(

@@ -24,6 +24,7 @@ pub mod kinematics;
 pub mod machine;
 pub mod milling;
 pub mod motion;
+pub mod plausible;
 pub mod program;
 pub mod read;
 pub mod sensors;

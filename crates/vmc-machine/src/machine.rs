@@ -174,7 +174,8 @@ pub fn read_machine_file(path: &Path) -> Result<String, MachineError> {
     })
 }
 
-/// A machine description parsed from TOML (not yet validated); `path` names it in errors.
+/// A machine description parsed from TOML, its numbers checked for plausibility
+/// ([`crate::plausible`]) but its sections not yet validated; `path` names it in errors.
 ///
 /// # Errors
 /// [`MachineError::Parse`] with the TOML error on one line.
@@ -182,10 +183,16 @@ pub fn parse_machine_toml<T: serde::de::DeserializeOwned>(
     text: &str,
     path: &str,
 ) -> Result<T, MachineError> {
-    toml::from_str(text).map_err(|e| MachineError::Parse {
+    let parse_error = |e: toml::de::Error| MachineError::Parse {
         path: path.to_string(),
         msg: crate::read::one_line_toml_error(&e),
-    })
+    };
+    // The schema first (its errors carry the line and column), then the plausibility of every
+    // number (`crate::plausible`), before any section's own checks.
+    let spec = toml::from_str(text).map_err(parse_error)?;
+    let table: toml::Table = toml::from_str(text).map_err(parse_error)?;
+    crate::plausible::check_table(&table).map_err(|e| invalid(path, e.field, e.msg))?;
+    Ok(spec)
 }
 
 impl MachineSpec {

@@ -317,6 +317,22 @@ pub fn kind_name(kind: vmc_dynamics::BoundaryKind) -> &'static str {
 /// # Errors
 /// A malformed range or list, a count of 0, a speed that is not a positive number.
 pub fn parse_speeds(text: &str) -> Result<Vec<f64>, String> {
+    let speeds = parse_speed_list(text)?;
+    if speeds.len() > MAX_SPEEDS {
+        return Err(format!(
+            "{} speeds, more than the limit of {MAX_SPEEDS} per run (each speed is a stability \
+             computation); split the range over several runs, e.g. first:middle:count and \
+             middle:last:count",
+            speeds.len()
+        ));
+    }
+    Ok(speeds)
+}
+
+/// Most spindle speeds one `--rpm` may give (a work limit: each is a stability computation).
+pub const MAX_SPEEDS: usize = 20_000;
+
+fn parse_speed_list(text: &str) -> Result<Vec<f64>, String> {
     let number = |s: &str| -> Result<f64, String> {
         let v: f64 = s
             .trim()
@@ -338,7 +354,16 @@ pub fn parse_speeds(text: &str) -> Result<Vec<f64>, String> {
                 .map_err(|_| format!("`{}` is not a whole number of speeds", count.trim()))?;
             match n {
                 0 => Err("the count of speeds must be at least 1".into()),
-                1 => Ok(vec![a]),
+                1 if a == b => Ok(vec![a]),
+                1 => Err(format!(
+                    "a count of 1 cannot include both ends {a} and {b} rpm; give a count of at \
+                     least 2, or the one speed alone (`{a}`)"
+                )),
+                n if n > MAX_SPEEDS => Err(format!(
+                    "{n} speeds, more than the limit of {MAX_SPEEDS} per run (each speed is a \
+                     stability computation); split the range over several runs, e.g. \
+                     first:middle:count and middle:last:count"
+                )),
                 _ => Ok((0..n)
                     .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
                     .collect()),
@@ -401,7 +426,18 @@ mod tests {
             [1000.0, 1500.0, 2000.0]
         );
         assert_eq!(parse_speeds("5000, 7500").unwrap(), [5000.0, 7500.0]);
-        assert_eq!(parse_speeds("3000:4000:1").unwrap(), [3000.0]);
+        // A count of 1 holds both ends only when they agree (the docs promise both ends).
+        assert_eq!(parse_speeds("3000:3000:1").unwrap(), [3000.0]);
+        assert!(parse_speeds("3000:4000:1")
+            .unwrap_err()
+            .contains("cannot include both ends"));
+        // The work limit, before any speed is made, with the way beyond it.
+        let e = parse_speeds("5000:6000:100000000").unwrap_err();
+        assert!(
+            e.contains("limit of 20000") && e.contains("several runs"),
+            "{e}"
+        );
+        assert_eq!(parse_speeds("5000:6000:20000").unwrap().len(), MAX_SPEEDS);
         assert!(parse_speeds("1000:2000:0")
             .unwrap_err()
             .contains("at least 1"));

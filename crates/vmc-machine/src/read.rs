@@ -2,16 +2,23 @@
 //!
 //! Every file the twin reads goes through [`read_text`]: bytes that are not UTF-8 are an error
 //! naming their line and column (instead of the standard library's location-free message);
-//! [`read_named`] adds the file and what it should hold.
+//! [`read_named`] adds the file and what it should hold. Each file read is remembered
+//! ([`is_input`]) so that no output of the same process can be written over one of its inputs.
 
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use thiserror::Error;
 
-/// Reads a text file; bytes that are not UTF-8 are an `InvalidData` error naming their line,
+/// Reads a text file, without a leading UTF-8 byte-order mark; bytes that are not UTF-8 are an `InvalidData` error naming their line,
 /// column and value (instead of the standard library's location-free message).
 pub fn read_text(path: &Path) -> std::io::Result<String> {
-    let bytes = std::fs::read(path)?;
+    let mut bytes = std::fs::read(path)?;
+    note_input(path);
+    // A UTF-8 byte-order mark (as spreadsheet programs write) is not text: drop it.
+    if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
+        bytes.drain(..3);
+    }
     String::from_utf8(bytes).map_err(|e| {
         let bad_at = e.utf8_error().valid_up_to();
         let bytes = e.as_bytes();
@@ -32,6 +39,58 @@ pub fn read_text(path: &Path) -> std::io::Result<String> {
                 bytes[bad_at]
             ),
         )
+    })
+}
+
+/// The identity of a file: device and inode where the platform has them (so that two names of
+/// one file, through links or `..`, are the same), else its canonical path.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum FileIdentity {
+    #[cfg(unix)]
+    Inode { dev: u64, ino: u64 },
+    #[cfg_attr(unix, allow(dead_code))]
+    Path(PathBuf),
+}
+
+fn identity(path: &Path) -> Option<FileIdentity> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let m = std::fs::metadata(path).ok()?;
+        Some(FileIdentity::Inode {
+            dev: m.dev(),
+            ino: m.ino(),
+        })
+    }
+    #[cfg(not(unix))]
+    {
+        std::fs::canonicalize(path).ok().map(FileIdentity::Path)
+    }
+}
+
+/// The files this process has read (see [`note_input`]).
+static INPUTS: Mutex<Vec<FileIdentity>> = Mutex::new(Vec::new());
+
+/// Remembers `path` as an input of this process (done by [`read_text`]; call it for inputs
+/// read another way, or before checking outputs up front). A path that does not exist is
+/// ignored.
+pub fn note_input(path: &Path) {
+    if let Some(id) = identity(path) {
+        let mut inputs = INPUTS.lock().unwrap_or_else(|p| p.into_inner());
+        if !inputs.contains(&id) {
+            inputs.push(id);
+        }
+    }
+}
+
+/// True if `path` names a file this process has read (the same file under any name), so
+/// writing it would destroy an input.
+pub fn is_input(path: &Path) -> bool {
+    identity(path).is_some_and(|id| {
+        INPUTS
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .contains(&id)
     })
 }
 
@@ -80,6 +139,21 @@ mod tests {
             e.ends_with("cannot read program: not UTF-8 text: line 2, column 5: byte 0xE9"),
             "{e}"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_file_read_is_an_input_under_any_of_its_names() {
+        let dir = std::env::temp_dir().join(format!("vmc-inputs-test-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        let f = dir.join("in.csv");
+        std::fs::write(&f, "time_s\n0\n").unwrap();
+        std::fs::write(dir.join("other.csv"), "x").unwrap();
+        assert!(!is_input(&f));
+        read_text(&dir.join("sub").join("..").join("in.csv")).unwrap();
+        assert!(is_input(&f));
+        assert!(!is_input(&dir.join("other.csv")));
+        assert!(!is_input(&dir.join("missing.csv")));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

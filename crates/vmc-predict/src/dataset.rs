@@ -334,6 +334,8 @@ impl Dataset {
 
     /// Parses CSV text; `source_name` names the file in errors.
     pub fn from_csv(text: &str, source_name: &str) -> Result<Dataset, DatasetError> {
+        // A UTF-8 byte-order mark (as spreadsheet programs write) is not part of the header.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut lines = text
             .lines()
             .enumerate()
@@ -405,7 +407,10 @@ impl Dataset {
                 column: "<sensor>_degc (no temperature columns)".into(),
             });
         }
-        let mut records = Vec::new();
+        let mut records: Vec<Record> = Vec::new();
+        // The last time of each cycle and its line: rows of a cycle must be in time order.
+        let mut last_time: std::collections::HashMap<String, (f64, usize)> =
+            std::collections::HashMap::new();
         for (ln, line) in lines {
             let line_no = ln + 1;
             let cells: Vec<&str> = line.split(',').map(|c| c.trim()).collect();
@@ -524,9 +529,29 @@ impl Dataset {
                     }
                 }
             };
+            let time_s = num(1, true)?;
+            if time_s < 0.0 {
+                return Err(bad(
+                    "time_s",
+                    format!("negative time {time_s} s (times count from the start of the test)"),
+                ));
+            }
+            let cycle = cells[idx[0]].to_string();
+            if let Some(&(before_s, before_line)) = last_time.get(&cycle) {
+                if time_s < before_s {
+                    return Err(bad(
+                        "time_s",
+                        format!(
+                            "time {time_s} s is before {before_s} s of line {before_line} of \
+                             cycle \"{cycle}\"; the rows of a cycle must be in time order"
+                        ),
+                    ));
+                }
+            }
+            last_time.insert(cycle.clone(), (time_s, line_no));
             records.push(Record {
-                cycle: cells[idx[0]].to_string(),
-                time_s: num(1, true)?,
+                cycle,
+                time_s,
                 instrument,
                 pos_mm: [num(3, true)?, num(4, true)?, num(5, true)?],
                 values,

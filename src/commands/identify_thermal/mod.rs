@@ -141,6 +141,14 @@ pub fn identify_thermal(cfg: &IdentifyThermalConfig, out: &mut dyn Write) -> Res
             rpm[r]
         );
     }
+    if rpm.iter().all(|v| *v == 0.0) {
+        bail!(
+            "{source}: speed column \"{}\" is 0 rpm on every row: without the spindle turning \
+             there is no heat input to identify (the network's heat comes from the speed); give \
+             measurements where the spindle runs",
+            cfg.rpm
+        );
+    }
     let cols = Columns {
         rpm,
         drifts: cfg

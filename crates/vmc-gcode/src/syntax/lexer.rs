@@ -33,6 +33,7 @@ pub fn parse_line(line: usize, text: &str) -> Result<Option<Line>, GcodeError> {
         chars,
         pos: 0,
         line,
+        operations: 0,
     };
     let mut out = Line {
         line,
@@ -118,6 +119,8 @@ pub(super) struct Lexer<'a> {
     pub(super) chars: &'a [char],
     pub(super) pos: usize,
     pub(super) line: usize,
+    /// Binary operations read so far on this line (bounded by `value::MAX_OPERATIONS`).
+    pub(super) operations: usize,
 }
 
 impl Lexer<'_> {

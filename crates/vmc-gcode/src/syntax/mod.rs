@@ -38,6 +38,7 @@ mod value;
 pub use error::{CallSite, ErrorIn, GcodeError, GcodeErrorKind};
 pub use expr::{Assign, BinOp, Expr, ExprWord, Func, Line, OKind, OName, OWord, Param};
 pub use lexer::parse_line;
+pub use value::MAX_OPERATIONS;
 
 /// One word: a letter and its number, e.g. `X-12.5` or `G91.1`.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -9,6 +9,11 @@ use super::GcodeError;
 /// Deepest nesting of brackets and functions accepted in one value (guards the stack).
 const MAX_DEPTH: usize = 64;
 
+/// Most binary operations accepted on one line. A chain `1+1+…` builds a tree as deep as it
+/// is long, and evaluating (and dropping) that tree recurses once per level: this bound keeps
+/// the deepest tree well inside a 2 MB thread stack. Real programs use a few dozen.
+pub const MAX_OPERATIONS: usize = 1000;
+
 impl Lexer<'_> {
     /// The value of a word (cursor after the letter). A plain number keeps the messages of
     /// the number reader (`X word: missing number`).
@@ -131,6 +136,16 @@ impl Lexer<'_> {
             if op.precedence() < min_prec {
                 self.pos = save;
                 break;
+            }
+            self.operations += 1;
+            if self.operations > MAX_OPERATIONS {
+                return Err(self.invalid(
+                    save,
+                    format!(
+                        "more than {MAX_OPERATIONS} operations on one line; \
+                         split the expression over several parameters"
+                    ),
+                ));
             }
             let rhs = self.binary(op.precedence() + 1, depth + 1)?;
             lhs = Expr::Bin(op, Box::new(lhs), Box::new(rhs));

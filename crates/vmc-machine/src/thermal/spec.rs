@@ -41,12 +41,40 @@ pub enum ThermalError {
         /// The repeated name.
         name: String,
     },
+    /// More nodes than the work limit (see [`max_nodes`]).
+    #[error(
+        "thermal.nodes: {nodes} nodes, more than the limit of {limit} (the work of a thermal \
+         step grows with the cube of the node count: 1,000 nodes simulate a 1-minute program in \
+         about a second, 3,000 in over a minute); merge nodes, or set the environment variable \
+         {MAX_NODES_ENV} to a larger limit"
+    )]
+    TooManyNodes {
+        /// Nodes in the file.
+        nodes: usize,
+        /// The limit in force.
+        limit: usize,
+    },
     /// The network matrix could not be factorised (should not happen for a validated spec).
     #[error("thermal network matrix is not positive definite (dt_s = {dt_s})")]
     Singular {
         /// Step for which the factorisation failed.
         dt_s: f64,
     },
+}
+
+/// Default bound of the nodes of a thermal network (see [`max_nodes`]).
+pub const DEFAULT_MAX_NODES: usize = 1000;
+
+/// Environment variable that raises (or lowers) the node bound.
+pub const MAX_NODES_ENV: &str = "VMC_TWIN_MAX_THERMAL_NODES";
+
+/// The node bound in force: [`MAX_NODES_ENV`] if it holds a whole number, else
+/// [`DEFAULT_MAX_NODES`].
+pub fn max_nodes() -> usize {
+    std::env::var(MAX_NODES_ENV)
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(DEFAULT_MAX_NODES)
 }
 
 /// One lumped thermal mass.
@@ -343,6 +371,13 @@ impl ThermalSpec {
         self.ambient.validate("thermal.ambient")?;
         if self.nodes.is_empty() {
             return Err(invalid("thermal.nodes", "non-empty", "[]".into()));
+        }
+        let limit = max_nodes();
+        if self.nodes.len() > limit {
+            return Err(ThermalError::TooManyNodes {
+                nodes: self.nodes.len(),
+                limit,
+            });
         }
         let index = self.node_map()?;
         for (i, n) in self.nodes.iter().enumerate() {

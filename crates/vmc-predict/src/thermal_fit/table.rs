@@ -131,6 +131,8 @@ pub fn read_csv(
     source: &str,
     request: &TableRequest,
 ) -> Result<Table, ThermalFitError> {
+    // A UTF-8 byte-order mark (as spreadsheet programs write) is not part of the first name.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = text
         .lines()
         .enumerate()
