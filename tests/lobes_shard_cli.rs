@@ -212,7 +212,8 @@ fn merge_refuses_lobes_shards_that_do_not_belong_together_naming_them() {
         "{e}"
     );
     assert!(!dir.join("m").exists(), "nothing written on a refusal");
-    // A shard whose points were altered is refused, naming the file and line.
+    // A shard whose points were altered after it wrote them is refused by its checksum,
+    // naming the file.
     shard(&three, "3/3", "a3");
     let points = std::fs::read_to_string(dir.join("a2/lobes.jsonl")).unwrap();
     std::fs::write(
@@ -222,7 +223,7 @@ fn merge_refuses_lobes_shards_that_do_not_belong_together_naming_them() {
     .unwrap();
     let e = merge(&["a1", "a2", "a3"]);
     assert!(
-        e.contains("lobes.jsonl line 1: speed 6000.5 rpm, expected 6000 rpm"),
+        e.contains("a2/lobes.jsonl: changed since its shard wrote it"),
         "{e}"
     );
 }

@@ -279,7 +279,10 @@ pub fn write_summary(d: &Summary, out: &mut dyn Write) -> std::io::Result<()> {
             (s.as_str(), g)
         })
         .collect();
-    writeln!(out, "by diagonal: median reduction % / max residual |E| µm")?;
+    writeln!(
+        out,
+        "by diagonal: median reduction % / max residual |E| µm / worst residual share of the thermal part %"
+    )?;
     write_aggregate(d, out, &diagonals)?;
     writeln!(
         out,
