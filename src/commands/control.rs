@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use super::lobes::{LobesOutputs, ShardOutput};
 use crate::dynamics::control::blade::BladePlant;
 use crate::dynamics::control::closed_loop::{
-    attenuation, close, lobes_block as closed_lobes_block, open, sampled_model, ClosedLoop, LobeCut,
+    attenuation, close, lobes_block as closed_lobes_block, open, sampled_model, ClosedLoop,
 };
 use crate::dynamics::control::design::{to_metres, CuttingCoupling, DesignPlant};
 use crate::dynamics::control::robust::{check_sampling, SampledController};
@@ -66,15 +66,6 @@ pub fn kind_name(k: Kind) -> &'static str {
         Kind::Lqg => "lqg",
         Kind::Hinf => "hinf",
         Kind::RobustHinf => "robust-hinf",
-    }
-}
-
-/// The cut of a plant file's lobes.
-pub fn lobe_cut(p: &Plant) -> LobeCut {
-    LobeCut {
-        tool: p.tool,
-        immersion: p.immersion,
-        milling: p.milling,
     }
 }
 
@@ -473,7 +464,7 @@ pub fn lobes_block(
             cfg.judged.source.as_deref().unwrap_or("its plant")
         );
     }
-    let cut = lobe_cut(p);
+    let cut = super::control_robust::lobe_cut(p);
     let tol = (MAX_DEPTH_MM, DEPTH_TOL_MM);
     let (speeds, res) = (&cfg.speeds_rpm, cfg.resolution);
     let ol = closed_lobes_block(&bp, &open(&bp), &cut, speeds, block.clone(), tol, res)?;
@@ -635,7 +626,7 @@ pub fn cut(cfg: &ControlCutConfig, out: &mut dyn Write) -> Result<()> {
         tooth_periods: cfg.tooth_periods,
         ..ControlledCutOptions::default()
     };
-    let cut = lobe_cut(p);
+    let cut = super::control_robust::lobe_cut(p);
     let run = |c: Option<&LoopElement>| {
         simulate(
             &bp,

@@ -8,6 +8,7 @@ use std::io::Write;
 
 use anyhow::Result;
 
+use crate::dynamics::control::closed_loop::LobeCut;
 use crate::dynamics::control::robust::{
     robustness_case, Perturbation, RobustnessCase, SampledController, SweepLobes,
 };
@@ -39,7 +40,7 @@ pub fn sweep(
     out: &mut dyn Write,
 ) -> Result<Vec<RobustnessCase>> {
     let lobes = (!cfg.speeds_rpm.is_empty()).then(|| SweepLobes {
-        cut: super::control::lobe_cut(plant),
+        cut: lobe_cut(plant),
         speeds_rpm: cfg.speeds_rpm.clone(),
         depth_range_mm: DEPTH_RANGE_MM,
         resolution: cfg.resolution,
@@ -114,4 +115,13 @@ pub fn sweep(
     }
     writeln!(out, "{tail}")?;
     Ok(cases)
+}
+
+/// The cut of a plant file's lobes.
+pub fn lobe_cut(p: &Plant) -> LobeCut {
+    LobeCut {
+        tool: p.tool,
+        immersion: p.immersion,
+        milling: p.milling,
+    }
 }

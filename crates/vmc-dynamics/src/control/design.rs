@@ -20,7 +20,7 @@ use super::lqg::lqg;
 use super::pade::pade;
 use super::{ControlError, StateSpace};
 use crate::forces::{average_cutting_matrix, Engagement};
-use crate::params::{positive, Milling, Tool};
+use crate::params::{positive, DynamicsError, Milling, Tool};
 
 /// Metres to micrometres.
 const UM_PER_M: f64 = 1e6;
@@ -272,7 +272,7 @@ impl DesignPlant {
     pub fn robust_hinf(
         &self,
         w: &HinfWeights,
-        r: &super::robust::RobustWeights,
+        r: &RobustWeights,
     ) -> Result<(StateSpace, f64), ControlError> {
         r.validate()?;
         let f = lowpass_filter(r.rolloff_hz)?;
@@ -359,5 +359,51 @@ pub fn to_metres(k: &StateSpace) -> StateSpace {
         b: &k.b * UM_PER_M,
         c: k.c.clone(),
         d: &k.d * UM_PER_M,
+    }
+}
+
+/// The weights of the robust H∞ design on top of [`HinfWeights`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobustWeights {
+    /// Relative input uncertainty at low frequency r₀.
+    pub uncertainty_low: f64,
+    /// Relative input uncertainty at high frequency r_∞.
+    pub uncertainty_high: f64,
+    /// Frequency ω₀/2π where the uncertainty starts to rise, Hz.
+    pub uncertainty_corner_hz: f64,
+    /// Corner of the second-order roll-off of the command (two first-order filters), Hz.
+    pub rolloff_hz: f64,
+}
+
+impl RobustWeights {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// A weight that is not positive and finite, or r_∞ below r₀.
+    pub fn validate(&self) -> Result<(), DynamicsError> {
+        positive("uncertainty_low", self.uncertainty_low)?;
+        positive("uncertainty_high", self.uncertainty_high)?;
+        positive("uncertainty_corner_hz", self.uncertainty_corner_hz)?;
+        positive("rolloff_hz", self.rolloff_hz)?;
+        positive(
+            "uncertainty_high - uncertainty_low",
+            self.uncertainty_high - self.uncertainty_low,
+        )
+    }
+
+    /// The uncertainty weight W_Δ(s) as a state-space system (one state).
+    pub fn uncertainty_weight(&self) -> StateSpace {
+        use nalgebra::DMatrix;
+        let (r0, ri) = (self.uncertainty_low, self.uncertainty_high);
+        let w0 = 2.0 * std::f64::consts::PI * self.uncertainty_corner_hz;
+        // W(s) = r0 (s/w0 + 1)/(s/(w0 ri/r0) + 1) = ri + (r0 - ri) p/(s + p), p = w0 ri/r0.
+        let p = w0 * ri / r0;
+        StateSpace {
+            a: DMatrix::from_element(1, 1, -p),
+            b: DMatrix::from_element(1, 1, p),
+            c: DMatrix::from_element(1, 1, r0 - ri),
+            d: DMatrix::from_element(1, 1, ri),
+        }
     }
 }

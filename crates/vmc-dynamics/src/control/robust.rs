@@ -30,6 +30,7 @@ use super::blade::{Blade, BladePlant};
 use super::closed_loop::{
     attenuation, close, lobes_block, open, sampled_model, ClosedLoop, LobeCut,
 };
+pub use super::design::RobustWeights;
 use super::simulate::LoopElement;
 use super::{ControlError, StateSpace};
 use crate::converged::Resolution;
@@ -308,52 +309,6 @@ pub fn robustness(
         .iter()
         .map(|&p| robustness_case(blade, controller, p, lobes))
         .collect()
-}
-
-/// The weights of the robust H∞ design on top of [`super::design::HinfWeights`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RobustWeights {
-    /// Relative input uncertainty at low frequency r₀.
-    pub uncertainty_low: f64,
-    /// Relative input uncertainty at high frequency r_∞.
-    pub uncertainty_high: f64,
-    /// Frequency ω₀/2π where the uncertainty starts to rise, Hz.
-    pub uncertainty_corner_hz: f64,
-    /// Corner of the second-order roll-off of the command (two first-order filters), Hz.
-    pub rolloff_hz: f64,
-}
-
-impl RobustWeights {
-    /// Checks every field.
-    ///
-    /// # Errors
-    /// A weight that is not positive and finite, or r_∞ below r₀.
-    pub fn validate(&self) -> Result<(), DynamicsError> {
-        positive("uncertainty_low", self.uncertainty_low)?;
-        positive("uncertainty_high", self.uncertainty_high)?;
-        positive("uncertainty_corner_hz", self.uncertainty_corner_hz)?;
-        positive("rolloff_hz", self.rolloff_hz)?;
-        positive(
-            "uncertainty_high - uncertainty_low",
-            self.uncertainty_high - self.uncertainty_low,
-        )
-    }
-
-    /// The uncertainty weight W_Δ(s) as a state-space system (one state).
-    pub fn uncertainty_weight(&self) -> StateSpace {
-        use nalgebra::DMatrix;
-        let (r0, ri) = (self.uncertainty_low, self.uncertainty_high);
-        let w0 = 2.0 * std::f64::consts::PI * self.uncertainty_corner_hz;
-        // W(s) = r0 (s/w0 + 1)/(s/(w0 ri/r0) + 1) = ri + (r0 - ri) p/(s + p), p = w0 ri/r0.
-        let p = w0 * ri / r0;
-        StateSpace {
-            a: DMatrix::from_element(1, 1, -p),
-            b: DMatrix::from_element(1, 1, p),
-            c: DMatrix::from_element(1, 1, r0 - ri),
-            d: DMatrix::from_element(1, 1, ri),
-        }
-    }
 }
 
 /// Checks the sampling of a controller against the modes it acts on: the highest mode whose

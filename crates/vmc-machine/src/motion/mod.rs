@@ -44,6 +44,7 @@ mod rotary;
 mod rotary_tests;
 mod sampling;
 mod travel;
+pub use travel::travel_message;
 
 #[cfg(test)]
 mod limit_tests;
@@ -191,16 +192,6 @@ pub enum MotionError {
         /// Upper travel limit (mm).
         max_mm: f64,
     },
-}
-
-/// The message of a move beyond the travel, in the program's unit `unit` and rounded as a
-/// person reads it (µm in mm, a tenth of a thou in inches): `line 4: axis X reaches 580 mm,
-/// outside travel [0, 560] mm`. `values_mm`: the position reached and the travel's minimum
-/// and maximum, machine coordinates, mm.
-pub fn travel_message(line: usize, axis: char, values_mm: [f64; 3], unit: LengthUnit) -> String {
-    let [pos, min, max] = values_mm.map(|v| unit.number_mm(v));
-    let u = unit.symbol();
-    format!("line {line}: axis {axis} reaches {pos} {u}, outside travel [{min}, {max}] {u}")
 }
 
 /// Longest machine time a program may take (s): 7 days. Longer plans (a G4 of 10⁸ s, a feed

@@ -10,6 +10,17 @@
 //! 1e-9°).
 
 use super::{Geometry, MotionError, Plan, Segment};
+use vmc_gcode::interp::LengthUnit;
+
+/// The message of a move beyond the travel, in the program's unit `unit` and rounded as a
+/// person reads it (µm in mm, a tenth of a thou in inches): `line 4: axis X reaches 580 mm,
+/// outside travel [0, 560] mm`. `values_mm`: the position reached and the travel's minimum
+/// and maximum, machine coordinates, mm.
+pub fn travel_message(line: usize, axis: char, values_mm: [f64; 3], unit: LengthUnit) -> String {
+    let [pos, min, max] = values_mm.map(|v| unit.number_mm(v));
+    let u = unit.symbol();
+    format!("line {line}: axis {axis} reaches {pos} {u}, outside travel [{min}, {max}] {u}")
+}
 
 /// Overshoot tolerated before a position counts as outside the travel (mm).
 const TRAVEL_TOLERANCE_MM: f64 = 1e-9;
