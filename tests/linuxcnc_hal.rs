@@ -10,6 +10,8 @@
 //! module cannot be shown to `loadrt` (`VMC_REQUIRE_LINUXCNC=1` turns the skip into a
 //! failure). About 2 s: no motion controller, one short HAL session per test.
 
+#[path = "common/hal_module.rs"]
+mod hal_module;
 #[path = "../crates/vmc-predict/tests/common/mod.rs"]
 mod predict_common;
 #[path = "../crates/vmc-gcode/tests/common/temp_dir.rs"]
@@ -18,6 +20,7 @@ mod temp_dir;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use hal_module::build_module;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use temp_dir::TempDir;
@@ -61,41 +64,6 @@ fn available() -> bool {
         }
         _ => panic!("hal-check.sh --probe: {}", text(&out)),
     }
-}
-
-/// The static library cargo built for this test (a dev-dependency), newest first.
-fn static_library() -> PathBuf {
-    let exe = std::env::current_exe().expect("the test's path");
-    let deps = exe.parent().expect("the deps folder");
-    let mut found: Vec<(std::time::SystemTime, PathBuf)> = std::fs::read_dir(deps)
-        .expect("the deps folder lists")
-        .filter_map(Result::ok)
-        .map(|e| e.path())
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with("libvmc_rtcomp") && n.ends_with(".a"))
-        })
-        .filter_map(|p| Some((p.metadata().ok()?.modified().ok()?, p)))
-        .collect();
-    found.sort();
-    found
-        .pop()
-        .expect("cargo built libvmc_rtcomp.a next to the test")
-        .1
-}
-
-/// Builds the module into `dir` with the library of this build.
-fn build_module(dir: &Path) -> PathBuf {
-    let out = Command::new(script("build-comp.sh"))
-        .arg("--lib")
-        .arg(static_library())
-        .arg("--out")
-        .arg(dir)
-        .output()
-        .expect("build-comp.sh starts");
-    assert!(out.status.success(), "build-comp.sh: {}", text(&out));
-    dir.join("vmc_comp.so")
 }
 
 /// The reference machine's features with the spindle speed as an input, 6 units per net.
