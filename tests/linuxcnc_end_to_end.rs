@@ -12,43 +12,13 @@
 //! LinuxCNC session of about 35 s, the twin's runs and the calibration.
 
 mod common;
-#[path = "common/hal_module.rs"]
-mod hal_module;
+#[path = "common/linuxcnc.rs"]
+mod linuxcnc_common;
 
-use std::process::{Command, Output};
+use std::process::Command;
 
 use common::{ok, repo_file, vmc, TempDir};
-
-fn end_to_end(args: &[&str]) -> Output {
-    Command::new(repo_file("deploy/linuxcnc/end-to-end.sh"))
-        .args(args)
-        .output()
-        .expect("deploy/linuxcnc/end-to-end.sh starts")
-}
-
-fn text(out: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
-/// Whether the run can happen here; prints why not (a failure under `VMC_REQUIRE_LINUXCNC=1`).
-fn available() -> bool {
-    let out = end_to_end(&["--probe"]);
-    match out.status.code() {
-        Some(0) => true,
-        Some(77) => {
-            let reason = text(&out);
-            let required = std::env::var("VMC_REQUIRE_LINUXCNC").is_ok_and(|v| v == "1");
-            assert!(!required, "VMC_REQUIRE_LINUXCNC=1 but {reason}");
-            eprintln!("{reason}");
-            false
-        }
-        _ => panic!("end-to-end.sh --probe: {}", text(&out)),
-    }
-}
+use linuxcnc_common::text;
 
 /// One row of `end-to-end.csv`, by column name.
 fn field(header: &str, row: &str, name: &str) -> f64 {
@@ -64,7 +34,7 @@ fn field(header: &str, row: &str, name: &str) -> f64 {
 
 #[test]
 fn linuxcnc_with_the_component_in_its_servo_thread_removes_what_run_compensate_removes() {
-    if !available() {
+    if !linuxcnc_common::available("end-to-end.sh") {
         eprintln!("skipped: LinuxCNC is not available here");
         return;
     }
@@ -86,7 +56,7 @@ fn linuxcnc_with_the_component_in_its_servo_thread_removes_what_run_compensate_r
         .expect("diag_xy.ngc reads")
         .replace("G4 P4", "G4 P1");
     std::fs::write(d.join("diag_xy_short.ngc"), program).expect("the program is written");
-    let module = hal_module::build_module(d);
+    let module = linuxcnc_common::build_module(d);
     let warmup = repo_file("trajectories/warmup_2h_4000rpm.ngc");
     let state = format!("2h={}", warmup.display());
     let out = Command::new(repo_file("deploy/linuxcnc/end-to-end.sh"))

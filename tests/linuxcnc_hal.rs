@@ -10,17 +10,16 @@
 //! module cannot be shown to `loadrt` (`VMC_REQUIRE_LINUXCNC=1` turns the skip into a
 //! failure). About 2 s: no motion controller, one short HAL session per test.
 
-#[path = "common/hal_module.rs"]
-mod hal_module;
+#[path = "common/linuxcnc.rs"]
+mod linuxcnc_common;
 #[path = "../crates/vmc-predict/tests/common/mod.rs"]
 mod predict_common;
 #[path = "../crates/vmc-gcode/tests/common/temp_dir.rs"]
 mod temp_dir;
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-use hal_module::build_module;
+use linuxcnc_common::{build_module, script, text};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use temp_dir::TempDir;
@@ -33,37 +32,9 @@ const SAME_MM: f64 = 1e-9;
 const RPM: f64 = 8000.0;
 const FEEDS_MM_PER_MIN: [f64; 3] = [1200.0, -600.0, 300.0];
 
-fn script(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("deploy/linuxcnc")
-        .join(name)
-}
-
-fn text(out: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
 /// Whether the check can run here; prints why not (a failure under `VMC_REQUIRE_LINUXCNC=1`).
 fn available() -> bool {
-    let out = Command::new(script("hal-check.sh"))
-        .arg("--probe")
-        .output()
-        .expect("hal-check.sh starts");
-    match out.status.code() {
-        Some(0) => true,
-        Some(77) => {
-            let reason = text(&out);
-            let required = std::env::var("VMC_REQUIRE_LINUXCNC").is_ok_and(|v| v == "1");
-            assert!(!required, "VMC_REQUIRE_LINUXCNC=1 but {reason}");
-            eprintln!("{reason}");
-            false
-        }
-        _ => panic!("hal-check.sh --probe: {}", text(&out)),
-    }
+    linuxcnc_common::available("hal-check.sh")
 }
 
 /// The reference machine's features with the spindle speed as an input, 6 units per net.
