@@ -72,7 +72,9 @@ fn summary(dir: &Path, out: &str) -> serde_json::Value {
 
 /// `stats[field][i]` of a summary, µm.
 fn stat(s: &serde_json::Value, part: &str, field: &str, i: usize) -> f64 {
-    s[part][field][i].as_f64().unwrap_or_else(|| panic!("{part}.{field}: {s}"))
+    s[part][field][i]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{part}.{field}: {s}"))
 }
 
 fn arg(p: &Path) -> &str {
@@ -88,16 +90,39 @@ fn a_csv_and_a_halsampler_log_of_the_same_trajectory_give_the_same_figures() {
     std::fs::write(d.join("trace.hal"), hal_log(&s)).unwrap();
     let warmup = repo_file(WARMUP);
     let csv = ok(
-        &vmc(d, &["replay", "trace.csv", "--warmup", arg(&warmup), "--out", "c"]),
+        &vmc(
+            d,
+            &[
+                "replay",
+                "trace.csv",
+                "--warmup",
+                arg(&warmup),
+                "--out",
+                "c",
+            ],
+        ),
         "replay csv",
     );
-    assert!(csv.contains(&format!("replayed {} samples", s.len())), "{csv}");
+    assert!(
+        csv.contains(&format!("replayed {} samples", s.len())),
+        "{csv}"
+    );
     let hal = ok(
         &vmc(
             d,
             &[
-                "replay", "trace.hal", "--format", "halsampler", "--columns", "n,x,y,z,s",
-                "--period-ms", "10", "--warmup", arg(&warmup), "--out", "h",
+                "replay",
+                "trace.hal",
+                "--format",
+                "halsampler",
+                "--columns",
+                "n,x,y,z,s",
+                "--period-ms",
+                "10",
+                "--warmup",
+                arg(&warmup),
+                "--out",
+                "h",
             ],
         ),
         "replay halsampler",
@@ -127,7 +152,10 @@ fn zero_logged_corrections_give_the_uncompensated_figure_as_compensated() {
         &vmc(d, &["replay", "zero.csv", "--every", "7", "--out", "z"]),
         "replay with zero corrections",
     );
-    assert!(text.contains("with the corrections the controller logged"), "{text}");
+    assert!(
+        text.contains("with the corrections the controller logged"),
+        "{text}"
+    );
     let z = summary(d, "z");
     assert_eq!(z["points"].as_u64(), Some(s.len().div_ceil(7) as u64));
     assert_eq!(z["before"], z["after"]);
@@ -142,11 +170,19 @@ fn a_replay_with_the_models_compensation_is_close_to_the_run_of_the_same_program
     let d = dir.path();
     // A quick model: a coarse calibration and the linear predictor.
     ok(
-        &vmc(d, &["calibrate", "-o", "cal.csv", "--measure-every-min", "120"]),
+        &vmc(
+            d,
+            &["calibrate", "-o", "cal.csv", "--measure-every-min", "120"],
+        ),
         "calibrate",
     );
     ok(
-        &vmc(d, &["train", "--data", "cal.csv", "--kind", "linear", "-o", "m.json"]),
+        &vmc(
+            d,
+            &[
+                "train", "--data", "cal.csv", "--kind", "linear", "-o", "m.json",
+            ],
+        ),
         "train",
     );
     let s = samples(&diagonal_plan());
@@ -157,8 +193,18 @@ fn a_replay_with_the_models_compensation_is_close_to_the_run_of_the_same_program
         &vmc(
             d,
             &[
-                "run", arg(&program), "--warmup", arg(&warmup), "--model", "m.json",
-                "--compensate", "--every-cycle", "--interp-cycle-ms", "10", "--out", "run",
+                "run",
+                arg(&program),
+                "--warmup",
+                arg(&warmup),
+                "--model",
+                "m.json",
+                "--compensate",
+                "--every-cycle",
+                "--interp-cycle-ms",
+                "10",
+                "--out",
+                "run",
             ],
         ),
         "run",
@@ -167,8 +213,16 @@ fn a_replay_with_the_models_compensation_is_close_to_the_run_of_the_same_program
         &vmc(
             d,
             &[
-                "replay", "trace.csv", "--warmup", arg(&warmup), "--compensate", "m.json",
-                "--out", "rep", "--rrd", "rep.rrd",
+                "replay",
+                "trace.csv",
+                "--warmup",
+                arg(&warmup),
+                "--compensate",
+                "m.json",
+                "--out",
+                "rep",
+                "--rrd",
+                "rep.rrd",
             ],
         ),
         "replay",
@@ -181,10 +235,19 @@ fn a_replay_with_the_models_compensation_is_close_to_the_run_of_the_same_program
     // the weighting of the points (the replay measures every 10 ms of the 4 s dwells too, the
     // run once per dwell).
     for part in ["before", "after"] {
-        let (a, b) = (stat(&r, part, "max_abs_um", 3), stat(&p, part, "max_abs_um", 3));
-        assert!((a - b).abs() < 0.1 * a.max(1.0), "{part} max |E|: run {a}, replay {b}");
+        let (a, b) = (
+            stat(&r, part, "max_abs_um", 3),
+            stat(&p, part, "max_abs_um", 3),
+        );
+        assert!(
+            (a - b).abs() < 0.1 * a.max(1.0),
+            "{part} max |E|: run {a}, replay {b}"
+        );
         let (a, b) = (stat(&r, part, "rms_um", 3), stat(&p, part, "rms_um", 3));
-        assert!((a - b).abs() < 0.2 * a.max(1.0), "{part} RMS |E|: run {a}, replay {b}");
+        assert!(
+            (a - b).abs() < 0.2 * a.max(1.0),
+            "{part} RMS |E|: run {a}, replay {b}"
+        );
     }
     assert!(stat(&p, "after", "rms_um", 3) < 0.7 * stat(&p, "before", "rms_um", 3));
 }
@@ -195,16 +258,56 @@ fn bad_logs_are_refused_with_their_line() {
     let d = dir.path();
     let head = "time_s,x_mm,y_mm,z_mm\n";
     let cases = [
-        ("missing.csv", "time_s,x_mm,y_mm\n0,1,2\n".to_string(), "line 1: no `z_mm` column"),
-        ("short.csv", format!("{head}0,10,60,-225\n0.001,10,60\n"), "line 3: 3 fields"),
-        ("repeat.csv", format!("{head}0,10,60,-225\n0,10,60,-225\n"), "line 3: time 0 s is not after"),
-        ("back.csv", format!("{head}1,10,60,-225\n0.5,10,60,-225\n"), "line 3: time 0.5 s"),
-        ("nan.csv", format!("{head}0,10,NaN,-225\n"), "line 2: column `y_mm`: NaN"),
-        ("inf.csv", format!("{head}0,10,60,inf\n"), "line 2: column `z_mm`: inf"),
-        ("word.csv", format!("{head}0,10,60,-225\n0.001,ten,60,-225\n"), "line 3: column `x_mm`: `ten`"),
-        ("twice.csv", "time_s,x_mm,y_mm,y_mm,z_mm\n".to_string(), "line 1: column `y_mm` is named twice"),
-        ("unknown.csv", "time_s,x_mm,y_mm,z_mm,feed\n".to_string(), "line 1: unknown column `feed`"),
-        ("sensor.csv", "time_s,x_mm,y_mm,z_mm,nowhere_degc\n0,1,2,3,20\n".to_string(), "unknown column `nowhere_degc`"),
+        (
+            "missing.csv",
+            "time_s,x_mm,y_mm\n0,1,2\n".to_string(),
+            "line 1: no `z_mm` column",
+        ),
+        (
+            "short.csv",
+            format!("{head}0,10,60,-225\n0.001,10,60\n"),
+            "line 3: 3 fields",
+        ),
+        (
+            "repeat.csv",
+            format!("{head}0,10,60,-225\n0,10,60,-225\n"),
+            "line 3: time 0 s is not after",
+        ),
+        (
+            "back.csv",
+            format!("{head}1,10,60,-225\n0.5,10,60,-225\n"),
+            "line 3: time 0.5 s",
+        ),
+        (
+            "nan.csv",
+            format!("{head}0,10,NaN,-225\n"),
+            "line 2: column `y_mm`: NaN",
+        ),
+        (
+            "inf.csv",
+            format!("{head}0,10,60,inf\n"),
+            "line 2: column `z_mm`: inf",
+        ),
+        (
+            "word.csv",
+            format!("{head}0,10,60,-225\n0.001,ten,60,-225\n"),
+            "line 3: column `x_mm`: `ten`",
+        ),
+        (
+            "twice.csv",
+            "time_s,x_mm,y_mm,y_mm,z_mm\n".to_string(),
+            "line 1: column `y_mm` is named twice",
+        ),
+        (
+            "unknown.csv",
+            "time_s,x_mm,y_mm,z_mm,feed\n".to_string(),
+            "line 1: unknown column `feed`",
+        ),
+        (
+            "sensor.csv",
+            "time_s,x_mm,y_mm,z_mm,nowhere_degc\n0,1,2,3,20\n".to_string(),
+            "unknown column `nowhere_degc`",
+        ),
         ("empty.csv", String::new(), "the log has no samples"),
         ("header.csv", head.to_string(), "the log has no samples"),
     ];
@@ -217,10 +320,23 @@ fn bad_logs_are_refused_with_their_line() {
     let err = refused(&vmc(d, &["replay", "log.txt"]), "no format");
     assert!(err.contains("give --format csv"), "{err}");
     let err = refused(
-        &vmc(d, &["replay", "log.txt", "--columns", "n,x,y,z", "--period-ms", "1"]),
+        &vmc(
+            d,
+            &[
+                "replay",
+                "log.txt",
+                "--columns",
+                "n,x,y,z",
+                "--period-ms",
+                "1",
+            ],
+        ),
         "halsampler field count",
     );
-    assert!(err.contains("log.txt: line 2: 5 fields, the log has 4 columns"), "{err}");
+    assert!(
+        err.contains("log.txt: line 2: 5 fields, the log has 4 columns"),
+        "{err}"
+    );
     std::fs::write(
         d.join("corr.csv"),
         "time_s,x_mm,y_mm,z_mm,corr_x_mm,corr_y_mm,corr_z_mm\n0,10,60,-225,0,0,0\n",
@@ -230,5 +346,8 @@ fn bad_logs_are_refused_with_their_line() {
         &vmc(d, &["replay", "corr.csv", "--compensate", "m.json"]),
         "corrections and a model",
     );
-    assert!(err.contains("the log has the controller's corrections"), "{err}");
+    assert!(
+        err.contains("the log has the controller's corrections"),
+        "{err}"
+    );
 }

@@ -112,7 +112,9 @@ impl ReplayArgs {
             (None, None) => None,
         };
         if model.is_none() && (self.strict || self.allow_other_machine) {
-            anyhow::bail!("--strict and --allow-other-machine apply to a model: add --compensate MODEL");
+            anyhow::bail!(
+                "--strict and --allow-other-machine apply to a model: add --compensate MODEL"
+            );
         }
         let sim = SimConfig::new(self.thermal_step_s, 1e-3).map_err(|_| {
             anyhow::anyhow!("--thermal-step-s must be > 0, got {}", self.thermal_step_s)

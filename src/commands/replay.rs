@@ -108,13 +108,8 @@ pub fn replay(cfg: &ReplayConfig, out: &mut dyn Write) -> Result<()> {
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let (mut controller, ranges_known) = match &cfg.model {
         Some(path) => {
-            let (c, known) = run::compensator(
-                &cfg.machine,
-                cfg.seed,
-                path,
-                cfg.allow_other_machine,
-                out,
-            )?;
+            let (c, known) =
+                run::compensator(&cfg.machine, cfg.seed, path, cfg.allow_other_machine, out)?;
             (Some(c), known)
         }
         None => (None, false),
@@ -240,7 +235,13 @@ fn simulate(
         names: &cfg.warmups,
         sim: &warm_cfg,
     };
-    run::run_warmups(&ctx, &mut twin, warmups, controller.as_deref_mut(), &mut watch)?;
+    run::run_warmups(
+        &ctx,
+        &mut twin,
+        warmups,
+        controller.as_deref_mut(),
+        &mut watch,
+    )?;
     let mut log = RunLog::default();
     let mut obs = sim::Tee(&mut log, &mut watch);
     obs.on_run_start(&RunStart {
@@ -254,7 +255,9 @@ fn simulate(
         &twin,
         &sim_cfg,
         cfg.every,
-        controller.as_deref_mut().map(|c| c as &mut dyn sim::Controller),
+        controller
+            .as_deref_mut()
+            .map(|c| c as &mut dyn sim::Controller),
         &obs,
     );
     while let Some(s) = reader.next_sample()? {
@@ -335,7 +338,10 @@ fn report_text(
     let compensation = match (&cfg.model, scan.has_corrections) {
         (_, true) => "after = with the corrections the controller logged".to_string(),
         (Some(m), false) => format!("after = with {} in the twin's loop", m.display()),
-        (None, false) => "no compensation (the log has no corrections; --compensate MODEL adds the model's)".to_string(),
+        (None, false) => {
+            "no compensation (the log has no corrections; --compensate MODEL adds the model's)"
+                .to_string()
+        }
     };
     writeln!(out, "{compensation}")?;
     if !scan.first_temps.is_empty() {

@@ -143,13 +143,8 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let (mut controller, ranges_known) = match &cfg.model {
         Some(path) => {
-            let (c, known) = compensator(
-                &cfg.machine,
-                cfg.seed,
-                path,
-                cfg.allow_other_machine,
-                out,
-            )?;
+            let (c, known) =
+                compensator(&cfg.machine, cfg.seed, path, cfg.allow_other_machine, out)?;
             (Some(c), known)
         }
         None => (None, false),
@@ -405,7 +400,13 @@ fn simulate(
             names: &cfg.warmups,
             sim: &warm_cfg,
         };
-        run_warmups(&ctx, &mut twin, warmups, controller.as_deref_mut(), &mut obs)?;
+        run_warmups(
+            &ctx,
+            &mut twin,
+            warmups,
+            controller.as_deref_mut(),
+            &mut obs,
+        )?;
     }
     let mut log = RunLog::default();
     {

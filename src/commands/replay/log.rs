@@ -217,10 +217,8 @@ impl LogColumns {
             (Some(x), Some(y), Some(z)) => Some([x, y, z]),
             (None, None, None) => None,
             _ => {
-                let name = ["corr_x_mm", "corr_y_mm", "corr_z_mm"][corr
-                    .iter()
-                    .position(Option::is_none)
-                    .unwrap_or(0)];
+                let name = ["corr_x_mm", "corr_y_mm", "corr_z_mm"]
+                    [corr.iter().position(Option::is_none).unwrap_or(0)];
                 return Err(LogError::MissingColumn {
                     line,
                     name,

@@ -66,14 +66,38 @@ fn bad_logs_are_refused_with_their_line() {
     let csv = LogFormat::Csv;
     let cases: [(&str, &str); 9] = [
         ("time_s,x_mm,y_mm\n0,1,2\n", "line 1: no `z_mm` column"),
-        ("time_s,x_mm,y_mm,z_mm\n0,1,2,3\n1,1,2\n", "line 3: 3 fields, the log has 4 columns"),
-        ("time_s,x_mm,y_mm,z_mm\n0,1,2,3\n0,1,2,3\n", "line 3: time 0 s is not after"),
-        ("time_s,x_mm,y_mm,z_mm\n1,1,2,3\n0.5,1,2,3\n", "line 3: time 0.5 s is not after"),
-        ("time_s,x_mm,y_mm,z_mm\n0,1,NaN,3\n", "line 2: column `y_mm`: NaN is not a finite"),
-        ("time_s,x_mm,y_mm,z_mm\n0,1,inf,3\n", "line 2: column `y_mm`: inf is not a finite"),
-        ("time_s,x_mm,y_mm,z_mm\n0,1,2,3\n1,1,2,abc\n", "line 3: column `z_mm`: `abc` is not a number"),
-        ("time_s,x_mm,x_mm,y_mm,z_mm\n", "line 1: column `x_mm` is named twice"),
-        ("time_s,x_mm,y_mm,z_mm,feed\n", "line 1: unknown column `feed`"),
+        (
+            "time_s,x_mm,y_mm,z_mm\n0,1,2,3\n1,1,2\n",
+            "line 3: 3 fields, the log has 4 columns",
+        ),
+        (
+            "time_s,x_mm,y_mm,z_mm\n0,1,2,3\n0,1,2,3\n",
+            "line 3: time 0 s is not after",
+        ),
+        (
+            "time_s,x_mm,y_mm,z_mm\n1,1,2,3\n0.5,1,2,3\n",
+            "line 3: time 0.5 s is not after",
+        ),
+        (
+            "time_s,x_mm,y_mm,z_mm\n0,1,NaN,3\n",
+            "line 2: column `y_mm`: NaN is not a finite",
+        ),
+        (
+            "time_s,x_mm,y_mm,z_mm\n0,1,inf,3\n",
+            "line 2: column `y_mm`: inf is not a finite",
+        ),
+        (
+            "time_s,x_mm,y_mm,z_mm\n0,1,2,3\n1,1,2,abc\n",
+            "line 3: column `z_mm`: `abc` is not a number",
+        ),
+        (
+            "time_s,x_mm,x_mm,y_mm,z_mm\n",
+            "line 1: column `x_mm` is named twice",
+        ),
+        (
+            "time_s,x_mm,y_mm,z_mm,feed\n",
+            "line 1: unknown column `feed`",
+        ),
     ];
     for (text, want) in cases {
         let e = refusal(text, &csv);

@@ -112,7 +112,11 @@ fn a_logged_correction_moves_the_axes_by_it() {
     }
     for p in replay(&spec, &log).iter().take(50) {
         let q = p.compensated_command_mm.unwrap();
-        let want = [p.commanded_mm[0] + 0.01, p.commanded_mm[1], p.commanded_mm[2] - 0.02];
+        let want = [
+            p.commanded_mm[0] + 0.01,
+            p.commanded_mm[1],
+            p.commanded_mm[2] - 0.02,
+        ];
         assert_eq!(q, want);
         // Moving X by +10 µm moves the tool by about +10 µm: the error grows by about that.
         let dx = p.error_after_um.unwrap()[0] - p.error_before_um[0];
@@ -136,7 +140,10 @@ fn a_sample_not_later_than_the_previous_is_refused_with_its_line() {
     };
     r.push(&mut twin, &s(1.0, 1), None, &mut null).unwrap();
     let e = r.push(&mut twin, &s(1.0, 2), None, &mut null).unwrap_err();
-    assert!(matches!(e, SimError::TimeNotIncreasing { line: 2, .. }), "{e}");
+    assert!(
+        matches!(e, SimError::TimeNotIncreasing { line: 2, .. }),
+        "{e}"
+    );
 }
 
 #[test]
