@@ -10,7 +10,7 @@
 //! points of `run --compensate` on the same program and state.
 //!
 //! Skipped with the reason where LinuxCNC, its development files, root or namespaces are not
-//! available (`VMC_REQUIRE_LINUXCNC=1` turns the skip into a failure). About 60 s: one
+//! available (`VMC_REQUIRE_LINUXCNC=1` turns the skip into a failure). 41–61 s: one
 //! LinuxCNC session of about 32 s, the calibration and training, the twin's runs.
 
 mod common;
