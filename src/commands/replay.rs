@@ -273,6 +273,7 @@ fn simulate(
             .map(|c| c as &mut dyn sim::Controller);
         replay
             .push(&mut twin, &sample, ctrl, &mut obs)
+            .map_err(|e| logged_correction_error(e, scan.has_corrections))
             .with_context(|| cfg.log.display().to_string())?;
     }
     replay.finish(&mut twin)?;
@@ -280,6 +281,23 @@ fn simulate(
     drop(watch);
     progress.finish();
     Ok((log, recording))
+}
+
+/// A correction beyond the limit is the log's, not a model's, when the log has corrections.
+fn logged_correction_error(e: sim::SimError, logged: bool) -> anyhow::Error {
+    match e {
+        sim::SimError::Compensation {
+            line,
+            correction_mm,
+            ..
+        } if logged => anyhow::anyhow!(
+            "line {line}: the logged correction moves the axes {correction_mm:.4} mm, above the \
+             limit of {} mm for a geometric and thermal correction (are the correction columns \
+             in mm?)",
+            sim::MAX_CORRECTION_MM
+        ),
+        e => e.into(),
+    }
 }
 
 /// The recording's id, naming everything that makes the replay.
