@@ -163,7 +163,7 @@ fn scan(cfg: &ReplayConfig) -> Result<LogScan> {
                 .zip(s.temperatures_degc.iter().copied())
                 .collect();
         }
-        if samples % cfg.every == 0 {
+        if samples.is_multiple_of(cfg.every) {
             measured_mm.push(s.commanded_mm);
         }
         span_s[1] = s.time_s;
