@@ -149,7 +149,7 @@ fn scan(cfg: &ReplayConfig) -> Result<LogScan> {
     let mut reader = open(cfg)?;
     check_sensor_columns(reader.columns(), &cfg.machine)?;
     let columns = reader.columns().clone();
-    let mut samples = 0;
+    let mut samples: usize = 0;
     let mut span_s = [0.0; 2];
     let mut first_temps = Vec::new();
     let mut measured_mm = Vec::new();
