@@ -277,8 +277,6 @@ fn simulate(
             .with_context(|| cfg.log.display().to_string())?;
     }
     replay.finish(&mut twin)?;
-    drop(obs);
-    drop(watch);
     progress.finish();
     Ok((log, recording))
 }
