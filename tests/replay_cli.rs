@@ -230,22 +230,28 @@ fn a_replay_with_the_models_compensation_is_close_to_the_run_of_the_same_program
     assert!(text.contains("with m.json in the twin's loop"), "{text}");
     assert!(text.contains("wrote rep.rrd"), "{text}");
     let (r, p) = (summary(d, "run"), summary(d, "rep"));
-    // The same path in the same thermal state: the largest errors agree to the approach noise
-    // (the random non-repeatability drawn at each point, a few tenths of a µm) and the RMS to
-    // the weighting of the points (the replay measures every 10 ms of the 4 s dwells too, the
-    // run once per dwell).
-    for part in ["before", "after"] {
+    // The same path in the same thermal state, so "before" agrees closely: the replay
+    // measures every 10 ms of the 4 s dwells too (the run once per dwell), which weights the
+    // dwell points more in the RMS, and its samples lie on straight lines between the planner's
+    // positions. "After" is small and dominated by the random non-repeatability drawn at each
+    // point (σ = 0.25 µm per axis): its largest value over ~5800 points against ~1900 differs
+    // by up to a few σ.
+    for (part, max_abs_um, rms_abs_um, rel) in
+        [("before", 0.5, 0.5, 0.05), ("after", 1.0, 0.3, 0.2)]
+    {
         let (a, b) = (
             stat(&r, part, "max_abs_um", 3),
             stat(&p, part, "max_abs_um", 3),
         );
+        eprintln!("{part} max |E|: run {a:.3} µm, replay {b:.3} µm");
         assert!(
-            (a - b).abs() < 0.1 * a.max(1.0),
+            (a - b).abs() < max_abs_um + rel * a,
             "{part} max |E|: run {a}, replay {b}"
         );
         let (a, b) = (stat(&r, part, "rms_um", 3), stat(&p, part, "rms_um", 3));
+        eprintln!("{part} RMS |E|: run {a:.3} µm, replay {b:.3} µm");
         assert!(
-            (a - b).abs() < 0.2 * a.max(1.0),
+            (a - b).abs() < rms_abs_um + rel * a,
             "{part} RMS |E|: run {a}, replay {b}"
         );
     }
@@ -348,6 +354,17 @@ fn bad_logs_are_refused_with_their_line() {
     );
     assert!(
         err.contains("the log has the controller's corrections"),
+        "{err}"
+    );
+    std::fs::write(
+        d.join("big.csv"),
+        "time_s,x_mm,y_mm,z_mm,corr_x_mm,corr_y_mm,corr_z_mm\n0,10,60,-225,0,0,0\n\
+         0.001,10,60,-225,0,0,0\n0.002,10,60,-225,0,0,15\n",
+    )
+    .unwrap();
+    let err = refused(&vmc(d, &["replay", "big.csv"]), "a correction of 15 mm");
+    assert!(
+        err.contains("big.csv: line 4: the logged correction moves the axes 15.0000 mm"),
         "{err}"
     );
 }

@@ -149,7 +149,7 @@ fn scan(cfg: &ReplayConfig) -> Result<LogScan> {
     let mut reader = open(cfg)?;
     check_sensor_columns(reader.columns(), &cfg.machine)?;
     let columns = reader.columns().clone();
-    let mut samples = 0;
+    let mut samples: usize = 0;
     let mut span_s = [0.0; 2];
     let mut first_temps = Vec::new();
     let mut measured_mm = Vec::new();
@@ -163,7 +163,7 @@ fn scan(cfg: &ReplayConfig) -> Result<LogScan> {
                 .zip(s.temperatures_degc.iter().copied())
                 .collect();
         }
-        if samples % cfg.every == 0 {
+        if samples.is_multiple_of(cfg.every) {
             measured_mm.push(s.commanded_mm);
         }
         span_s[1] = s.time_s;
@@ -273,13 +273,29 @@ fn simulate(
             .map(|c| c as &mut dyn sim::Controller);
         replay
             .push(&mut twin, &sample, ctrl, &mut obs)
+            .map_err(|e| logged_correction_error(e, scan.has_corrections))
             .with_context(|| cfg.log.display().to_string())?;
     }
     replay.finish(&mut twin)?;
-    drop(obs);
-    drop(watch);
     progress.finish();
     Ok((log, recording))
+}
+
+/// A correction beyond the limit is the log's, not a model's, when the log has corrections.
+fn logged_correction_error(e: sim::SimError, logged: bool) -> anyhow::Error {
+    match e {
+        sim::SimError::Compensation {
+            line,
+            correction_mm,
+            ..
+        } if logged => anyhow::anyhow!(
+            "line {line}: the logged correction moves the axes {correction_mm:.4} mm, above the \
+             limit of {} mm for a geometric and thermal correction (are the correction columns \
+             in mm?)",
+            sim::MAX_CORRECTION_MM
+        ),
+        e => e.into(),
+    }
 }
 
 /// The recording's id, naming everything that makes the replay.

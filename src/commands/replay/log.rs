@@ -328,7 +328,7 @@ impl<R: BufRead> LogReader<R> {
                 let names: Vec<&str> = columns.iter().map(String::as_str).collect();
                 let cols = LogColumns::new(&names, 0, true)?;
                 if let Some(p) = period_s {
-                    if !(*p > 0.0 && p.is_finite()) {
+                    if p.is_nan() || *p <= 0.0 || p.is_infinite() {
                         return Err(LogError::Period(*p));
                     }
                 } else if cols.time.is_none() {

@@ -144,7 +144,7 @@ impl Replay {
         let rpm = sample.spindle_rpm.abs();
         if let Some((ta, pa, rpm_a)) = self.prev {
             let dt = t_s - ta;
-            if !(dt > 0.0) {
+            if dt.is_nan() || dt <= 0.0 {
                 return Err(SimError::TimeNotIncreasing {
                     line: sample.line,
                     time_s: sample.time_s,
@@ -175,7 +175,7 @@ impl Replay {
             observer.on_motion_sample(self.twin_t0_s, p);
             self.next_motion_s = self.motion_every_s.unwrap_or(f64::INFINITY);
         }
-        if self.samples % self.every == 0 {
+        if self.samples.is_multiple_of(self.every) {
             let mut logged = sample.correction_mm.map(LoggedCorrection);
             let mut ctrl: Option<&mut dyn Controller> = match logged.as_mut() {
                 Some(l) => Some(l),
