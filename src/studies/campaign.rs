@@ -62,6 +62,9 @@ pub enum EvalError {
     /// A diagonal program failed to plan.
     #[error(transparent)]
     Program(#[from] ProgramError),
+    /// A probing drift setting that is not usable.
+    #[error(transparent)]
+    Drift(#[from] vmc_predict::drift::DriftSettingError),
 }
 
 /// Drives `twin` through `state`'s cycle up to the state (1 s thermal steps, cycle time 0 at
