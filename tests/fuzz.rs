@@ -556,32 +556,34 @@ fn thermal_file(text: &str) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// The linear thermal-drift model of the small slice (two temperatures and the speed to two
+/// channels).
+fn fit_small_thermal_model(csv: &str) -> vmc_twin::predict::thermal_fit::ThermalModel {
+    use vmc_twin::predict::thermal_fit::{self, Architecture, FitSettings, Split, TableRequest};
+    let cols = ["t1_degc", "t5_degc", "spindle_rpm", "ch1_um", "ch5_um"];
+    let request = TableRequest {
+        time: None,
+        required: cols.iter().map(|c| (c.to_string(), "input")).collect(),
+        optional: Vec::new(),
+        min_rows: 20,
+    };
+    let table = thermal_fit::read_csv(csv, "t.csv", &request).unwrap();
+    let rpm = table.column("spindle_rpm").unwrap();
+    let split = Split::resolve(&table.time_s, None, Some(("spindle_rpm", rpm)), 0.25).unwrap();
+    let settings = FitSettings {
+        architecture: Architecture::Linear,
+        ..FitSettings::default()
+    };
+    let inputs: Vec<String> = cols[..3].iter().map(|c| c.to_string()).collect();
+    let outputs: Vec<String> = cols[3..].iter().map(|c| c.to_string()).collect();
+    thermal_fit::fit(&table, &inputs, &outputs, &split, &settings).unwrap()
+}
+
 #[test]
 fn mutated_thermal_measurement_files_never_panic_and_every_rejection_is_one_line() {
     let csv = small_thermal_csv();
     // The unmutated slice reads and fits: the property is not vacuous.
-    {
-        use vmc_twin::predict::thermal_fit::{
-            self, Architecture, FitSettings, Split, TableRequest,
-        };
-        let cols = ["t1_degc", "t5_degc", "spindle_rpm", "ch1_um", "ch5_um"];
-        let request = TableRequest {
-            time: None,
-            required: cols.iter().map(|c| (c.to_string(), "input")).collect(),
-            optional: Vec::new(),
-            min_rows: 20,
-        };
-        let table = thermal_fit::read_csv(&csv, "t.csv", &request).unwrap();
-        let rpm = table.column("spindle_rpm").unwrap();
-        let split = Split::resolve(&table.time_s, None, Some(("spindle_rpm", rpm)), 0.25).unwrap();
-        let settings = FitSettings {
-            architecture: Architecture::Linear,
-            ..FitSettings::default()
-        };
-        let inputs: Vec<String> = cols[..3].iter().map(|c| c.to_string()).collect();
-        let outputs: Vec<String> = cols[3..].iter().map(|c| c.to_string()).collect();
-        thermal_fit::fit(&table, &inputs, &outputs, &split, &settings).unwrap();
-    }
+    fit_small_thermal_model(&csv);
     runner(1000)
         .run(&prop::collection::vec(mutation(), 1..4), |muts| {
             let text = muts.iter().fold(csv.clone(), |t, m| apply(&t, m));
@@ -638,27 +640,8 @@ fn mutated_predictor_model_files_never_panic_and_every_rejection_is_one_line() {
 
 #[test]
 fn mutated_thermal_model_files_never_panic_and_every_rejection_names_the_file() {
-    use vmc_twin::predict::thermal_fit::{
-        self, Architecture, FitSettings, Split, TableRequest, ThermalModel,
-    };
-    let csv = small_thermal_csv();
-    let cols = ["t1_degc", "t5_degc", "spindle_rpm", "ch1_um", "ch5_um"];
-    let request = TableRequest {
-        time: None,
-        required: cols.iter().map(|c| (c.to_string(), "input")).collect(),
-        optional: Vec::new(),
-        min_rows: 20,
-    };
-    let table = thermal_fit::read_csv(&csv, "t.csv", &request).unwrap();
-    let rpm = table.column("spindle_rpm").unwrap();
-    let split = Split::resolve(&table.time_s, None, Some(("spindle_rpm", rpm)), 0.25).unwrap();
-    let settings = FitSettings {
-        architecture: Architecture::Linear,
-        ..FitSettings::default()
-    };
-    let inputs: Vec<String> = cols[..3].iter().map(|c| c.to_string()).collect();
-    let outputs: Vec<String> = cols[3..].iter().map(|c| c.to_string()).collect();
-    let model = thermal_fit::fit(&table, &inputs, &outputs, &split, &settings).unwrap();
+    use vmc_twin::predict::thermal_fit::ThermalModel;
+    let model = fit_small_thermal_model(&small_thermal_csv());
     let json = model.to_json();
     ThermalModel::from_json(&json, "m.json").unwrap();
     let time_s: Vec<f64> = (0..50).map(|i| 60.0 * f64::from(i)).collect();

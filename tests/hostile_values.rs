@@ -155,16 +155,16 @@ fn an_absurd_cell_of_a_probing_file_is_refused_naming_its_line_and_column() {
     }
 }
 
+/// A calibration dataset `c.csv` from the binary (every 2 h).
+fn calibrate(dir: &std::path::Path) {
+    let args = ["calibrate", "--measure-every-min", "120", "-o", "c.csv"];
+    ok(&vmc(dir, &args), "calibrate");
+}
+
 #[test]
 fn a_calibration_without_its_machine_line_trains_and_every_use_says_the_realisation_is_unknown() {
     let t = TempDir::new("provenance");
-    ok(
-        &vmc(
-            t.path(),
-            &["calibrate", "--measure-every-min", "120", "-o", "c.csv"],
-        ),
-        "calibrate",
-    );
+    calibrate(t.path());
     let text = std::fs::read_to_string(t.path().join("c.csv")).unwrap();
     assert!(text.starts_with("# machine: "), "the line the test removes");
     let without: String = text
@@ -205,13 +205,7 @@ fn a_calibration_without_its_machine_line_trains_and_every_use_says_the_realisat
 #[test]
 fn a_model_without_trained_ranges_is_named_unchecked_and_refused_under_strict() {
     let t = TempDir::new("ranges");
-    ok(
-        &vmc(
-            t.path(),
-            &["calibrate", "--measure-every-min", "120", "-o", "c.csv"],
-        ),
-        "calibrate",
-    );
+    calibrate(t.path());
     let train = [
         "train", "--data", "c.csv", "--kind", "linear", "-o", "m.json",
     ];
