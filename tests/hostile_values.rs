@@ -254,3 +254,24 @@ fn an_empty_program_is_refused_without_suggesting_an_option_already_given() {
         assert!(!err.contains("use --every-cycle"), "{err}");
     }
 }
+
+#[test]
+fn lobes_beyond_any_spindle_or_with_a_billion_steps_are_refused_not_computed_or_aborted() {
+    let t = TempDir::new("lobes");
+    let err = refused(
+        &vmc(t.path(), &["lobes", "--rpm", "1e300:2e300:3"]),
+        "1e300 rpm",
+    );
+    assert!(
+        err.contains("spindle speed 1e300 rpm is above 200000 rpm"),
+        "{err}"
+    );
+    let err = refused(
+        &vmc(t.path(), &["lobes", "--steps", "1000000000"]),
+        "1e9 steps",
+    );
+    assert!(
+        err.contains("--steps must be <= 20000, got 1000000000"),
+        "{err}"
+    );
+}

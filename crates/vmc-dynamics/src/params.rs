@@ -47,6 +47,9 @@ pub enum DynamicsError {
     /// The spindle speed is positive but below [`MIN_SPINDLE_RPM`].
     #[error("spindle speed {} rpm is below {MIN_SPINDLE_RPM} rpm: a tooth period of minutes or more is not a milling cut (milling runs at hundreds to tens of thousands of rpm)", readable(*.0))]
     SpeedTooLow(f64),
+    /// The spindle speed is above [`MAX_SPINDLE_RPM`].
+    #[error("spindle speed {} rpm is above {MAX_SPINDLE_RPM} rpm, faster than any machine-tool spindle", readable(*.0))]
+    SpeedTooHigh(f64),
     /// Neither direction has a mode.
     #[error("at least one mode in x or y is required")]
     NoModes,
@@ -296,10 +299,12 @@ impl Cut {
     }
 }
 
-/// Checks that a spindle speed is finite and > 0.
+/// Checks that a spindle speed is finite and in [[`MIN_SPINDLE_RPM`], [`MAX_SPINDLE_RPM`]].
 pub fn validate_speed(spindle_rpm: f64) -> Result<(), DynamicsError> {
     finite("spindle_rpm", spindle_rpm)?;
-    if spindle_rpm >= MIN_SPINDLE_RPM {
+    if spindle_rpm > MAX_SPINDLE_RPM {
+        Err(DynamicsError::SpeedTooHigh(spindle_rpm))
+    } else if spindle_rpm >= MIN_SPINDLE_RPM {
         Ok(())
     } else if spindle_rpm > 0.0 {
         Err(DynamicsError::SpeedTooLow(spindle_rpm))
@@ -311,6 +316,10 @@ pub fn validate_speed(spindle_rpm: f64) -> Result<(), DynamicsError> {
 /// Slowest spindle speed the dynamics accepts, rpm (below, a tooth period lasts minutes and
 /// the models' notion of a steady cut, its spectra and step counts lose their meaning).
 pub const MIN_SPINDLE_RPM: f64 = 1.0;
+
+/// Fastest spindle speed the dynamics accepts, rpm (the machine files' bound for a speed; the
+/// fastest machining spindles turn at about 10⁵ rpm).
+pub const MAX_SPINDLE_RPM: f64 = 2e5;
 
 /// A number as a person reads it in a message: plain between 10⁻⁴ and 10⁶, else in exponent
 /// form (never three hundred digits).
