@@ -10,7 +10,7 @@
 //! offset cannot correct).
 use vmc_machine::machine::MachineSpec;
 use vmc_machine::twin::sub_seed;
-use vmc_twin::predict::predictor::{self, ErrorPredictor, HybridPredictor, ModelKind, Settings};
+use vmc_twin::predict::predictor::{self, HybridPredictor, ModelKind, Settings};
 use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::studies::campaign::{self, diagonal_plans, eval_noise_seed, ForMachine};
 use vmc_twin::studies::probing::{self, Probing};

@@ -360,6 +360,12 @@ pub(super) fn compensator(
         spindle_rpm: None,
         axis_feeds: None,
     };
+    anyhow::ensure!(
+        !(cfg.strict && trained_on.is_none()),
+        "{}: --strict refuses readings outside the model's trained ranges, and this model file \
+         records none (a file older than version 8): retrain it, or run without --strict",
+        path.display()
+    );
     let ranges = trained_on.as_ref().map(|t| &t.inputs).unwrap_or(&none);
     Ok((Guarded::new(ctrl, ranges, &names), trained_on.is_some()))
 }

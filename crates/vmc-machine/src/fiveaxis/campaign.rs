@@ -163,6 +163,16 @@ pub struct ProbingFile {
     pub observations: Vec<Observation>,
 }
 
+/// Largest magnitude of any number in a probing file (mm, °, mm²).
+pub const MAX_PROBING_VALUE: f64 = 1e5;
+
+/// Largest distance between a measured and a nominal sphere centre, mm (geometric errors of a
+/// machine tool are micrometres to tenths of a millimetre).
+pub const MAX_CENTRE_ERROR_MM: f64 = 5.0;
+
+/// Largest variance of a probed centre coordinate, mm² (a standard deviation of 1 mm).
+pub const MAX_CENTRE_VARIANCE_MM2: f64 = 1.0;
+
 /// What is wrong with a probing file.
 #[derive(Debug, thiserror::Error)]
 pub enum ProbingFileError {
@@ -245,11 +255,19 @@ pub fn parse_csv(text: &str, spec: &FiveAxisSpec) -> Result<ProbingFile, Probing
             let i = cols.iter().position(|c| c == name).ok_or_else(|| {
                 ProbingFileError::Format(format!("the probing file has no column {name}"))
             })?;
-            fields[i]
+            let v = fields[i]
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| row_err(format!("{name} is not a number: '{}'", fields[i])))
+                .ok_or_else(|| row_err(format!("{name} is not a number: '{}'", fields[i])))?;
+            // Coordinates, angles, counts and covariances of a machine tool are all far below
+            // this; a larger number is a broken cell, not a measurement.
+            if v.abs() > MAX_PROBING_VALUE {
+                return Err(row_err(format!(
+                    "{name} = {v:e} is beyond any probing value (|v| ≤ {MAX_PROBING_VALUE:e})"
+                )));
+            }
+            Ok(v)
         };
         let mut rot = [0.0; 2];
         for (r, l) in letters.iter().enumerate() {
@@ -289,8 +307,23 @@ pub fn parse_csv(text: &str, spec: &FiveAxisSpec) -> Result<ProbingFile, Probing
                 nominal[0], nominal[1], nominal[2], off, spec.machine.name, want[0], want[1], want[2]
             )));
         }
+        let miss_mm = (Vector3::from(measured) - Vector3::from(nominal)).norm();
+        if miss_mm > MAX_CENTRE_ERROR_MM {
+            return Err(row_err(format!(
+                "the measured centre is {miss_mm:.3} mm from the nominal one: a machine's \
+                 errors move it by less than {MAX_CENTRE_ERROR_MM} mm"
+            )));
+        }
         let (xx, yy, zz) = (get("cov_xx_mm2")?, get("cov_yy_mm2")?, get("cov_zz_mm2")?);
         let (xy, xz, yz) = (get("cov_xy_mm2")?, get("cov_xz_mm2")?, get("cov_yz_mm2")?);
+        for (name, v) in [("cov_xx_mm2", xx), ("cov_yy_mm2", yy), ("cov_zz_mm2", zz)] {
+            if !(v > 0.0 && v <= MAX_CENTRE_VARIANCE_MM2) {
+                return Err(row_err(format!(
+                    "{name} = {v:e} mm²: a variance of a probed centre must lie in \
+                     (0, {MAX_CENTRE_VARIANCE_MM2}] mm²"
+                )));
+            }
+        }
         let cov = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
         file.observations.push(Observation {
             rotary_deg: rot,
