@@ -108,8 +108,14 @@ pub fn replay(cfg: &ReplayConfig, out: &mut dyn Write) -> Result<()> {
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let (mut controller, ranges_known) = match &cfg.model {
         Some(path) => {
-            let (c, known) =
-                run::compensator(&cfg.machine, cfg.seed, path, cfg.allow_other_machine, out)?;
+            let (c, known) = run::compensator(
+                &cfg.machine,
+                cfg.seed,
+                path,
+                cfg.allow_other_machine,
+                cfg.strict,
+                out,
+            )?;
             (Some(c), known)
         }
         None => (None, false),

@@ -143,8 +143,14 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let (mut controller, ranges_known) = match &cfg.model {
         Some(path) => {
-            let (c, known) =
-                compensator(&cfg.machine, cfg.seed, path, cfg.allow_other_machine, out)?;
+            let (c, known) = compensator(
+                &cfg.machine,
+                cfg.seed,
+                path,
+                cfg.allow_other_machine,
+                cfg.strict,
+                out,
+            )?;
             (Some(c), known)
         }
         None => (None, false),
@@ -347,6 +353,7 @@ pub(super) fn compensator(
     seed: u64,
     path: &Path,
     allow_other_machine: bool,
+    strict: bool,
     out: &mut dyn Write,
 ) -> Result<(RunController, bool)> {
     let (model, trained_on) =
@@ -361,7 +368,7 @@ pub(super) fn compensator(
         axis_feeds: None,
     };
     anyhow::ensure!(
-        !(cfg.strict && trained_on.is_none()),
+        !(strict && trained_on.is_none()),
         "{}: --strict refuses readings outside the model's trained ranges, and this model file \
          records none (a file older than version 8): retrain it, or run without --strict",
         path.display()
