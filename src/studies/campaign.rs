@@ -65,6 +65,9 @@ pub enum EvalError {
     /// A probing drift setting that is not usable.
     #[error(transparent)]
     Drift(#[from] vmc_predict::drift::DriftSettingError),
+    /// A compensator with a drift field that could not be built.
+    #[error(transparent)]
+    Probed(#[from] probing::ProbedCompensatorError),
 }
 
 /// Drives `twin` through `state`'s cycle up to the state (1 s thermal steps, cycle time 0 at

@@ -375,6 +375,17 @@ pub fn drive_probed<P: ErrorPredictor>(
     Ok(cycles)
 }
 
+/// Why a compensator with a drift field could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum ProbedCompensatorError {
+    /// A drift setting that is not usable.
+    #[error(transparent)]
+    Drift(#[from] vmc_predict::drift::DriftSettingError),
+    /// Sensors the model does not know.
+    #[error(transparent)]
+    Predict(#[from] crate::predict::predictor::PredictError),
+}
+
 /// A compensator with a fresh drift field of `p` around `model`.
 ///
 /// # Errors
@@ -383,7 +394,7 @@ pub fn probed_compensator<P: ErrorPredictor>(
     model: P,
     p: &Probing,
     sensor_names: &[String],
-) -> Result<Compensator<WithDrift<P, DriftField>>, super::campaign::EvalError> {
+) -> Result<Compensator<WithDrift<P, DriftField>>, ProbedCompensatorError> {
     Ok(Compensator::for_machine(
         WithDrift::new(model, p.filter()?),
         sensor_names,

@@ -392,7 +392,7 @@ pub fn parse_csv(text: &str, spec: &FiveAxisSpec) -> Result<ProbingFile, Probing
                 get(&format!("Z_{suffix}"))?,
             ])
         };
-        let target = row_target(spec, &cols, &get, &mut placed).map_err(row_err)?;
+        let target = row_target(spec, cols, &get, &mut placed).map_err(row_err)?;
         let placement = placed.last_row_placement;
         let nominal = xyz("nominal_mm")?;
         let measured = xyz("measured_mm")?;

@@ -160,7 +160,7 @@ impl TrueMachine {
             return [0.0; 3];
         }
         let mut rng = StdRng::seed_from_u64(
-            self.seed ^ 0x51ace_0000_0000 ^ (placement as u64).wrapping_mul(0x9e37_79b9),
+            self.seed ^ 0x0005_1ace_0000_0000 ^ (placement as u64).wrapping_mul(0x9e37_79b9),
         );
         let n = Normal::new(0.0, PLACEMENT_SIGMA_MM).expect("σ > 0");
         [n.sample(&mut rng), n.sample(&mut rng), n.sample(&mut rng)]
