@@ -52,6 +52,11 @@ fn absurd_cut_depths_feeds_and_speeds_are_refused_naming_the_option() {
         "{err}"
     );
     assert!(!err.contains("resonat"), "{err}");
+    let err = cut(&["--rpm", "9000", "--depth-mm", "1", "--revolutions", "1e300"]);
+    assert!(
+        err.contains("--revolutions 1e300 is 2e300 tooth periods") && err.len() < 300,
+        "{err}"
+    );
 }
 
 #[test]

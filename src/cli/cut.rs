@@ -7,7 +7,7 @@ use anyhow::{anyhow, bail, Result};
 use super::{ForceArg, MillingArg};
 use crate::commands;
 use crate::dynamics::cut::{CutOptions, MAX_TOOTH_PERIODS};
-use crate::dynamics::params::{validate_immersion, validate_speed};
+use crate::dynamics::params::{readable, validate_immersion, validate_speed};
 use crate::dynamics::{Cut, Milling};
 use vmc_machine::milling::ToolDynamics;
 
@@ -129,13 +129,14 @@ impl CutArgs {
         };
         let periods = periods.round();
         let what = match (self.revolutions, self.duration_s) {
-            (Some(r), _) => format!("--revolutions {r}"),
-            (None, Some(d)) => format!("--duration-s {d}"),
+            (Some(r), _) => format!("--revolutions {}", readable(r)),
+            (None, Some(d)) => format!("--duration-s {}", readable(d)),
             (None, None) => String::new(),
         };
         if periods < MIN_TOOTH_PERIODS as f64 {
             bail!(
-                "{what} is {periods} tooth periods at {} rpm; at least {MIN_TOOTH_PERIODS} are needed ({:.4} s, {:.1} revolutions)",
+                "{what} is {} tooth periods at {} rpm; at least {MIN_TOOTH_PERIODS} are needed ({:.4} s, {:.1} revolutions)",
+                readable(periods),
                 self.rpm,
                 MIN_TOOTH_PERIODS as f64 * period_s,
                 MIN_TOOTH_PERIODS as f64 / teeth
@@ -143,7 +144,8 @@ impl CutArgs {
         }
         if periods > MAX_TOOTH_PERIODS as f64 {
             bail!(
-                "{what} is {periods} tooth periods at {} rpm; at most {MAX_TOOTH_PERIODS} are simulated ({:.3} s, {:.0} revolutions)",
+                "{what} is {} tooth periods at {} rpm; at most {MAX_TOOTH_PERIODS} are simulated ({:.3} s, {:.0} revolutions)",
+                readable(periods),
                 self.rpm,
                 MAX_TOOTH_PERIODS as f64 * period_s,
                 MAX_TOOTH_PERIODS as f64 / teeth
