@@ -9,7 +9,6 @@
 //! residual per axis of the run (an offset the probe could see) beside its spread (what an
 //! offset cannot correct).
 use vmc_machine::machine::MachineSpec;
-use vmc_machine::twin::sub_seed;
 use vmc_twin::predict::predictor::{self, HybridPredictor, ModelKind, Settings};
 use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
 use vmc_twin::studies::campaign::{self, diagonal_plans, eval_noise_seed, ForMachine};
@@ -209,7 +208,6 @@ fn main() {
                 }
             }
         }
-        let _ = sub_seed(seed, 0);
     }
     let reports: Vec<_> = runs.iter().map(|r| r.0.clone()).collect();
     let h = campaign::headline(&reports, ModelKind::Hybrid).unwrap();
