@@ -62,9 +62,6 @@ pub enum EvalError {
     /// A diagonal program failed to plan.
     #[error(transparent)]
     Program(#[from] ProgramError),
-    /// A probing drift setting that is not usable.
-    #[error(transparent)]
-    Drift(#[from] vmc_predict::drift::DriftSettingError),
     /// A compensator with a drift field that could not be built.
     #[error(transparent)]
     Probed(#[from] probing::ProbedCompensatorError),
