@@ -343,10 +343,10 @@ impl RunArgs {
 
 /// The tool table of `--tools`, or none (the machine's own tool for every number).
 fn load_tool_table(path: Option<&Path>) -> Result<vmc_machine::tools::ToolTable> {
-    path.map_or_else(
-        || Ok(vmc_machine::tools::ToolTable::default()),
-        vmc_machine::tools::ToolTable::load,
-    )
+    Ok(path
+        .map(vmc_machine::tools::ToolTable::load)
+        .transpose()?
+        .unwrap_or_default())
 }
 
 /// Arguments of `calibrate`.

@@ -44,9 +44,9 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail, Context, Result};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
+use thiserror::Error;
 
 use crate::milling::ToolSection;
 use crate::read;
@@ -168,7 +168,7 @@ impl Plant {
     ///
     /// # Errors
     /// Unreadable, not TOML, not the schema, or values the dynamics refuses.
-    pub fn load(path: &Path) -> Result<Self> {
+    pub fn load(path: &Path) -> Result<Self, BladeFileError> {
         let text = read::read_named(path, "plant file")?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
@@ -177,36 +177,43 @@ impl Plant {
     ///
     /// # Errors
     /// See [`Plant::load`].
-    pub fn from_toml_str(text: &str, path: &str) -> Result<Self> {
-        let f: PlantFile = toml::from_str(text)
-            .map_err(|e| anyhow!("{path}: {}", read::one_line_toml_error(&e)))?;
+    pub fn from_toml_str(text: &str, path: &str) -> Result<Self, BladeFileError> {
+        let invalid = |message: String| BladeFileError::Invalid {
+            file: path.to_string(),
+            message,
+        };
+        let f: PlantFile =
+            toml::from_str(text).map_err(|e| invalid(read::one_line_toml_error(&e)))?;
         let tool = f.tool.to_tool();
-        tool.validate().map_err(|e| anyhow!("{path}: tool: {e}"))?;
+        tool.validate().map_err(|e| invalid(format!("tool: {e}")))?;
         f.blade
             .validate()
-            .map_err(|e| anyhow!("{path}: blade: {e}"))?;
+            .map_err(|e| invalid(format!("blade: {e}")))?;
         let c = &f.cut;
         let immersion = c.radial_depth_mm / tool.diameter_mm;
         vmc_dynamics::params::validate_immersion(immersion)
-            .map_err(|e| anyhow!("{path}: cut.radial_depth_mm / tool.diameter_mm: {e}"))?;
+            .map_err(|e| invalid(format!("cut.radial_depth_mm / tool.diameter_mm: {e}")))?;
         vmc_dynamics::params::validate_speed(c.spindle_rpm)
-            .map_err(|e| anyhow!("{path}: cut.spindle_rpm: {e}"))?;
+            .map_err(|e| invalid(format!("cut.spindle_rpm: {e}")))?;
         let [lo, hi] = c.speed_band_rpm;
         if !(lo > 0.0 && hi > lo && hi.is_finite()) {
-            bail!("{path}: cut.speed_band_rpm must be [low, high] with 0 < low < high, got [{lo}, {hi}]");
+            return Err(invalid(format!(
+                "cut.speed_band_rpm must be [low, high] with 0 < low < high, got [{lo}, {hi}]"
+            )));
         }
         if !(c.feed_per_tooth_mm > 0.0 && c.feed_per_tooth_mm.is_finite()) {
-            bail!(
-                "{path}: cut.feed_per_tooth_mm must be > 0, got {}",
+            return Err(invalid(format!(
+                "cut.feed_per_tooth_mm must be > 0, got {}",
                 c.feed_per_tooth_mm
-            );
+            )));
         }
         let rate = f.controller.sample_rate_hz;
         if !(rate > 0.0 && rate.is_finite()) {
-            bail!("{path}: controller.sample_rate_hz must be > 0, got {rate}");
+            return Err(invalid(format!(
+                "controller.sample_rate_hz must be > 0, got {rate}"
+            )));
         }
-        check_weights(&f.lqg, &f.hinf, f.robust_hinf.as_ref())
-            .map_err(|e| anyhow!("{path}: {e}"))?;
+        check_weights(&f.lqg, &f.hinf, f.robust_hinf.as_ref()).map_err(invalid)?;
         Ok(Self {
             name: f.name.unwrap_or_else(|| path.to_string()),
             blade: f.blade,
@@ -233,7 +240,7 @@ fn check_weights(
     lqg: &LqgWeights,
     hinf: &HinfWeights,
     robust: Option<&RobustWeights>,
-) -> Result<()> {
+) -> Result<(), String> {
     let fields = [
         ("lqg.tip_weight_per_um2", lqg.tip_weight_per_um2),
         ("lqg.effort_weight_per_v2", lqg.effort_weight_per_v2),
@@ -253,11 +260,11 @@ fn check_weights(
         .chain(corners.into_iter().filter_map(|(n, v)| v.map(|v| (n, v))))
     {
         if !(v > 0.0 && v.is_finite()) {
-            bail!("{name} must be > 0, got {v}");
+            return Err(format!("{name} must be > 0, got {v}"));
         }
     }
     if let Some(r) = robust {
-        r.validate().map_err(|e| anyhow!("robust_hinf: {e}"))?;
+        r.validate().map_err(|e| format!("robust_hinf: {e}"))?;
     }
     Ok(())
 }
@@ -271,12 +278,17 @@ fn rows(m: &DMatrix<f64>) -> Rows {
         .collect()
 }
 
-fn matrix(r: &Rows, what: &str, nrows: usize, ncols: usize) -> Result<DMatrix<f64>> {
+fn matrix(
+    r: &Rows,
+    what: &'static str,
+    nrows: usize,
+    ncols: usize,
+) -> Result<DMatrix<f64>, ControllerError> {
     if r.len() != nrows || r.iter().any(|row| row.len() != ncols) {
-        bail!("controller.{what} must be {nrows} x {ncols}");
+        return Err(ControllerError::Shape { what, nrows, ncols });
     }
     if r.iter().flatten().any(|v| !v.is_finite()) {
-        bail!("controller.{what} has a value that is not a finite number");
+        return Err(ControllerError::NotFinite { what });
     }
     Ok(DMatrix::from_fn(nrows, ncols, |i, j| r[i][j]))
 }
@@ -361,7 +373,7 @@ impl ControllerFile {
     ///
     /// # Errors
     /// Matrices of the wrong shape or with non-finite values.
-    pub fn state_space(&self) -> Result<StateSpace> {
+    pub fn state_space(&self) -> Result<StateSpace, ControllerError> {
         let m = &self.controller;
         let n = m.a.len();
         Ok(StateSpace {
@@ -376,29 +388,30 @@ impl ControllerFile {
     ///
     /// # Errors
     /// Unreadable, not JSON, not the schema or its format tag, bad matrices or plant.
-    pub fn load(path: &Path) -> Result<Self> {
+    pub fn load(path: &Path) -> Result<Self, BladeFileError> {
         let text = read::read_named(path, "controller file")?;
+        let invalid = |message: String| BladeFileError::Invalid {
+            file: path.display().to_string(),
+            message,
+        };
         let f: Self = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a controller file", path.display()))?;
+            .map_err(|e| invalid(format!("not a controller file: {e}")))?;
         if f.format != CONTROLLER_FORMAT {
-            bail!(
-                "{}: format is `{}`, expected `{CONTROLLER_FORMAT}`",
-                path.display(),
+            return Err(invalid(format!(
+                "format is `{}`, expected `{CONTROLLER_FORMAT}`",
                 f.format
-            );
+            )));
         }
-        f.state_space()
-            .with_context(|| format!("{}", path.display()))?;
+        f.state_space().map_err(|e| invalid(e.to_string()))?;
         f.plant
             .blade
             .validate()
-            .map_err(|e| anyhow!("{}: plant.blade: {e}", path.display()))?;
+            .map_err(|e| invalid(format!("plant.blade: {e}")))?;
         f.plant
             .tool
             .validate()
-            .map_err(|e| anyhow!("{}: plant.tool: {e}", path.display()))?;
-        f.check_consistent()
-            .with_context(|| format!("{}", path.display()))?;
+            .map_err(|e| invalid(format!("plant.tool: {e}")))?;
+        f.check_consistent().map_err(|e| invalid(e.to_string()))?;
         Ok(f)
     }
 
@@ -408,7 +421,7 @@ impl ControllerFile {
     ///
     /// # Errors
     /// A pole that moved, a sampling that cannot see an acted-on mode.
-    pub fn check_consistent(&self) -> Result<()> {
+    pub fn check_consistent(&self) -> Result<(), ControllerError> {
         use vmc_dynamics::control::closed_loop::{close, sampled_model};
         let k = self.state_space()?;
         let plant = self.plant.blade.plant()?;
@@ -423,9 +436,7 @@ impl ControllerFile {
                 .zip(&poles)
                 .all(|(s, p)| (s[0] - p[0]).hypot(s[1].abs() - p[1].abs()) <= 1e-6 * scale);
         if !matches {
-            bail!(
-                "the stored plant and controller matrices do not give the closed-loop poles stored with them (the plant or the matrices were edited): design the controller again with `vmc-twin control design`, and judge it on another blade with --plant FILE"
-            );
+            return Err(ControllerError::PolesMoved);
         }
         let modes: Vec<(f64, f64)> = self
             .figures
@@ -441,6 +452,52 @@ impl ControllerFile {
         )?;
         Ok(())
     }
+}
+
+/// A plant or controller file that cannot be used.
+#[derive(Debug, Error)]
+pub enum BladeFileError {
+    /// The file could not be read.
+    #[error(transparent)]
+    Read(#[from] read::ReadError),
+    /// Not the format, or a value the file may not hold (the message names the field).
+    #[error("{file}: {message}")]
+    Invalid {
+        /// The file.
+        file: String,
+        /// What is wrong, naming the field.
+        message: String,
+    },
+}
+
+/// A controller that cannot be used as stored.
+#[derive(Debug, Error)]
+pub enum ControllerError {
+    /// A matrix of the wrong shape.
+    #[error("controller.{what} must be {nrows} x {ncols}")]
+    Shape {
+        /// The matrix (`a`, `b`, `c`, `d`).
+        what: &'static str,
+        /// Rows it must have.
+        nrows: usize,
+        /// Columns it must have.
+        ncols: usize,
+    },
+    /// A matrix with a value that is not a finite number.
+    #[error("controller.{what} has a value that is not a finite number")]
+    NotFinite {
+        /// The matrix (`a`, `b`, `c`, `d`).
+        what: &'static str,
+    },
+    /// The stored plant or its closed loop cannot be built.
+    #[error(transparent)]
+    Dynamics(#[from] vmc_dynamics::DynamicsError),
+    /// The closed loop or the sampling check failed.
+    #[error(transparent)]
+    Control(#[from] vmc_dynamics::control::ControlError),
+    /// The stored poles are not those of the stored plant and matrices.
+    #[error("the stored plant and controller matrices do not give the closed-loop poles stored with them (the plant or the matrices were edited): design the controller again with `vmc-twin control design`, and judge it on another blade with --plant FILE")]
+    PolesMoved,
 }
 
 #[cfg(test)]

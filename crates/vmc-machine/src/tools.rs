@@ -16,8 +16,8 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
 use serde::Deserialize;
+use thiserror::Error;
 
 use crate::machine::MachineSpec;
 
@@ -58,23 +58,28 @@ impl ToolTable {
     /// # Errors
     /// Bad TOML or an unknown field, a tool given twice, a length that is not finite within
     /// ±10,000 mm, a diameter that is not a finite number ≥ 0.
-    pub fn from_toml_str(text: &str, file: &str) -> Result<Self> {
-        let table: TableFile = toml::from_str(text).with_context(|| file.to_string())?;
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Self, ToolTableError> {
+        let table: TableFile = toml::from_str(text).map_err(|e| ToolTableError::Toml {
+            file: file.to_string(),
+            message: crate::read::one_line_toml_error(&e),
+        })?;
         for (i, t) in table.tool.iter().enumerate() {
+            let bad = |field| ToolTableError::Value {
+                file: file.to_string(),
+                number: t.number,
+                field,
+            };
             if table.tool[..i].iter().any(|o| o.number == t.number) {
-                anyhow::bail!("{file}: tool {} appears twice", t.number);
+                return Err(ToolTableError::Twice {
+                    file: file.to_string(),
+                    number: t.number,
+                });
             }
             if !t.length_mm.is_finite() || t.length_mm.abs() > 1e4 {
-                anyhow::bail!(
-                    "{file}: tool {}: length_mm must be finite within ±10000 mm",
-                    t.number
-                );
+                return Err(bad("length_mm must be finite within ±10000 mm"));
             }
             if !(t.diameter_mm.is_finite() && t.diameter_mm >= 0.0) {
-                anyhow::bail!(
-                    "{file}: tool {}: diameter_mm must be a finite number >= 0",
-                    t.number
-                );
+                return Err(bad("diameter_mm must be a finite number >= 0"));
             }
         }
         Ok(Self { tools: table.tool })
@@ -84,10 +89,9 @@ impl ToolTable {
     ///
     /// # Errors
     /// An unreadable file, or as [`ToolTable::from_toml_str`].
-    pub fn load(path: &Path) -> Result<Self> {
-        let file = path.display().to_string();
-        let text = crate::read::read_text(path).with_context(|| file.clone())?;
-        Self::from_toml_str(&text, &file)
+    pub fn load(path: &Path) -> Result<Self, ToolTableError> {
+        let text = crate::read::read_named(path, "tool table")?;
+        Self::from_toml_str(&text, &path.display().to_string())
     }
 
     /// True when no table was given.
@@ -150,6 +154,40 @@ impl ToolTable {
 /// Length of the machine file's own tool (gauge line to tip along the spindle axis), mm.
 pub fn master_length_mm(machine: &MachineSpec) -> f64 {
     -machine.tool.offset_mm[2]
+}
+
+/// A tool table that cannot be used.
+#[derive(Debug, Error)]
+pub enum ToolTableError {
+    /// The file could not be read.
+    #[error(transparent)]
+    Read(#[from] crate::read::ReadError),
+    /// Not TOML, or not a tool table's fields.
+    #[error("{file}: {message}")]
+    Toml {
+        /// The file.
+        file: String,
+        /// The parser's message, on one line.
+        message: String,
+    },
+    /// A tool number given twice.
+    #[error("{file}: tool {number} appears twice")]
+    Twice {
+        /// The file.
+        file: String,
+        /// The tool number.
+        number: u32,
+    },
+    /// A length or diameter out of range.
+    #[error("{file}: tool {number}: {field}")]
+    Value {
+        /// The file.
+        file: String,
+        /// The tool number.
+        number: u32,
+        /// Which value and its range.
+        field: &'static str,
+    },
 }
 
 #[cfg(test)]
