@@ -177,7 +177,10 @@ mod tests {
         assert!((pose.rotary_deg[0] - 45.0).abs() < 0.05, "{pose:?}");
         let st = tilted(&pose);
         assert!((tip_in_workpiece_mm(&g, &pose, &st) - p).norm() < 1e-9);
-        let before = angle_rad(tool_axis_in_workpiece(&g, &commanded, &tilted(&commanded)), axis);
+        let before = angle_rad(
+            tool_axis_in_workpiece(&g, &commanded, &tilted(&commanded)),
+            axis,
+        );
         let after = angle_rad(tool_axis_in_workpiece(&g, &pose, &st), axis);
         assert!(after < before, "{after:e} vs {before:e}");
     }
