@@ -31,8 +31,9 @@ use vmc_identify::errors::ErrorState;
 use vmc_identify::htm::tip_in_workpiece_mm;
 use vmc_identify::inverse::nominal_linear_axes;
 
-use super::run::{pose_of, FiveAxisRunError};
 use super::FiveAxisSpec;
+use crate::machine::MachineError;
+use vmc_identify::inverse::HtmError;
 
 /// Time step of the linear-axis travel check along a G43.4 move, s (1 mm at 30 m/min).
 pub const TRAVEL_CHECK_STEP_S: f64 = 0.002;
@@ -51,6 +52,47 @@ pub struct TcpTravelError {
     pub min_mm: f64,
     /// Travel limits, mm.
     pub max_mm: f64,
+}
+
+/// Why a program cannot be run on the five-axis machine.
+#[derive(Debug, Error)]
+pub enum FiveAxisRunError {
+    /// The program cannot be interpreted or planned, or leaves a travel.
+    #[error(transparent)]
+    Program(#[from] ProgramError),
+    /// The machine file lacks what running needs.
+    #[error(transparent)]
+    Machine(#[from] MachineError),
+    /// A linear axis leaves its travel along a G43.4 move.
+    #[error("{file}: {err}")]
+    TcpTravel {
+        /// The program file.
+        file: String,
+        /// Where and which axis.
+        err: TcpTravelError,
+    },
+    /// The compensation could not be solved at a point.
+    #[error("line {line}: compensation failed: {err}")]
+    Compensation {
+        /// Source line of the point.
+        line: usize,
+        /// The solver's error.
+        err: HtmError,
+    },
+}
+
+/// The pose of linear axes `q_mm` and G-code angles `abc_deg` (A, B, C) for `geom`'s rotary
+/// axes.
+#[must_use]
+pub fn pose_of(geom: &Geometry, q_mm: [f64; 3], abc_deg: [f64; 3]) -> Pose {
+    let mut rotary_deg = [0.0; 2];
+    for (i, r) in geom.rotary.iter().enumerate().take(2) {
+        rotary_deg[i] = abc_deg[r.axis.index()];
+    }
+    Pose {
+        linear_mm: q_mm,
+        rotary_deg,
+    }
 }
 
 /// One planned piece: moves in one frame.

@@ -25,45 +25,16 @@
 //! time. Units: mm, degrees; errors in µm.
 
 use nalgebra::Vector3;
-use thiserror::Error;
 
-use crate::machine::MachineError;
 use crate::motion::SegmentKind;
-use crate::program::ProgramError;
 use vmc_identify::chain::{Geometry, Pose};
 use vmc_identify::errors::ErrorState;
 use vmc_identify::htm::{tip_in_workpiece_mm, tool_axis_in_workpiece};
-use vmc_identify::inverse::{linear_axes_for, HtmError};
+use vmc_identify::inverse::linear_axes_for;
 use vmc_identify::inverse_pose::axes_for_tool_pose;
 
-use super::plan::{joints_for_tip, FivePlan, Piece, TcpTravelError};
-
-/// Why a program cannot be run on the five-axis machine.
-#[derive(Debug, Error)]
-pub enum FiveAxisRunError {
-    /// The program cannot be interpreted or planned, or leaves a travel.
-    #[error(transparent)]
-    Program(#[from] ProgramError),
-    /// The machine file lacks what running needs.
-    #[error(transparent)]
-    Machine(#[from] MachineError),
-    /// A linear axis leaves its travel along a G43.4 move.
-    #[error("{file}: {err}")]
-    TcpTravel {
-        /// The program file.
-        file: String,
-        /// Where and which axis.
-        err: TcpTravelError,
-    },
-    /// The compensation could not be solved at a point.
-    #[error("line {line}: compensation failed: {err}")]
-    Compensation {
-        /// Source line of the point.
-        line: usize,
-        /// The solver's error.
-        err: HtmError,
-    },
-}
+use super::plan::{joints_for_tip, FivePlan, Piece};
+pub use super::plan::{pose_of, FiveAxisRunError};
 
 /// Where the trajectory is sampled.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -168,20 +139,6 @@ fn piece_points(plan: &FivePlan, piece: &Piece, sampling: Sampling, out: &mut Ve
             }
             _ => {}
         }
-    }
-}
-
-/// The pose of linear axes `q_mm` and G-code angles `abc_deg` (A, B, C) for `geom`'s rotary
-/// axes.
-#[must_use]
-pub fn pose_of(geom: &Geometry, q_mm: [f64; 3], abc_deg: [f64; 3]) -> Pose {
-    let mut rotary_deg = [0.0; 2];
-    for (i, r) in geom.rotary.iter().enumerate().take(2) {
-        rotary_deg[i] = abc_deg[r.axis.index()];
-    }
-    Pose {
-        linear_mm: q_mm,
-        rotary_deg,
     }
 }
 
