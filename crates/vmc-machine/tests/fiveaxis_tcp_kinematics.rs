@@ -77,6 +77,17 @@ impl Trunnion {
     }
 }
 
+/// Both machine files: the trunnion tilting about `tilt`, C on it, the same sizes.
+fn trunnion(tilt: char) -> Trunnion {
+    Trunnion {
+        tilt,
+        p_c: [0.0, 0.0, -450.0],
+        p_t: [0.0, 0.0, -500.0],
+        datum: [150.0, 0.0, -350.0],
+        length_mm: 150.0,
+    }
+}
+
 fn spec(file: &str, text: &str) -> FiveAxisSpec {
     FiveAxisSpec::from_toml_str(text, file).unwrap()
 }
@@ -149,13 +160,7 @@ fn g43_4_moves_on_the_b_c_machine_follow_its_closed_form_kinematics() {
         "trunnion-bc.toml",
         include_str!("../../../machines/trunnion-bc.toml"),
     );
-    let m = Trunnion {
-        tilt: 'B',
-        p_c: [0.0, 0.0, -450.0],
-        p_t: [0.0, 0.0, -500.0],
-        datum: [150.0, 0.0, -350.0],
-        length_mm: 150.0,
-    };
+    let m = trunnion('B');
     let dwells = [
         ([0.0, 0.0, 50.0], [0.0, 0.0, 0.0]),
         ([20.0, 10.0, 30.0], [0.0, -30.0, 45.0]),
@@ -171,13 +176,7 @@ fn g43_4_moves_on_the_a_c_machine_follow_its_closed_form_kinematics() {
         "trunnion-ac.toml",
         include_str!("../../../machines/trunnion-ac.toml"),
     );
-    let m = Trunnion {
-        tilt: 'A',
-        p_c: [0.0, 0.0, -450.0],
-        p_t: [0.0, 0.0, -500.0],
-        datum: [150.0, 0.0, -350.0],
-        length_mm: 150.0,
-    };
+    let m = trunnion('A');
     let program = BC_PROGRAM.replace(" B", " A");
     let dwells = [
         ([0.0, 0.0, 50.0], [0.0, 0.0, 0.0]),
@@ -201,13 +200,7 @@ fn a_rotary_turn_alone_under_g43_4_keeps_the_tip_on_its_point() {
     let points = commanded_points(&plan, Sampling::EveryCycle(0.005));
     let turning: Vec<_> = points.iter().filter(|p| p.line == 4).collect();
     assert!(turning.len() > 100);
-    let m = Trunnion {
-        tilt: 'B',
-        p_c: [0.0, 0.0, -450.0],
-        p_t: [0.0, 0.0, -500.0],
-        datum: [150.0, 0.0, -350.0],
-        length_mm: 150.0,
-    };
+    let m = trunnion('B');
     assert_eq!(geom.datum_mm, m.datum);
     for p in turning {
         let tip = sub(m.forward(p.q_mm, p.abc_deg), OFFSET);
