@@ -75,6 +75,7 @@ fn the_g43_4_program_is_compensated_in_position_and_tool_axis_on_the_b_c_machine
         reports.push(run(&args, "run"));
     }
     assert!(reports[0].contains("the controller corrects X, Y, Z and the rotary axes"));
+    assert!(reports[0].contains("tool-centre-point control: under G43.4"));
     assert!(reports[1].contains("the controller corrects X, Y, Z (--rotary-comp off)"));
     let (on, off) = (summary(dir.path(), "on"), summary(dir.path(), "off"));
     // One point per dwell of the program.

@@ -90,7 +90,8 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     .with_context(|| {
         format!("{name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion")
     })?;
-    let report = report_text(cfg, &evaluated, &summary, model.as_ref())?;
+    let tcp = plan.pieces.iter().any(|p| p.tcp_length_mm.is_some());
+    let report = report_text(cfg, &evaluated, &summary, model.as_ref(), tcp)?;
     out.write_all(report.as_bytes())?;
     if let Some(rrd) = &cfg.rrd {
         let id = format!(
@@ -130,6 +131,7 @@ fn report_text(
     points: &[FivePoint],
     summary: &FiveAxisSummary,
     model: Option<&IdentifiedModel>,
+    tcp: bool,
 ) -> Result<String> {
     let mut out: Vec<u8> = Vec::new();
     let spec = &cfg.machine;
@@ -142,6 +144,9 @@ fn report_text(
         spec.machine.chain
     )?;
     writeln!(out, "thermal state: {}", five_report::NO_THERMAL_MODEL)?;
+    if tcp {
+        writeln!(out, "tool-centre-point control: under G43.4 the program gives the tool tip in the part frame; the axes come from the nominal inverse kinematics")?;
+    }
     if let (Some(m), Some(path)) = (model, &cfg.identified) {
         writeln!(
             out,
