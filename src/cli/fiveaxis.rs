@@ -11,6 +11,15 @@ use crate::commands::run_fiveaxis::FiveAxisRunConfig;
 use vmc_machine::fiveaxis::run::Sampling;
 use vmc_machine::fiveaxis::FiveAxisSpec;
 
+/// Whether the compensating controller of a five-axis `run` corrects the rotary axes too.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum RotaryComp {
+    /// Linear and rotary axes: position and tool-axis errors.
+    On,
+    /// Linear axes only: position errors.
+    Off,
+}
+
 /// Arguments of `probe-campaign`.
 #[derive(clap::Args)]
 pub struct ProbeCampaignArgs {
@@ -246,6 +255,7 @@ pub(super) fn run_config(args: super::RunArgs) -> Result<FiveAxisRunConfig> {
         force: args.force.force,
         sampling,
         identified: args.identified,
+        rotary_comp: args.rotary_comp != Some(RotaryComp::Off),
         rrd: args.rrd.checked()?,
     })
 }

@@ -270,6 +270,10 @@ pub struct RunArgs {
     /// point is reported before and after.
     #[arg(long, conflicts_with = "model")]
     pub identified: Option<PathBuf>,
+    /// Five-axis machine with --identified: `on` (default) corrects the rotary axes for the
+    /// tool-axis error as well, `off` the linear axes only.
+    #[arg(long, value_enum, requires = "identified")]
+    pub rotary_comp: Option<fiveaxis::RotaryComp>,
     #[command(flatten)]
     pub rrd: RrdArgs,
 }

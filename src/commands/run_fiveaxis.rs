@@ -13,7 +13,8 @@ use crate::record;
 use crate::report::fiveaxis::{self as five_report, FiveAxisSummary};
 use vmc_identify::chain::Pose;
 use vmc_machine::fiveaxis::identified::IdentifiedModel;
-use vmc_machine::fiveaxis::run::{self as five, FivePoint, Sampling};
+use vmc_machine::fiveaxis::plan::plan_program;
+use vmc_machine::fiveaxis::run::{self as five, Controller, FivePoint, Sampling};
 use vmc_machine::fiveaxis::{FiveAxisSpec, TrueMachine};
 
 /// What to run on a five-axis machine, validated.
@@ -34,6 +35,8 @@ pub struct FiveAxisRunConfig {
     pub sampling: Sampling,
     /// An identified model (`identify`'s JSON) to compensate with.
     pub identified: Option<PathBuf>,
+    /// The controller corrects the rotary axes too (else the linear axes only).
+    pub rotary_comp: bool,
     /// A Rerun recording to write.
     pub rrd: Option<RrdOutput>,
 }
@@ -47,7 +50,7 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     let spec = &cfg.machine;
     let name = cfg.program.display().to_string();
     let text = files::read_named(&cfg.program, "program")?;
-    let plan = five::plan_program(&text, &name, spec, &cfg.machine_file)?;
+    let plan = plan_program(&text, &name, spec, &cfg.machine_file)?;
     if let Sampling::EveryCycle(dt_s) = cfg.sampling {
         // No thermal steps on this machine: only the number of samples is limited.
         vmc_machine::program::check_run_size(&name, 0.0, 1.0, plan.duration_s(), Some(dt_s))?;
@@ -69,13 +72,12 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     let points = five::commanded_points(&plan, cfg.sampling);
     let truth_at = |p: &Pose| truth.state_at(p);
     let model_at = model.as_ref().map(|m| move |p: &Pose| m.state_at(p));
-    let evaluated = five::evaluate(
-        &geom,
-        &points,
-        &truth_at,
-        model_at.as_ref().map(|f| f as &dyn Fn(&Pose) -> _),
-    )
-    .with_context(|| name.clone())?;
+    let controller = model_at.as_ref().map(|f| Controller {
+        model: f as &dyn Fn(&Pose) -> _,
+        rotary: cfg.rotary_comp,
+    });
+    let evaluated =
+        five::evaluate(&geom, &points, &truth_at, controller).with_context(|| name.clone())?;
     let identified_name = cfg.identified.as_ref().map(|p| p.display().to_string());
     let summary = five_report::summarise(
         &evaluated,
@@ -83,11 +85,13 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
         &spec.machine.name,
         cfg.seed,
         identified_name.as_deref(),
+        cfg.rotary_comp,
     )
     .with_context(|| {
         format!("{name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion")
     })?;
-    let report = report_text(cfg, &evaluated, &summary, model.as_ref())?;
+    let tcp = plan.pieces.iter().any(|p| p.tcp_length_mm.is_some());
+    let report = report_text(cfg, &evaluated, &summary, model.as_ref(), tcp)?;
     out.write_all(report.as_bytes())?;
     if let Some(rrd) = &cfg.rrd {
         let id = format!(
@@ -127,6 +131,7 @@ fn report_text(
     points: &[FivePoint],
     summary: &FiveAxisSummary,
     model: Option<&IdentifiedModel>,
+    tcp: bool,
 ) -> Result<String> {
     let mut out: Vec<u8> = Vec::new();
     let spec = &cfg.machine;
@@ -139,20 +144,28 @@ fn report_text(
         spec.machine.chain
     )?;
     writeln!(out, "thermal state: {}", five_report::NO_THERMAL_MODEL)?;
+    if tcp {
+        writeln!(out, "tool-centre-point control: under G43.4 the program gives the tool tip in the part frame; the axes come from the nominal inverse kinematics")?;
+    }
     if let (Some(m), Some(path)) = (model, &cfg.identified) {
         writeln!(
             out,
-            "compensation: identified model {} ({} parameters{}); the controller corrects X, Y, Z",
+            "compensation: identified model {} ({} parameters{}); the controller corrects {}",
             path.display(),
             m.set.len(),
             if m.harmonics >= 2 {
                 format!(", rotary motion harmonics up to order {}", m.harmonics)
             } else {
                 String::new()
+            },
+            if cfg.rotary_comp {
+                "X, Y, Z and the rotary axes (--rotary-comp on)"
+            } else {
+                "X, Y, Z (--rotary-comp off)"
             }
         )?;
     }
-    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; X, Y, Z and the angles are the commanded axes")?;
+    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; ax = angle between actual and commanded tool axis, µrad; X, Y, Z and the angles are the commanded axes")?;
     five_report::write_table(&spec.geometry(), points, &mut out)?;
     five_report::write_summary(summary, &mut out)?;
     Ok(String::from_utf8_lossy(&out).to_string())

@@ -38,10 +38,10 @@ use vmc_identify::chain::{Axis, Geometry, Pose};
 use vmc_identify::errors::ErrorState;
 use vmc_identify::htm::{parent_from_element, tip_in_workpiece_mm};
 use vmc_machine::fiveaxis::heldout::JudgedPose;
+use vmc_machine::fiveaxis::plan::FivePlan;
 use vmc_machine::fiveaxis::probe::ProbedSphere;
 use vmc_machine::fiveaxis::run::{pose_of, FivePoint};
 use vmc_machine::fiveaxis::FiveAxisSpec;
-use vmc_machine::motion::Plan;
 
 const GREY: [u8; 3] = [170, 170, 170];
 const RED: [u8; 3] = [230, 60, 50];
@@ -335,7 +335,7 @@ pub fn record_run(
     id: &str,
     magnify: f64,
     spec: &FiveAxisSpec,
-    plan: &Plan,
+    plan: &FivePlan,
     points: &[FivePoint],
     report: &str,
 ) -> Result<u64, RecordError> {
@@ -363,7 +363,8 @@ pub fn record_run(
     let mut commanded = Vec::with_capacity(n + 1);
     for k in 0..=n {
         let t_s = (k as f64 * dt_s).min(duration_s);
-        let pose = pose_of(geom, plan.position_at(t_s), plan.abc_at(t_s));
+        let (q_mm, abc_deg) = plan.joints_at(t_s);
+        let pose = pose_of(geom, q_mm, abc_deg);
         rec.set_duration_secs("sim_time", t_s);
         scene.log_pose(&pose)?;
         let tip = tip_in_workpiece_mm(geom, &pose, &zero);

@@ -31,6 +31,36 @@ pub struct FiveAxisSummary {
     pub after: Option<ErrorStats>,
     /// 1 − RMS(|E| after)/RMS(|E| before), if compensation ran.
     pub reduction: Option<f64>,
+    /// Whether the controller corrected the rotary axes too, if compensation ran.
+    pub rotary_compensation: Option<bool>,
+    /// Tool-axis error (angle between actual and commanded tool axis relative to the
+    /// workpiece) without compensation.
+    pub axis_before: AxisStats,
+    /// Tool-axis error with compensation, if it ran.
+    pub axis_after: Option<AxisStats>,
+    /// 1 − RMS(tool-axis error after)/RMS(before), if compensation ran.
+    pub axis_reduction: Option<f64>,
+}
+
+/// Statistics of the tool-axis error, µrad.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct AxisStats {
+    /// RMS, µrad.
+    pub rms_urad: f64,
+    /// Largest, µrad.
+    pub max_urad: f64,
+}
+
+/// RMS and maximum of `values` (µrad); `None` if empty.
+fn axis_stats(values: &[f64]) -> Option<AxisStats> {
+    if values.is_empty() {
+        return None;
+    }
+    let sq: f64 = values.iter().map(|v| v * v).sum();
+    Some(AxisStats {
+        rms_urad: (sq / values.len() as f64).sqrt(),
+        max_urad: values.iter().copied().fold(0.0, f64::max),
+    })
 }
 
 /// The note on the thermal state of every five-axis run.
@@ -45,11 +75,18 @@ pub fn summarise(
     machine: &str,
     seed: u64,
     identified: Option<&str>,
+    rotary_comp: bool,
 ) -> Option<FiveAxisSummary> {
     let before: Vec<[f64; 3]> = points.iter().map(|p| p.error_before_um).collect();
     let after: Vec<[f64; 3]> = points.iter().filter_map(|p| p.error_after_um).collect();
     let b = error_stats(&before)?;
     let a = error_stats(&after);
+    let axis_b: Vec<f64> = points.iter().map(|p| p.axis_error_before_urad).collect();
+    let axis_a: Vec<f64> = points
+        .iter()
+        .filter_map(|p| p.axis_error_after_urad)
+        .collect();
+    let (ab, aa) = (axis_stats(&axis_b)?, axis_stats(&axis_a));
     Some(FiveAxisSummary {
         program: program.to_string(),
         machine: machine.to_string(),
@@ -64,6 +101,10 @@ pub fn summarise(
         identified: identified.map(str::to_string),
         after: a,
         reduction: a.map(|a| 1.0 - a.rms_um[3] / b.rms_um[3].max(1e-300)),
+        rotary_compensation: a.map(|_| rotary_comp),
+        axis_before: ab,
+        axis_after: aa,
+        axis_reduction: aa.map(|a| 1.0 - a.rms_urad / ab.rms_urad.max(1e-300)),
     })
 }
 
@@ -90,9 +131,13 @@ pub fn samples_csv(geom: &Geometry, points: &[FivePoint]) -> String {
     for (_, l) in &rot {
         let _ = write!(s, ",{l}_deg");
     }
-    s.push_str(",tip_x_w_mm,tip_y_w_mm,tip_z_w_mm,ex_um,ey_um,ez_um,norm_um");
+    s.push_str(",tip_x_w_mm,tip_y_w_mm,tip_z_w_mm,ex_um,ey_um,ez_um,norm_um,axis_err_urad");
     if comp {
         s.push_str(",qx_mm,qy_mm,qz_mm,ex_comp_um,ey_comp_um,ez_comp_um,norm_comp_um");
+        for (_, l) in &rot {
+            let _ = write!(s, ",{l}_comp_deg");
+        }
+        s.push_str(",axis_err_comp_urad");
     }
     s.push('\n');
     for p in points {
@@ -108,14 +153,15 @@ pub fn samples_csv(geom: &Geometry, points: &[FivePoint]) -> String {
         }
         let _ = write!(
             s,
-            ",{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
+            ",{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.3}",
             t[0],
             t[1],
             t[2],
             e[0],
             e[1],
             e[2],
-            super::norm(e)
+            super::norm(e),
+            p.axis_error_before_urad
         );
         if comp {
             let q = p.compensated_q_mm.unwrap_or(q);
@@ -131,6 +177,11 @@ pub fn samples_csv(geom: &Geometry, points: &[FivePoint]) -> String {
                 a[2],
                 super::norm(a)
             );
+            let abc = p.compensated_abc_deg.unwrap_or(c.abc_deg);
+            for (i, _) in &rot {
+                let _ = write!(s, ",{:.8}", abc[*i]);
+            }
+            let _ = write!(s, ",{:.3}", p.axis_error_after_urad.unwrap_or(f64::NAN));
         }
         s.push('\n');
     }
@@ -161,8 +212,10 @@ pub fn write_table(
         " {:>8} {:>8} {:>8} {:>8}",
         "ex_um", "ey_um", "ez_um", "|e|_um"
     )?;
+    write!(out, " {:>8}", "ax_urad")?;
     if comp {
         super::write_compensated_header(out)?;
+        write!(out, " {:>8}", "ax_comp")?;
     }
     writeln!(out)?;
     for (k, p) in points.iter().enumerate() {
@@ -183,8 +236,10 @@ pub fn write_table(
             e[2],
             super::norm(e)
         )?;
+        write!(out, " {:>8.2}", p.axis_error_before_urad)?;
         if let Some(a) = p.error_after_um {
             super::write_compensated_cells(out, a)?;
+            write!(out, " {:>8.2}", p.axis_error_after_urad.unwrap_or(f64::NAN))?;
         }
         writeln!(out)?;
     }
@@ -207,6 +262,22 @@ pub fn write_summary(s: &FiveAxisSummary, out: &mut dyn std::io::Write) -> std::
     }
     if let Some(r) = s.reduction {
         writeln!(out, "  reduction of RMS |E|: {:.1} %", r * 100.0)?;
+    }
+    let row = |a: &AxisStats| format!("RMS {:.2} µrad, max {:.2} µrad", a.rms_urad, a.max_urad);
+    writeln!(out, "  tool-axis error: {}", row(&s.axis_before))?;
+    if let (Some(a), Some(r), Some(rot)) = (&s.axis_after, s.axis_reduction, s.rotary_compensation)
+    {
+        writeln!(
+            out,
+            "  compensated tool-axis error ({}): {}; reduction of RMS {:.1} %",
+            if rot {
+                "rotary axes corrected"
+            } else {
+                "linear axes only"
+            },
+            row(a),
+            r * 100.0
+        )?;
     }
     Ok(())
 }

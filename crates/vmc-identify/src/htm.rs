@@ -125,3 +125,12 @@ pub fn tip_in_workpiece_mm(geom: &Geometry, pose: &Pose, state: &ErrorState) -> 
     let t = bed_from_tip(geom, pose, state);
     (w.inverse() * t).translation.vector
 }
+
+/// The tool's axis (the spindle direction, unit vector from the tip towards the gauge point)
+/// relative to the workpiece, in the workpiece frame (exact).
+#[must_use]
+pub fn tool_axis_in_workpiece(geom: &Geometry, pose: &Pose, state: &ErrorState) -> Vector3<f64> {
+    let w = bed_from_workpiece(geom, pose, state);
+    let t = bed_from_tip(geom, pose, state);
+    (w.inverse() * t).rotation * Vector3::z()
+}

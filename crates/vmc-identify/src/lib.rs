@@ -23,6 +23,7 @@ pub mod errors;
 pub mod htm;
 pub mod identify;
 pub mod inverse;
+pub mod inverse_pose;
 pub mod order;
 pub mod sensitivity;
 pub mod sphere;

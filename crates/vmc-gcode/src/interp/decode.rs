@@ -116,6 +116,8 @@ pub(super) enum ToolLength {
     Table,
     /// G43.1: the Z word is the length.
     Given,
+    /// G43.4: tool centre point control (see `exec::tcp`).
+    Tcp,
     /// G49: off.
     Off,
 }
@@ -478,6 +480,7 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
         ),
         430 => (8, A::ToolLength(ToolLength::Table)),
         431 => (8, A::ToolLength(ToolLength::Given)),
+        434 => (8, A::ToolLength(ToolLength::Tcp)),
         490 => (8, A::ToolLength(ToolLength::Off)),
         540..=590 if code.is_multiple_of(10) => (12, A::CoordSystem(((code - 540) / 10) as usize)),
         591..=593 => (12, A::CoordSystem((code - 591) as usize + 6)),

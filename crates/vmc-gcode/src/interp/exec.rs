@@ -23,6 +23,7 @@ mod probing;
 use probing::PendingProbe;
 mod rotary;
 mod state_params;
+mod tcp;
 mod tool_table;
 
 /// Modal interpreter state; feed it blocks with [`Interpreter::execute_block`].
@@ -74,6 +75,8 @@ pub struct Interpreter {
     rotary: rotary::RotaryState,
     /// The probe move of the last block while its result is still to come.
     probe: Option<PendingProbe>,
+    /// Tool centre point control (G43.4): the machine's rotary axes and the active state.
+    tcp: tcp::TcpState,
 }
 
 /// What the motion step of a block will do.
@@ -113,6 +116,7 @@ impl Interpreter {
             contexts: modal_state::Contexts::default(),
             comp: CutterComp::default(),
             rotary: rotary::RotaryState::new(cfg.start_abc_deg),
+            tcp: tcp::TcpState::new(cfg.tcp_axes),
             probe: None,
         }
     }
@@ -333,8 +337,10 @@ impl Interpreter {
                 self.tool_offset_mm = d.axes[2].map_or(0.0, |z| z.value * self.scale());
             }
             Some((ToolLength::Off, _)) => self.tool_offset_mm = 0.0,
+            Some((ToolLength::Tcp, _)) => self.tool_offset_mm = 0.0,
             None => {}
         }
+        self.set_tcp(&d, step);
         self.coord_index = d.coord_system.unwrap_or(self.coord_index);
         self.distance = d.distance.unwrap_or(self.distance);
         self.arc_distance = d.arc_distance.unwrap_or(self.arc_distance);

@@ -60,6 +60,10 @@
 //!   whatever the mode, so they change nothing.
 //! - G43 H (tool length from [`InterpConfig::tool_lengths_mm`]; without H, the spindle's
 //!   tool's), G43.1 Z (given length), G49 (off): absolute Z targets are shifted by the length.
+//! - G43.4 H (tool centre point control, on a five-axis machine given by
+//!   [`InterpConfig::tcp_axes`]; G49, G43, G43.1 end it): X, Y, Z are the tool tip in the part
+//!   frame, the length goes to the machine's kinematics ([`run_program_tcp`]; rules in
+//!   `exec::tcp`).
 //! - G41 / G42 D (cutter radius compensation left / right of the path, D a tool number whose
 //!   diameter comes from [`InterpConfig::tool_diameters_mm`]; D0 or no D: the tool in the
 //!   spindle, loaded by M6 — a T word alone only selects),
@@ -111,6 +115,8 @@ mod program_run;
 mod rotary_tests;
 mod sub_files;
 #[cfg(test)]
+mod tcp_tests;
+#[cfg(test)]
 mod tests;
 
 pub use crate::syntax::{CallSite, ErrorIn, GcodeError, GcodeErrorKind};
@@ -155,6 +161,10 @@ pub struct InterpConfig {
     /// program does not define (LinuxCNC's subroutine path). Default: none (such a call is
     /// refused as unsupported).
     pub subroutine_dirs: Vec<std::path::PathBuf>,
+    /// Which of the rotary axes A, B, C a five-axis machine has, for tool centre point control
+    /// (G43.4, see [`run_program_tcp`]). `None` (the default): the machine has no kinematics for
+    /// it and G43.4 is refused.
+    pub tcp_axes: Option<[bool; 3]>,
 }
 
 impl Default for InterpConfig {
@@ -167,6 +177,7 @@ impl Default for InterpConfig {
             tool_diameters_mm: Vec::new(),
             block_delete: false,
             subroutine_dirs: Vec::new(),
+            tcp_axes: None,
         }
     }
 }
@@ -206,6 +217,37 @@ pub fn run_program_with_units(
     }
     let units = (0..out.len()).map(|i| run.length_unit_at(i)).collect();
     Ok((out, units))
+}
+
+/// [`run_program`] on a five-axis machine with tool centre point control
+/// ([`InterpConfig::tcp_axes`]): with each move, the tool length under G43.4 when it was
+/// emitted (`Some`: the move's X, Y, Z are the tool tip in the part frame, to be turned into
+/// axis positions by the machine's inverse kinematics; `None`: machine positions).
+///
+/// ```
+/// use vmc_gcode::interp::{run_program_tcp, InterpConfig};
+/// let cfg = InterpConfig {
+///     tool_lengths_mm: vec![(1, 150.0)],
+///     tcp_axes: Some([false, true, true]),
+///     ..InterpConfig::default()
+/// };
+/// let (moves, tcp) = run_program_tcp("G0 Z0\nG43.4 H1\nG0 X0 Y0 Z20 B-30\nG49\nG0 X0 Y0 Z0\nM2", &cfg)?;
+/// assert_eq!(tcp[..3], [None, Some(150.0), None]);
+/// let err = run_program_tcp("G43.4 H1\nG0 X1 A5", &cfg).unwrap_err();
+/// assert_eq!(err.to_string(), "line 2, column 7: G43.4: this machine has no A axis");
+/// # Ok::<(), vmc_gcode::interp::GcodeError>(())
+/// ```
+pub fn run_program_tcp(
+    src: &str,
+    cfg: &InterpConfig,
+) -> Result<(Vec<CanonMove>, Vec<Option<f64>>), GcodeError> {
+    let mut run = ProgramRun::new(src, cfg)?;
+    let mut out = Vec::new();
+    while let RunEvent::Probe(_) = run.resume(&mut out)? {
+        run.probe_result(ProbeOutcome::Standalone)?;
+    }
+    let tcp = (0..out.len()).map(|i| run.tcp_length_at(i)).collect();
+    Ok((out, tcp))
 }
 
 /// Active plane for arcs (G17 / G18 / G19).

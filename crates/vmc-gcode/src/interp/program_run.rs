@@ -118,6 +118,9 @@ pub struct ProgramRun {
     probe_index: usize,
     /// Where the length unit changed: (number of moves emitted before, the unit after).
     unit_changes: Vec<(usize, LengthUnit)>,
+    /// Where tool centre point control (G43.4) changed: (moves emitted before, tool length
+    /// after, `None` when off).
+    tcp_changes: Vec<(usize, Option<f64>)>,
 }
 
 impl ProgramRun {
@@ -137,6 +140,7 @@ impl ProgramRun {
             state: State::Running,
             probe_index: 0,
             unit_changes: vec![(0, LengthUnit::Mm)],
+            tcp_changes: vec![(0, None)],
         })
     }
 
@@ -209,6 +213,17 @@ impl ProgramRun {
             .map_or(LengthUnit::Mm, |c| c.1)
     }
 
+    /// The tool length under G43.4 when move `index` was emitted (as [`Self::length_unit_at`]):
+    /// `Some` when the move's X, Y, Z are the tool tip in the part frame, `None` when they are
+    /// the machine's.
+    pub fn tcp_length_at(&self, index: usize) -> Option<f64> {
+        self.tcp_changes
+            .iter()
+            .rev()
+            .find(|c| c.0 <= index)
+            .and_then(|c| c.1)
+    }
+
     fn run_until_event(&mut self, out: &mut Vec<CanonMove>) -> Result<RunEvent, GcodeError> {
         loop {
             if let Some(line) = self.runner.main_m99_end.take() {
@@ -239,6 +254,10 @@ impl ProgramRun {
             let unit = self.runner.interp.length_unit();
             if self.unit_changes.last().map(|c| c.1) != Some(unit) {
                 self.unit_changes.push((emitted, unit));
+            }
+            let tcp = self.runner.interp.tcp_length_mm();
+            if self.tcp_changes.last().map(|c| c.1) != Some(tcp) {
+                self.tcp_changes.push((emitted, tcp));
             }
             if let Some(request) = self.runner.probe {
                 self.probe_index = pc;

@@ -11,6 +11,7 @@
 pub mod campaign;
 pub mod heldout;
 pub mod identified;
+pub mod plan;
 pub mod probe;
 pub mod run;
 pub mod spec;

@@ -2,58 +2,39 @@
 //! sample, before and after compensation with an identified model.
 //!
 //! # Model
-//! - **Program.** `X Y Z` are the linear axes' positions (machine coordinates: all axes at zero
-//!   at machine zero, work offsets G54…G59 from the machine file), `A`, `B`, `C` the rotary
-//!   axes' angles in degrees. There is no tool-centre-point control (RTCP, G43.4): the program
-//!   gives axis positions, as a post-processor for this machine's kinematics writes them.
-//! - **Planning.** [`crate::motion::plan_with_rotary`] with the machine's linear and rotary
-//!   speed and acceleration limits; the linear travel and the rotary travel limits (degrees)
-//!   are checked, the first move beyond one refused with its line.
+//! - **Program and planning**: see [`super::plan`]. Without G43.4 `X Y Z` are the linear axes'
+//!   positions (machine coordinates, work offsets G54…G59 from the machine file), as a
+//!   post-processor for this machine's kinematics writes them; under G43.4 the tool tip in the
+//!   part frame, turned into axis positions by the nominal inverse kinematics. `A`, `B`, `C`
+//!   are the rotary axes' angles in degrees.
 //! - **Sampling** as the three-axis `run`: the middle of every dwell (G4), and with
 //!   [`Sampling::EveryCycle`] every interpolation cycle during motion.
 //! - **Error.** At commanded axes `(q, θ)` the commanded tool tip is the nominal chain's
 //!   `p = tip_w(q, θ; 0)` and the error `E = tip_w(q, θ; e(q, θ)) − p`, both in the workpiece
 //!   frame (exact homogeneous transforms, [`vmc_identify::htm`]), `e` the machine's errors at
-//!   the pose.
-//! - **Compensation** (with a model `ê`): the controller keeps `θ` and commands the linear axes
-//!   `q'` that solve `tip_w(q', θ; ê(q', θ)) = p` (Newton, [`vmc_identify::inverse::linear_axes_for`]);
-//!   the error after is `tip_w(q', θ; e(q', θ)) − p`. The controller sees `ê` only.
+//!   the pose. The tool-axis error is the angle between the actual tool axis
+//!   `a(q, θ; e)` and the commanded one `a* = a(q, θ; 0)`, relative to the workpiece.
+//! - **Compensation** (with a model `ê`, [`Controller`]): with the linear axes only, the
+//!   controller keeps `θ` and commands the `q'` that solve `tip_w(q', θ; ê(q', θ)) = p`
+//!   (Newton, [`vmc_identify::inverse::linear_axes_for`]); with the rotary axes too, it also
+//!   turns them to `θ'` so that the model's tool axis lies along `a*`, and solves `q'` at
+//!   `θ'` ([`vmc_identify::inverse_pose::axes_for_tool_pose`]). The errors after are the
+//!   machine's at the commanded `(q', θ')`. The controller sees `ê` only.
 //!
 //! There is no thermal model on this machine: the errors are geometric and do not change over
 //! time. Units: mm, degrees; errors in µm.
 
 use nalgebra::Vector3;
-use thiserror::Error;
 
-use crate::machine::MachineError;
-use crate::motion::{self, Plan, SegmentKind};
-use crate::program::ProgramError;
-use vmc_gcode::interp::{self, InterpConfig};
+use crate::motion::SegmentKind;
 use vmc_identify::chain::{Geometry, Pose};
 use vmc_identify::errors::ErrorState;
-use vmc_identify::htm::tip_in_workpiece_mm;
-use vmc_identify::inverse::{linear_axes_for, HtmError};
+use vmc_identify::htm::{tip_in_workpiece_mm, tool_axis_in_workpiece};
+use vmc_identify::inverse::linear_axes_for;
+use vmc_identify::inverse_pose::axes_for_tool_pose;
 
-use super::FiveAxisSpec;
-
-/// Why a program cannot be run on the five-axis machine.
-#[derive(Debug, Error)]
-pub enum FiveAxisRunError {
-    /// The program cannot be interpreted or planned, or leaves a travel.
-    #[error(transparent)]
-    Program(#[from] ProgramError),
-    /// The machine file lacks what running needs.
-    #[error(transparent)]
-    Machine(#[from] MachineError),
-    /// The compensation could not be solved at a point.
-    #[error("line {line}: compensation failed: {err}")]
-    Compensation {
-        /// Source line of the point.
-        line: usize,
-        /// The solver's error.
-        err: HtmError,
-    },
-}
+use super::plan::{joints_for_tip, FivePlan, Piece};
+pub use super::plan::{pose_of, FiveAxisRunError};
 
 /// Where the trajectory is sampled.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -92,62 +73,51 @@ pub struct FivePoint {
     pub compensated_q_mm: Option<[f64; 3]>,
     /// Error with compensation, workpiece frame, µm.
     pub error_after_um: Option<[f64; 3]>,
+    /// Angle between the actual and the commanded tool axis relative to the workpiece, without
+    /// compensation, µrad.
+    pub axis_error_before_urad: f64,
+    /// Rotary axes A, B, C the compensating controller commands, degrees (the commanded ones
+    /// when it corrects the linear axes only).
+    pub compensated_abc_deg: Option<[f64; 3]>,
+    /// Tool-axis error with compensation, µrad.
+    pub axis_error_after_urad: Option<f64>,
 }
 
-/// Interprets and plans `text` (named `file` in errors) on `spec` (read from `machine_file`),
-/// checking the linear and rotary travels.
-///
-/// # Errors
-/// Syntax or semantic errors, a machine file without rotary speed limits, a move beyond a
-/// travel limit (with its line).
-pub fn plan_program(
-    text: &str,
-    file: &str,
-    spec: &FiveAxisSpec,
-    machine_file: &str,
-) -> Result<Plan, FiveAxisRunError> {
-    let rotary = spec.rotary_limits(machine_file)?;
-    let start_mm = spec.axes.home_mm;
-    let cfg = InterpConfig {
-        start_mm,
-        work_offsets_mm: {
-            let mut all = [[0.0; 3]; interp::WORK_OFFSETS];
-            all[..6].copy_from_slice(&spec.axes.work_offsets_mm);
-            all
-        },
-        ..InterpConfig::default()
-    };
-    let moves = interp::run_program(text, &cfg).map_err(|err| ProgramError::Gcode {
-        file: file.to_string(),
-        err,
-    })?;
-    let motion_err = |err| ProgramError::Motion {
-        file: file.to_string(),
-        err,
-        unit: interp::LengthUnit::Mm,
-    };
-    let plan = motion::plan_with_rotary(&moves, start_mm, [0.0; 3], &spec.motion, &rotary)
-        .map_err(motion_err)?;
-    motion::check_travel(&plan, spec.axes.travel_min_mm, spec.axes.travel_max_mm)
-        .map_err(motion_err)?;
-    motion::check_rotary_travel(&plan, &spec.rotary_travel_abc_deg()).map_err(motion_err)?;
-    Ok(plan)
+/// The compensating controller: its model of the machine's errors (knowledge only) and
+/// whether it corrects the rotary axes too.
+#[derive(Clone, Copy)]
+pub struct Controller<'a> {
+    /// The model's errors at a pose.
+    pub model: &'a dyn Fn(&Pose) -> ErrorState,
+    /// Also correct the rotary axes for the tool-axis error
+    /// ([`vmc_identify::inverse_pose::axes_for_tool_pose`]); else the linear axes only.
+    pub rotary: bool,
 }
 
-/// The points where the run measures, in time order (as the three-axis simulation takes them).
+/// The points where the run measures, in time order (as the three-axis simulation takes them);
+/// under G43.4 the axes come from the nominal inverse kinematics of the programmed tip.
 #[must_use]
-pub fn commanded_points(plan: &Plan, sampling: Sampling) -> Vec<Commanded> {
+pub fn commanded_points(plan: &FivePlan, sampling: Sampling) -> Vec<Commanded> {
     let mut out = Vec::new();
-    for seg in plan.segments() {
+    for piece in &plan.pieces {
+        piece_points(plan, piece, sampling, &mut out);
+    }
+    out
+}
+
+fn piece_points(plan: &FivePlan, piece: &Piece, sampling: Sampling, out: &mut Vec<Commanded>) {
+    let joints =
+        |p_mm, abc_deg| joints_for_tip(plan.geometry(), piece.tcp_length_mm, p_mm, abc_deg);
+    for seg in piece.plan.segments() {
         let moving = matches!(
             seg.kind,
             SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc
         );
         match (seg.kind, sampling) {
             (SegmentKind::Dwell, _) => out.push(Commanded {
-                time_s: seg.t_start_s + 0.5 * seg.duration_s,
+                time_s: piece.t0_s + seg.t_start_s + 0.5 * seg.duration_s,
                 line: seg.line,
-                q_mm: seg.end_mm,
+                q_mm: joints(seg.end_mm, seg.end_abc_deg),
                 abc_deg: seg.end_abc_deg,
                 at_dwell: true,
             }),
@@ -156,9 +126,12 @@ pub fn commanded_points(plan: &Plan, sampling: Sampling) -> Vec<Commanded> {
                 for k in 0..n {
                     let t_local_s = k as f64 * dt_s;
                     out.push(Commanded {
-                        time_s: seg.t_start_s + t_local_s,
+                        time_s: piece.t0_s + seg.t_start_s + t_local_s,
                         line: seg.line,
-                        q_mm: seg.position_at_local(t_local_s),
+                        q_mm: joints(
+                            seg.position_at_local(t_local_s),
+                            seg.abc_at_local(t_local_s),
+                        ),
                         abc_deg: seg.abc_at_local(t_local_s),
                         at_dwell: false,
                     });
@@ -167,29 +140,28 @@ pub fn commanded_points(plan: &Plan, sampling: Sampling) -> Vec<Commanded> {
             _ => {}
         }
     }
-    out
-}
-
-/// The pose of linear axes `q_mm` and G-code angles `abc_deg` (A, B, C) for `geom`'s rotary
-/// axes.
-#[must_use]
-pub fn pose_of(geom: &Geometry, q_mm: [f64; 3], abc_deg: [f64; 3]) -> Pose {
-    let mut rotary_deg = [0.0; 2];
-    for (i, r) in geom.rotary.iter().enumerate().take(2) {
-        rotary_deg[i] = abc_deg[r.axis.index()];
-    }
-    Pose {
-        linear_mm: q_mm,
-        rotary_deg,
-    }
 }
 
 fn um(v: Vector3<f64>) -> [f64; 3] {
     [v[0] * 1e3, v[1] * 1e3, v[2] * 1e3]
 }
 
-/// The error at every point: `truth` gives the machine's errors at a pose, `model` (if any) the
-/// compensating controller's.
+/// `abc_deg` with the machine's rotary axes set to the pose's angles.
+fn abc_of(geom: &Geometry, rotary_deg: [f64; 2], mut abc_deg: [f64; 3]) -> [f64; 3] {
+    for (i, r) in geom.rotary.iter().enumerate().take(2) {
+        abc_deg[r.axis.index()] = rotary_deg[i];
+    }
+    abc_deg
+}
+
+/// Angle between two directions, µrad.
+fn angle_urad(a: Vector3<f64>, b: Vector3<f64>) -> f64 {
+    a.cross(&b).norm().atan2(a.dot(&b)) * 1e6
+}
+
+/// The error at every point: `truth` gives the machine's errors at a pose, `controller` (if
+/// any) compensates. Position and tool-axis errors are those of the tool relative to the
+/// workpiece, against the nominal chain at the commanded axes.
 ///
 /// # Errors
 /// [`FiveAxisRunError::Compensation`] when the controller's equation cannot be solved.
@@ -197,7 +169,7 @@ pub fn evaluate(
     geom: &Geometry,
     points: &[Commanded],
     truth: &dyn Fn(&Pose) -> ErrorState,
-    model: Option<&dyn Fn(&Pose) -> ErrorState>,
+    controller: Option<Controller>,
 ) -> Result<Vec<FivePoint>, FiveAxisRunError> {
     let zero = ErrorState::default();
     points
@@ -205,27 +177,43 @@ pub fn evaluate(
         .map(|c| {
             let pose = pose_of(geom, c.q_mm, c.abc_deg);
             let tip = tip_in_workpiece_mm(geom, &pose, &zero);
-            let real = |pose: &Pose| tip_in_workpiece_mm(geom, pose, &truth(pose));
-            let before = um(real(&pose) - tip);
-            let (q_comp, after) = match model {
-                Some(m) => {
-                    let q = linear_axes_for(geom, pose.rotary_deg, tip, m)
-                        .map_err(|err| FiveAxisRunError::Compensation { line: c.line, err })?;
-                    let p = Pose {
-                        linear_mm: q,
-                        rotary_deg: pose.rotary_deg,
-                    };
-                    (Some(q), Some(um(real(&p) - tip)))
-                }
-                None => (None, None),
+            let axis = tool_axis_in_workpiece(geom, &pose, &zero);
+            let real = |pose: &Pose| {
+                let state = truth(pose);
+                (
+                    tip_in_workpiece_mm(geom, pose, &state),
+                    tool_axis_in_workpiece(geom, pose, &state),
+                )
             };
-            Ok(FivePoint {
+            let (tip_before, axis_before) = real(&pose);
+            let mut point = FivePoint {
                 commanded: *c,
                 tip_w_mm: [tip[0], tip[1], tip[2]],
-                error_before_um: before,
-                compensated_q_mm: q_comp,
-                error_after_um: after,
-            })
+                error_before_um: um(tip_before - tip),
+                compensated_q_mm: None,
+                error_after_um: None,
+                axis_error_before_urad: angle_urad(axis_before, axis),
+                compensated_abc_deg: None,
+                axis_error_after_urad: None,
+            };
+            if let Some(ctl) = controller {
+                let fail = |err| FiveAxisRunError::Compensation { line: c.line, err };
+                let comp = if ctl.rotary {
+                    axes_for_tool_pose(geom, pose.rotary_deg, tip, axis, ctl.model).map_err(fail)?
+                } else {
+                    Pose {
+                        linear_mm: linear_axes_for(geom, pose.rotary_deg, tip, ctl.model)
+                            .map_err(fail)?,
+                        rotary_deg: pose.rotary_deg,
+                    }
+                };
+                let (tip_after, axis_after) = real(&comp);
+                point.compensated_q_mm = Some(comp.linear_mm);
+                point.compensated_abc_deg = Some(abc_of(geom, comp.rotary_deg, c.abc_deg));
+                point.error_after_um = Some(um(tip_after - tip));
+                point.axis_error_after_urad = Some(angle_urad(axis_after, axis));
+            }
+            Ok(point)
         })
         .collect()
 }
@@ -233,6 +221,8 @@ pub fn evaluate(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fiveaxis::plan::plan_program;
+    use crate::fiveaxis::FiveAxisSpec;
 
     /// 1e-6 µm (1 pm): rounding of the exact transforms.
     const TOL_UM: f64 = 1e-6;
@@ -262,7 +252,7 @@ mod tests {
         let plan = plan_program(text, "t.ngc", &s, "m.toml").unwrap();
         let pts = commanded_points(&plan, Sampling::Dwells);
         assert_eq!(pts.len(), 2);
-        let dwell = &plan.segments()[2];
+        let dwell = &plan.pieces[0].plan.segments()[2];
         assert_eq!(pts[0].line, 3);
         assert!((pts[0].time_s - (dwell.t_start_s + 0.5)).abs() < 1e-12);
         assert_eq!(pts[0].q_mm, [10.0, 20.0, -250.0]);
@@ -333,7 +323,38 @@ mod tests {
         let g = s.geometry();
         let truth = crate::fiveaxis::TrueMachine::new(&s, 3).unwrap();
         let t = |p: &Pose| truth.state_at(p);
-        let pts = evaluate(&g, &points(&s, Sampling::EveryCycle(0.01)), &t, Some(&t)).unwrap();
+        let ctl = |rotary| Controller { model: &t, rotary };
+        let pts = evaluate(
+            &g,
+            &points(&s, Sampling::EveryCycle(0.01)),
+            &t,
+            Some(ctl(false)),
+        )
+        .unwrap();
+        for p in &pts {
+            assert_eq!(p.compensated_abc_deg, Some(p.commanded.abc_deg));
+            // Linear axes alone do not turn the tool: the tool-axis error stays.
+            assert!((p.axis_error_after_urad.unwrap() - p.axis_error_before_urad).abs() < 1.0);
+        }
+        let full = evaluate(
+            &g,
+            &points(&s, Sampling::EveryCycle(0.01)),
+            &t,
+            Some(ctl(true)),
+        )
+        .unwrap();
+        for p in &full {
+            assert!(norm_um(p.error_after_um.unwrap()) < 1e-3, "{p:?}");
+            assert!(p.axis_error_before_urad > 5.0, "{p:?}");
+            let after = p.axis_error_after_urad.unwrap();
+            if p.commanded.abc_deg[0].abs() >= 10.0 {
+                // The damping leaves λ²/σ² of it (|A| ≥ 10°: σ ≥ 0.17).
+                assert!(after < 1e-3 * p.axis_error_before_urad, "{p:?}");
+            } else {
+                // Near A = 0 turning C does not move the tool axis: part of it stays.
+                assert!(after < p.axis_error_before_urad, "{p:?}");
+            }
+        }
         for p in &pts {
             assert!(norm_um(p.error_before_um) > 1.0, "{p:?}");
             // Newton stops below 1e-10 mm; 1e-3 µm leaves room.

@@ -16,6 +16,7 @@ impl Interpreter {
     pub(super) fn check(&self, block: &Block, d: &Decoded) -> Result<MotionStep, GcodeError> {
         check_values(block, d)?;
         let step = self.motion_step(block, d)?;
+        self.check_tcp(block, d, step)?;
         self.check_word_users(block, d, step)?;
         if let MotionStep::Move(Motion::Probe(kind)) = step {
             self.check_probe(block, d, motion_col(block, d), kind)?;
@@ -189,10 +190,12 @@ impl Interpreter {
             };
         }
         match (d.h, d.tool_length) {
-            (Some(h), Some((ToolLength::Table, _))) if h.value < 0.0 || h.value.fract() != 0.0 => {
+            (Some(h), Some((ToolLength::Table | ToolLength::Tcp, _)))
+                if h.value < 0.0 || h.value.fract() != 0.0 =>
+            {
                 return Err(inv(&h, "H word must be a non-negative integer"));
             }
-            (Some(_), Some((ToolLength::Table, _))) | (None, _) => {}
+            (Some(_), Some((ToolLength::Table | ToolLength::Tcp, _))) | (None, _) => {}
             (Some(h), _) => return Err(inv(&h, "H word without G43 to use it")),
         }
         if let Some((ToolLength::Table, col)) = d.tool_length {
