@@ -53,7 +53,12 @@ impl TableSet {
     /// The correction (mm, X, Y, Z) a controller adds to the commanded position `p_mm` (mm)
     /// with the tables of `scope`, each axis's own table in the column of its last direction
     /// of motion (`negative[k]`: axis `k` last moved in the negative direction).
-    pub fn correction_mm(&self, p_mm: [f64; 3], negative: [bool; 3], scope: TableScope) -> [f64; 3] {
+    pub fn correction_mm(
+        &self,
+        p_mm: [f64; 3],
+        negative: [bool; 3],
+        scope: TableScope,
+    ) -> [f64; 3] {
         std::array::from_fn(|j| {
             let direction = if negative[j] {
                 Direction::Negative

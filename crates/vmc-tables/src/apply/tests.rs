@@ -53,10 +53,16 @@ fn own_and_cross_tables_reproduce_the_live_correction_on_a_diagonal_but_for_the_
         let two_axis_mm = [1e-8 * (p[0] - 280.0) * (p[1] - 200.0), 0.0, 0.0];
         for k in 0..3 {
             let diff = c_tab[k] - (c_live[k] + two_axis_mm[k]);
-            assert!(diff.abs() <= bound, "axis {k} at {p:?}: {diff} mm > {bound} mm");
+            assert!(
+                diff.abs() <= bound,
+                "axis {k} at {p:?}: {diff} mm > {bound} mm"
+            );
         }
     }
-    assert!(bound < 0.1e-3, "the 10 mm tables follow the model to {bound} mm");
+    assert!(
+        bound < 0.1e-3,
+        "the 10 mm tables follow the model to {bound} mm"
+    );
 }
 
 #[test]
@@ -79,7 +85,10 @@ fn per_joint_tables_lose_what_the_cross_terms_carry() {
     assert!(all_worst_mm[1] < 0.05e-3, "own+cross Y: {all_worst_mm:?}");
     // Ez's 4e-6·x is a cross term too: 1.1 µm from the reference to the ends of the diagonal.
     // (Ex's 1e-5·y − 1e-5·z cancel along this diagonal, where y and z rise together.)
-    assert!(own_worst_mm[2] > all_worst_mm[2] + 1e-3, "{own_worst_mm:?} {all_worst_mm:?}");
+    assert!(
+        own_worst_mm[2] > all_worst_mm[2] + 1e-3,
+        "{own_worst_mm:?} {all_worst_mm:?}"
+    );
 }
 
 #[test]
