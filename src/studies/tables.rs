@@ -316,7 +316,7 @@ pub fn run_static_table_study(
         .collect();
     let live = variants.len();
     variants.push(LIVE_HYBRID.into());
-    let per_seed: Vec<Result<(Vec<FrozenTables>, Vec<(usize, RunReport)>), TablesError>> = models
+    let per_seed: Vec<Result<SeedStudy, TablesError>> = models
         .par_iter()
         .map(|m| seed_study(spec, m, &freezing, &plans, progress))
         .collect();
@@ -340,6 +340,9 @@ pub fn run_static_table_study(
     Ok(study)
 }
 
+/// One seed's table sets and its runs, each with its variant's index.
+type SeedStudy = (Vec<FrozenTables>, Vec<(usize, RunReport)>);
+
 /// The table sets and runs of one seed: variant `s·F + f` for scope `s` frozen at state `f`.
 fn seed_study(
     spec: &MachineSpec,
@@ -347,7 +350,7 @@ fn seed_study(
     freezing: &[(Freezing, EvalState)],
     plans: &[(&str, Plan)],
     progress: &dyn CampaignProgress,
-) -> Result<(Vec<FrozenTables>, Vec<(usize, RunReport)>), TablesError> {
+) -> Result<SeedStudy, TablesError> {
     let states = calibration::evaluation_states(spec, m.seed);
     let mut tables = Vec::new();
     let mut runs = Vec::new();
