@@ -43,6 +43,12 @@ pub struct CampaignArgs {
     /// start) and correct the drift the model missed (see docs/usage.md, probing).
     #[arg(long, value_name = "MIN")]
     pub probe_every: Option<f64>,
+    /// Also judge static compensation tables on the same held-out runs: per-joint and own+cross
+    /// tables sampled from each seed's hybrid frozen cold and frozen warm (HOURS into the
+    /// calibration cycle cal_4000_8000rpm, default 2: after 2 h at 4000 rpm), against the live
+    /// hybrid; with --out, writes static-tables.json.
+    #[arg(long, value_name = "HOURS", num_args = 0..=1, default_missing_value = "2")]
+    pub static_tables: Option<f64>,
     #[command(flatten)]
     pub rrd: RrdArgs,
 }
@@ -76,6 +82,9 @@ impl CampaignArgs {
                 bail!("--probe-every runs the whole campaign: run it without --shard");
             }
         }
+        if let Some(h) = self.static_tables {
+            check_static_tables(h, shard.is_some(), self.probe_every.is_some())?;
+        }
         let machine = self.machine.load(Some(&self.sensors))?;
         let inputs = commands::input_fingerprints(
             self.machine.machine.as_deref(),
@@ -92,10 +101,38 @@ impl CampaignArgs {
             rrd: self.rrd.checked()?,
             shard,
             probe_every_min: self.probe_every,
+            static_tables_warm_h: self.static_tables,
             inputs,
             command_line: std::env::args().collect(),
         })
     }
+}
+
+/// Checks `--static-tables HOURS` and what it runs with.
+///
+/// # Errors
+/// Hours outside the freezing cycle, a shard, probing.
+fn check_static_tables(hours: f64, shard: bool, probing: bool) -> Result<()> {
+    let cycle_h = crate::studies::tables::freezing_states(crate::studies::tables::DEFAULT_WARM_H)?
+        .last()
+        .map_or(0.0, |(_, s)| s.cycle.duration_s() / 3600.0);
+    if !(hours.is_finite() && hours > 0.0 && hours <= cycle_h) {
+        bail!(
+            "--static-tables {hours}: the warm freezing state is HOURS into the calibration \
+             cycle {} and must be within its {cycle_h} h (0 < HOURS ≤ {cycle_h})",
+            crate::studies::tables::FREEZE_CYCLE
+        );
+    }
+    if shard {
+        bail!("--static-tables runs the whole campaign: run it without --shard");
+    }
+    if probing {
+        bail!(
+            "--static-tables compares tables with the hybrid without probing: run it without \
+             --probe-every"
+        );
+    }
+    Ok(())
 }
 
 /// The seeds of `items` (each a seed `N` or an inclusive range `A..B`), in order; `option`

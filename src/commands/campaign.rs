@@ -15,6 +15,7 @@ use crate::shard::{InputFingerprint, Shard, ShardManifest, MANIFEST_FILE, MANIFE
 use crate::studies::calibration::ThermalCycle;
 use crate::studies::campaign::{self, CampaignReport, ForMachine, TrainedModels, PREDICTORS};
 use crate::studies::probing::Probing;
+use crate::studies::tables;
 use vmc_machine::machine::MachineSpec;
 
 /// Name of a campaign shard's per-seed results (one JSON object per line,
@@ -41,6 +42,9 @@ pub struct CampaignConfig {
     pub shard: Option<Shard>,
     /// Probe a reference sphere every this many minutes of every held-out run (None: no probing).
     pub probe_every_min: Option<f64>,
+    /// Also run the static-table study, the warm tables frozen this many hours into the
+    /// freezing cycle (None: not run).
+    pub static_tables_warm_h: Option<f64>,
     /// Fingerprints of the input files (machine, sensor set), for a shard's manifest.
     pub inputs: Vec<InputFingerprint>,
     /// The command line, for a shard's manifest.
@@ -70,6 +74,9 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
         Some(dir) => {
             let mut names = vec!["report.json".to_string()];
             names.extend(model_file_names(&cfg.seeds));
+            if cfg.static_tables_warm_h.is_some() {
+                names.push(tables::STATIC_TABLES_FILE.to_string());
+            }
             files::prepare_output_folder(dir, &names, cfg.force)?;
             Some(dir.clone())
         }
@@ -89,11 +96,19 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
         probing.as_ref(),
         &progress,
     )?;
+    let static_tables = cfg
+        .static_tables_warm_h
+        .map(|h| tables::run_static_table_study(&cfg.machine, &models, &rep.runs, h, &progress))
+        .transpose()?;
     progress.finish();
     let summary = campaign::Summary::of(rep.header(), &rep.runs);
     campaign::write_summary(&summary, out)?;
     if let Some(p) = &probing {
         write_probing(p, out)?;
+    }
+    let static_figures = static_tables.as_ref().map(tables::StudyFigures::of);
+    if let Some(f) = &static_figures {
+        tables::write_static_tables(f, out)?;
     }
     if cfg.print_runs {
         campaign::write_run_table(&rep, out)?;
@@ -108,6 +123,16 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
                 .map_err(std::io::Error::other)
         })?;
         write_models(&dir, &models, cfg.force)?;
+        if let (Some(study), Some(f)) = (&static_tables, &static_figures) {
+            files::write_atomic_with(&dir.join(tables::STATIC_TABLES_FILE), cfg.force, |w| {
+                tables::write_static_tables_json(f, study, w).map_err(std::io::Error::other)
+            })?;
+            writeln!(
+                out,
+                "wrote {}",
+                dir.join(tables::STATIC_TABLES_FILE).display()
+            )?;
+        }
         writeln!(out, "wrote {} and the trained models", path.display())?;
     }
     Ok(())

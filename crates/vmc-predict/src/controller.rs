@@ -109,10 +109,11 @@ pub struct SolveInfo {
     pub converged: bool,
 }
 
-/// Each axis's direction of commanded motion (module doc, "Approach direction"): what both
-/// compensators, this one and the compiled one, key the reversal on.
+/// Each axis's direction of commanded motion (module doc, "Approach direction"): what every
+/// compensator keys the reversal on (this one, the compiled one, and a controller's static
+/// tables choosing their forward or reverse column).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub(crate) struct ApproachDirections {
+pub struct ApproachDirections {
     /// Last commanded tool position, mm (None before the first).
     last_commanded_mm: Option<[f64; 3]>,
     /// Whether each axis's last commanded motion was negative.
@@ -121,7 +122,7 @@ pub(crate) struct ApproachDirections {
 
 impl ApproachDirections {
     /// Starts from the commanded position `p_mm` (mm), every axis positive.
-    pub(crate) fn starting_at(p_mm: [f64; 3]) -> Self {
+    pub fn starting_at(p_mm: [f64; 3]) -> Self {
         Self {
             last_commanded_mm: Some(p_mm),
             negative: [false; 3],
@@ -131,7 +132,7 @@ impl ApproachDirections {
     /// Notes a commanded tool position `p_mm` (mm): a change of an axis beyond
     /// [`DIRECTION_DEADBAND_MM`] sets its direction and moves its reference.
     #[inline]
-    pub(crate) fn note_commanded_mm(&mut self, p_mm: [f64; 3]) {
+    pub fn note_commanded_mm(&mut self, p_mm: [f64; 3]) {
         if let Some(last) = self.last_commanded_mm {
             for k in 0..3 {
                 let d = p_mm[k] - last[k];
@@ -154,7 +155,7 @@ impl ApproachDirections {
 
     /// Notes one commanded motion segment: the start counts only if no position was known yet.
     #[inline]
-    pub(crate) fn note_motion_segment_mm(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
+    pub fn note_motion_segment_mm(&mut self, start_mm: [f64; 3], end_mm: [f64; 3]) {
         if self.last_commanded_mm.is_none() {
             self.last_commanded_mm = Some(start_mm);
         }
@@ -163,12 +164,12 @@ impl ApproachDirections {
 
     /// Whether each axis's last commanded motion was negative.
     #[inline]
-    pub(crate) fn negative(&self) -> [bool; 3] {
+    pub fn negative(&self) -> [bool; 3] {
         self.negative
     }
 
     /// `1.0` positive (or no motion yet), `-1.0` negative, per axis.
-    pub(crate) fn signs(&self) -> [f64; 3] {
+    pub fn signs(&self) -> [f64; 3] {
         self.negative.map(|n| if n { -1.0 } else { 1.0 })
     }
 }

@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs)]
 
+pub mod apply;
 pub mod cec;
 pub mod export;
 pub mod linuxcnc;
