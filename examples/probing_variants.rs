@@ -3,7 +3,7 @@
 //!
 //! Keys: `seeds=` (machine seeds; use development seeds, never the campaign's held-out 1–3 for
 //! choosing), `every=` probing interval (min; `0` no probing), `walk=` drift walk (µm/√h),
-//! `meas=` measurement σ (µm, default: the probe's), `states=dev` adds the selection-only stress
+//! `states=dev` adds the selection-only stress
 //! states, `repeats=`/`toprep=` repeats of each touch along X, Y / of each top, `passes=` passes over the tops per cycle (1 or 2), `rate=` the drift rate's σ
 //! (µm/min; 1e-9: none), `tau=` its fading time (s). Models are trained once per seed and cached under `target/probing-models/`.
 //! Prints the headline figures, the worst runs with their max per axis and the mean signed
@@ -26,7 +26,6 @@ fn main() {
     let mut seeds = vec![21u64, 22, 23];
     let mut every_min = 30.0;
     let mut walk = None;
-    let mut meas: Option<f64> = None;
     let mut gwalk: Option<f64> = None;
     let mut ginit: Option<f64> = None;
     let mut oinit: Option<f64> = None;
@@ -46,7 +45,6 @@ fn main() {
             "seeds" => seeds = v.split(',').map(|s| s.parse().unwrap()).collect(),
             "every" => every_min = v.parse().unwrap(),
             "walk" => walk = Some(v.parse().unwrap()),
-            "meas" => meas = Some(v.parse().unwrap()),
             "states" => dev = v == "dev",
             "gwalk" => gwalk = Some(v.parse().unwrap()),
             "ginit" => ginit = Some(v.parse().unwrap()),
@@ -115,9 +113,6 @@ fn main() {
             }
             if let Some(w) = oinit {
                 p.field.initial_offset_um = w;
-            }
-            if let Some(m) = meas {
-                p.field.measurement_sigma_um = m;
             }
             p
         });

@@ -53,10 +53,8 @@ pub const FIELD_TOUCHES: [(usize, f64); 3] = [(0, 1.0), (1, 1.0), (2, -1.0)];
 pub const SPHERE_TOUCHES: [(usize, f64); 5] = [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0), (2, -1.0)];
 /// Cycles averaged into the artefacts' reference positions.
 const QUALIFY_CYCLES: usize = 8;
-/// Stationary σ of the Z drift's rate after a spindle stop, µm per minute (the drift filter's
-/// fading rate; the reference machine's residual moves by about 0.5 µm/min 3 min after a stop).
-const RATE_SIGMA_UM_PER_MIN: f64 = 0.5;
-/// Time in which that rate fades, s.
+/// Time in which the drift's rate fades, s (when a rate is estimated: `top_passes` 2 and
+/// [`FieldSettings::rate_sigma_um_per_min`] set).
 const RATE_TAU_S: f64 = 90.0;
 /// Clearance of each touch's start from the nominal contact, mm.
 const CLEARANCE_MM: f64 = 5.0;
@@ -94,11 +92,12 @@ pub struct Probing {
 impl Probing {
     /// Probing every `every_min` minutes with a typical probe as long as the machine's tool and
     /// four Ø25 mm reference spheres: three on 50 mm stems near the table's X−Y−, X+Y− and X−Y+
-    /// corners, one on a 300 mm column at the table's centre; each touched on +X, +Y and its
-    /// top, each touch three times. The drift is an offset per axis (walk 1 µm/√h, initial σ
+    /// corners, one on a 300 mm column at the table's centre; each touched on +X and +Y twice,
+    /// then the tops nine times each (the Z drift is what matters, and it moves fastest after
+    /// the stop: measured last). The drift is an offset per axis (walk 1 µm/√h, initial σ
     /// 0.7 µm: the model is trusted where it is good); the gradient (`gradient = true`, walks
-    /// 2 µm/m/√h, initial σ 2 µm/m) did worse on the development machines (seeds 21–23), see
-    /// docs/decisions/2026-11-28-probing-drift.md.
+    /// 2 µm/m/√h, initial σ 2 µm/m) and a fading rate did worse on the development machines
+    /// (seeds 21–29), see docs/decisions/2026-11-28-probing-drift.md.
     pub fn every(spec: &MachineSpec, every_min: f64) -> Self {
         let (min, max) = (spec.axes.travel_min_mm, spec.axes.travel_max_mm);
         let low_z = min[2] + 73.0;
@@ -114,16 +113,18 @@ impl Probing {
             ],
             sphere_radius_mm: 12.5,
             touches: FIELD_TOUCHES.to_vec(),
-            repeats: 3,
-            top_repeats: 3,
-            top_passes: 2,
+            repeats: 2,
+            top_repeats: 9,
+            top_passes: 1,
             field: FieldSettings {
                 walk_offset_um_per_sqrt_h: 1.0,
                 walk_gradient_um_per_m_sqrt_h: 2.0,
                 measurement_sigma_um: 1.0,
                 initial_offset_um: 0.7,
                 initial_gradient_um_per_m: 2.0,
-                rate_sigma_um_per_min: RATE_SIGMA_UM_PER_MIN,
+                // No rate: touching the tops twice per cycle to see it did not pay on the
+                // development machines (the decision record).
+                rate_sigma_um_per_min: 1e-9,
                 rate_tau_s: RATE_TAU_S,
             },
             gradient: false,
@@ -196,17 +197,21 @@ impl Probing {
         self.cycle_s() / 60.0 * 3600.0 / self.every_s
     }
 
-    /// σ of one sphere's position per axis from one cycle, µm: one touch's σ (the probe's
-    /// repeatability and latency, the machine's approach scatter) over the touches of the axis
-    /// least touched.
-    pub fn measurement_sigma_um(&self) -> f64 {
+    /// σ of one sphere's position along `axis` from one cycle, µm: one touch's σ (the probe's
+    /// repeatability and latency, the machine's approach scatter) over the touches along it in
+    /// one group; None for an axis not touched.
+    pub fn axis_sigma_um(&self, axis: usize) -> Option<f64> {
         let per_touch = (self.probe.sigma_mm() * 1e3).hypot(APPROACH_SIGMA_UM);
-        let least = (0..3)
-            .map(|a| self.touches.iter().filter(|t| t.0 == a).count() * self.repeats_of(a))
-            .filter(|&n| n > 0)
-            .min()
-            .unwrap_or(1);
-        per_touch / (least.max(1) as f64).sqrt()
+        let n = self.touches.iter().filter(|t| t.0 == axis).count() * self.repeats_of(axis);
+        (n > 0).then(|| per_touch / (n as f64).sqrt())
+    }
+
+    /// σ of one sphere's position per axis from one cycle, µm, for the axis least touched
+    /// (the drift field's default measurement σ; [`Probing::axis_sigma_um`] per axis).
+    pub fn measurement_sigma_um(&self) -> f64 {
+        (0..3)
+            .filter_map(|a| self.axis_sigma_um(a))
+            .fold(f64::NAN, f64::max)
     }
 
     /// The spheres' centroid, mm (the drift field's centre).
@@ -223,7 +228,13 @@ impl Probing {
             s.initial_gradient_um_per_m = 1e-9;
             s.walk_gradient_um_per_m_sqrt_h = 1e-9;
         }
-        DriftField::new(self.centroid_mm(), &s)
+        let mut f = DriftField::new(self.centroid_mm(), &s)?;
+        for a in 0..3 {
+            if let Some(sigma) = self.axis_sigma_um(a) {
+                f.set_measurement_sigma_um(a, sigma)?;
+            }
+        }
+        Ok(f)
     }
 
     fn artefact(&self, centre_mm: [f64; 3]) -> Artefact {
@@ -560,3 +571,6 @@ pub fn run_at_state_probed<P: ErrorPredictor>(
     )?;
     Ok(log.points)
 }
+
+#[cfg(test)]
+mod tests;

@@ -91,7 +91,8 @@ pub struct DriftField {
     /// Stationary variance of the rate, (mm/s)².
     rate_var: f64,
     rate_tau_s: f64,
-    measurement_mm2: f64,
+    /// Variance of one scalar measurement per component, mm².
+    measurement_mm2: [f64; 3],
     state: [State; 3],
     cov: [Cov; 3],
     /// Time the state refers to, s (None before the first update).
@@ -138,7 +139,7 @@ impl DriftField {
             walk_per_s,
             rate_var,
             rate_tau_s: settings.rate_tau_s,
-            measurement_mm2: mm2(settings.measurement_sigma_um),
+            measurement_mm2: [mm2(settings.measurement_sigma_um); 3],
             state: [State::zeros(); 3],
             cov: [p0; 3],
             updated_s: None,
@@ -155,6 +156,32 @@ impl DriftField {
         let mut q = Cov::from_diagonal(&(self.walk_per_s * dt_s));
         q[(4, 4)] = self.rate_var * (1.0 - fade * fade);
         (f, q)
+    }
+
+    /// Sets the σ of one measurement of component `k` (0 X, 1 Y, 2 Z) to `sigma_um` µm, when
+    /// the components are measured with different care (more touches along Z).
+    ///
+    /// # Errors
+    /// A σ that is not finite and > 0, or a component beyond 2.
+    pub fn set_measurement_sigma_um(
+        &mut self,
+        k: usize,
+        sigma_um: f64,
+    ) -> Result<(), DriftSettingError> {
+        if k > 2 {
+            return Err(DriftSettingError {
+                field: "component",
+                value: k as f64,
+            });
+        }
+        if !(sigma_um.is_finite() && sigma_um > 0.0) {
+            return Err(DriftSettingError {
+                field: "measurement_sigma_um",
+                value: sigma_um,
+            });
+        }
+        self.measurement_mm2[k] = (sigma_um * 1e-3).powi(2);
+        Ok(())
     }
 
     /// Notes the present time, s: [`Self::drift_at_mm`] forecasts the state to it.
@@ -226,7 +253,7 @@ impl DriftField {
                 0.0,
             ]);
             let ph = self.cov[k] * h;
-            let s = h.dot(&ph) + self.measurement_mm2;
+            let s = h.dot(&ph) + self.measurement_mm2[k];
             let gain = ph / s;
             let innovation = y - h.dot(&self.state[k]);
             self.state[k] += gain * innovation;
@@ -330,5 +357,35 @@ mod tests {
         let used = f.update(0.0, &[(3, [0.0; 3], 0.001), (0, [0.0; 3], f64::NAN)]);
         assert_eq!(used, 0);
         assert_eq!(f.drift_at_mm([100.0, 0.0, 0.0]), [0.0; 3]);
+    }
+
+    #[test]
+    fn a_rate_seen_within_a_cycle_carries_the_offset_on_and_then_fades() {
+        let s = FieldSettings {
+            rate_sigma_um_per_min: 1.0,
+            rate_tau_s: 100.0,
+            measurement_sigma_um: 0.05,
+            ..settings()
+        };
+        let mut f = DriftField::new([0.0; 3], &s).unwrap();
+        // Ez drift rising at 0.5 µm/min, measured at 0, 60, 120 s.
+        for k in 0..3 {
+            let t = 60.0 * k as f64;
+            f.update(t, &[(2, [0.0; 3], 0.5e-3 * t / 60.0)]);
+        }
+        let at = |f: &mut DriftField, t: f64| {
+            f.observe_time(t);
+            f.drift_at_mm([0.0; 3])[2] * 1e3
+        };
+        let now = at(&mut f, 120.0);
+        let later = at(&mut f, 180.0);
+        let much_later = at(&mut f, 7200.0);
+        assert!(later > now + 0.1, "{now} then {later}");
+        // It fades: an hour on it has moved by at most rate × τ.
+        assert!(
+            much_later - now < 0.5e-3 / 60.0 * 100.0 * 1e3 * 1.5,
+            "{much_later}"
+        );
+        assert!((much_later - at(&mut f, 3600.0)).abs() < 1e-3);
     }
 }
