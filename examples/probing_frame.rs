@@ -45,6 +45,29 @@ fn tops_mm(p: &Probing) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// The run's twin of state `si` driven to its time, with the model following the readings.
+fn at_state(
+    spec: &MachineSpec,
+    seed: u64,
+    si: usize,
+    state: &calibration::EvalState,
+    h: &HybridPredictor,
+) -> (Twin, Compensator<HybridPredictor>) {
+    let mut twin = Twin::with_noise_seed(spec, seed, eval_noise_seed(seed, si, 0)).unwrap();
+    state.cycle.prepare(&mut twin).unwrap();
+    let mut ctrl = Compensator::new(h.clone());
+    drive_with(
+        &mut twin,
+        &state.cycle,
+        0.0,
+        state.at_s,
+        1.0,
+        Some(&mut ctrl),
+    )
+    .unwrap();
+    (twin, ctrl)
+}
+
 fn main() {
     let spec = MachineSpec::reference();
     let mut seeds = vec![21u64];
@@ -95,19 +118,7 @@ fn main() {
             if state.at_s == 0.0 || !state.name.contains(&filter) {
                 continue;
             }
-            let mut twin =
-                Twin::with_noise_seed(&spec, seed, eval_noise_seed(seed, si, 0)).unwrap();
-            state.cycle.prepare(&mut twin).unwrap();
-            let mut ctrl = Compensator::new(h.clone());
-            drive_with(
-                &mut twin,
-                &state.cycle,
-                0.0,
-                state.at_s,
-                1.0,
-                Some(&mut ctrl),
-            )
-            .unwrap();
+            let (mut twin, mut ctrl) = at_state(&spec, seed, si, state, &h);
             println!("  {}:", state.name);
             let mut now_s = 0.0;
             for &t in &times_s {
@@ -136,19 +147,7 @@ fn main() {
                     // A whole cycle from here on a copy of the state: its Z drift per sphere
                     // (taken over its last minute) against the truth at the tops then.
                     let mut on = ProbeOnTwin::new(p.probe, 1).unwrap();
-                    let mut twin2 =
-                        Twin::with_noise_seed(&spec, seed, eval_noise_seed(seed, si, 0)).unwrap();
-                    state.cycle.prepare(&mut twin2).unwrap();
-                    let mut ctrl2 = Compensator::new(h.clone());
-                    drive_with(
-                        &mut twin2,
-                        &state.cycle,
-                        0.0,
-                        state.at_s,
-                        1.0,
-                        Some(&mut ctrl2),
-                    )
-                    .unwrap();
+                    let (mut twin2, mut ctrl2) = at_state(&spec, seed, si, state, &h);
                     let readings = probing::run_cycle(
                         &mut twin2,
                         &p,
