@@ -3,51 +3,29 @@
 //!
 //! Keys: `seeds=` (machine seeds; use development seeds, never the campaign's held-out 1–3 for
 //! choosing), `every=` probing interval (min; `0` no probing), `walk=` drift walk (µm/√h),
-//! `meas=` measurement σ (µm, default: the probe's), `states=dev` adds the selection-only stress
-//! states. Models are trained once per seed and cached under `target/probing-models/`.
+//! `states=dev` adds the selection-only stress
+//! states, `repeats=`/`toprep=` repeats of each touch along X, Y / of each top, `passes=` passes over the tops per cycle (1 or 2), `rate=` the drift rate's σ
+//! (µm/min; 1e-9: none), `tau=` its fading time (s). Models are trained once per seed and cached under `target/probing-models/`.
 //! Prints the headline figures, the worst runs with their max per axis and the mean signed
 //! residual per axis of the run (an offset the probe could see) beside its spread (what an
 //! offset cannot correct).
 use vmc_machine::machine::MachineSpec;
-use vmc_twin::predict::predictor::{self, HybridPredictor, ModelKind, Settings};
-use vmc_twin::studies::calibration::{self, CampaignConfig, ThermalCycle};
-use vmc_twin::studies::campaign::{self, diagonal_plans, eval_noise_seed, ForMachine};
+use vmc_twin::predict::predictor::ModelKind;
+use vmc_twin::studies::calibration;
+use vmc_twin::studies::campaign::{self, diagonal_plans, eval_noise_seed};
 use vmc_twin::studies::probing::{self, Probing};
 
+#[path = "shared/dev_model.rs"]
+mod dev_model;
 #[path = "shared/dev_states.rs"]
 mod dev_states;
-
-fn model(spec: &MachineSpec, seed: u64) -> HybridPredictor {
-    let dir = std::path::Path::new("target/probing-models");
-    let path = dir.join(format!("hybrid_seed{seed}.json"));
-    if let Ok(text) = std::fs::read_to_string(&path) {
-        return HybridPredictor::from_json_str(&text).unwrap();
-    }
-    let data = calibration::calibrate(
-        spec,
-        &ThermalCycle::calibration_plan(spec),
-        &CampaignConfig::new(seed),
-    )
-    .unwrap();
-    let s = campaign::fit_to_data(
-        Settings {
-            seed,
-            ..Settings::for_machine(spec)
-        },
-        &data,
-    );
-    let (h, _) = predictor::train_hybrid(&data, &spec.geometry(), &s).unwrap();
-    std::fs::create_dir_all(dir).unwrap();
-    std::fs::write(&path, h.to_json_string().unwrap()).unwrap();
-    h
-}
+use dev_model::model;
 
 fn main() {
     let spec = MachineSpec::reference();
     let mut seeds = vec![21u64, 22, 23];
     let mut every_min = 30.0;
     let mut walk = None;
-    let mut meas: Option<f64> = None;
     let mut gwalk: Option<f64> = None;
     let mut ginit: Option<f64> = None;
     let mut oinit: Option<f64> = None;
@@ -57,13 +35,16 @@ fn main() {
     let mut repeats: Option<usize> = None;
     let mut spheres: Option<usize> = None;
     let mut dev = false;
+    let mut passes: Option<usize> = None;
+    let mut top_repeats: Option<usize> = None;
+    let mut rate: Option<f64> = None;
+    let mut tau: Option<f64> = None;
     for a in std::env::args().skip(1) {
         let (k, v) = a.split_once('=').expect("key=value");
         match k {
             "seeds" => seeds = v.split(',').map(|s| s.parse().unwrap()).collect(),
             "every" => every_min = v.parse().unwrap(),
             "walk" => walk = Some(v.parse().unwrap()),
-            "meas" => meas = Some(v.parse().unwrap()),
             "states" => dev = v == "dev",
             "gwalk" => gwalk = Some(v.parse().unwrap()),
             "ginit" => ginit = Some(v.parse().unwrap()),
@@ -73,6 +54,10 @@ fn main() {
             "nograd" => nograd = v == "1",
             "repeats" => repeats = Some(v.parse().unwrap()),
             "spheres" => spheres = Some(v.parse().unwrap()),
+            "passes" => passes = Some(v.parse().unwrap()),
+            "toprep" => top_repeats = Some(v.parse().unwrap()),
+            "rate" => rate = Some(v.parse().unwrap()),
+            "tau" => tau = Some(v.parse().unwrap()),
             _ => panic!("unknown {k}"),
         }
     }
@@ -99,6 +84,18 @@ fn main() {
             if let Some(r) = repeats {
                 p.repeats = r;
             }
+            if let Some(r) = top_repeats {
+                p.top_repeats = r;
+            }
+            if let Some(n) = passes {
+                p.top_passes = n;
+            }
+            if let Some(r) = rate {
+                p.field.rate_sigma_um_per_min = r;
+            }
+            if let Some(t) = tau {
+                p.field.rate_tau_s = t;
+            }
             p.gradient = !nograd && !single;
             if ideal {
                 p.probe.repeatability_2sigma_um = 0.0;
@@ -116,9 +113,6 @@ fn main() {
             }
             if let Some(w) = oinit {
                 p.field.initial_offset_um = w;
-            }
-            if let Some(m) = meas {
-                p.field.measurement_sigma_um = m;
             }
             p
         });

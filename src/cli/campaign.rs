@@ -39,8 +39,9 @@ pub struct CampaignArgs {
     /// --out for `vmc-twin merge`.
     #[arg(long, value_name = "I/N")]
     pub shard: Option<String>,
-    /// Probe a reference sphere on the table every MIN minutes of every held-out run (from its
-    /// start) and correct the drift the model missed (see docs/usage.md, probing).
+    /// Probe four reference spheres on the table every MIN minutes of every held-out run (from
+    /// its start, and right before its diagonal) and correct the drift the model missed
+    /// (experimental; see docs/results.md, on-machine probing).
     #[arg(long, value_name = "MIN")]
     pub probe_every: Option<f64>,
     /// Also judge static compensation tables on the same held-out runs: per-joint and own+cross

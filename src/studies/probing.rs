@@ -1,13 +1,18 @@
 //! On-machine probing as a duty of its own in the campaign: every `every_s` of the thermal
 //! history (from its start, so also right before the measured program when the state's time is
 //! a multiple of the interval) the spindle stops, the probe is loaded, reference spheres on the
-//! table are touched (on each sphere +X and +Y at its equator and Z on its top, each touch
-//! repeated) and the spindle resumes its duty. The touches run on the twin's real, drifted
+//! table are touched (on each sphere +X and +Y at its equator, then the tops of all spheres,
+//! each touch repeated) and the spindle resumes its duty. The cycle runs in machine time: each
+//! touch happens at its own instant ([`run_cycle`]), the thermal history going on with the
+//! spindle stopped, because the model's Z residual moves by micrometres within minutes of a
+//! spindle stop (the front bearing cools, which no sensor sees in time; see
+//! docs/decisions/2026-11-28-probing-drift.md). The touches run on the twin's real, drifted
 //! geometry ([`vmc_machine::touch_probe`]); the controller sees only the latched axis positions
-//! and evaluates them with its own model ([`vmc_predict::drift`]), updating its drift estimate
-//! ([`DriftField`]) from four spheres not in one plane (three low in the table's corners, one
-//! on a tall column): an offset per axis by default, optionally a gradient per component too;
-//! or an offset from one sphere ([`Probing::single_sphere`], the first design, kept to compare).
+//! and evaluates each with its own model at the trip's instant ([`vmc_predict::drift`]),
+//! updating its drift estimate ([`DriftField`]) from four spheres not in one plane (three low in
+//! the table's corners, one on a tall column) in the order the touches were taken: an offset per
+//! axis by default, optionally a gradient per component too; or an offset from one sphere
+//! ([`Probing::single_sphere`], the first design, kept to compare).
 //!
 //! Each sphere's reference position is qualified once per machine and model: the same cycle on
 //! a cold machine (every node at the ambient's 20 °C, a noise stream of its own) with the model
@@ -20,7 +25,7 @@
 use vmc_machine::machine::MachineSpec;
 use vmc_machine::sim::{self, Controller};
 use vmc_machine::thermal::Activity;
-use vmc_machine::touch_probe::{Artefact, ProbeOnTwin, Touch, TouchProbe, Trip};
+use vmc_machine::touch_probe::{Artefact, ProbeOnTwin, Touch, TouchProbe};
 use vmc_machine::twin::{sub_seed, Twin, TwinError};
 use vmc_predict::controller::Compensator;
 use vmc_predict::drift::{
@@ -30,13 +35,16 @@ use vmc_predict::predictor::ErrorPredictor;
 
 use super::calibration::{drive_with, EvalState};
 
-/// Machine time of one probing cycle besides the touches, s: spindle stop and restart (2 × 3 s),
-/// probe in and out of the spindle (2 × 8 s), rapids to the first sphere and back (2 × 3 s).
-const CYCLE_OVERHEAD_S: f64 = 28.0;
+/// Machine time of a probing cycle before its first touch, s: spindle stop (3 s), probe into the
+/// spindle (8 s), rapid to the first sphere (3 s).
+const CYCLE_LEAD_S: f64 = 14.0;
+/// Machine time of a probing cycle after its last touch, s: rapid back (3 s), probe out (8 s),
+/// spindle restart (3 s).
+const CYCLE_TAIL_S: f64 = 14.0;
 /// Machine time of the rapid from one sphere to the next, s.
 const SPHERE_TO_SPHERE_S: f64 = 4.0;
 /// Machine time of one touch, s: a fast approach over the clearance, a 1 mm back-off, the slow
-/// touch at the probing feed, the retract and the move to the next start.
+/// touch at the probing feed, the retract and the move to the next start (the trip half-way).
 const TOUCH_TIME_S: f64 = 5.0;
 /// Touches per sphere with the field: +X, +Y at the equator, the top (the pre-travel of each
 /// direction cancels against the reference, so one side per axis suffices).
@@ -45,6 +53,9 @@ pub const FIELD_TOUCHES: [(usize, f64); 3] = [(0, 1.0), (1, 1.0), (2, -1.0)];
 pub const SPHERE_TOUCHES: [(usize, f64); 5] = [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0), (2, -1.0)];
 /// Cycles averaged into the artefacts' reference positions.
 const QUALIFY_CYCLES: usize = 8;
+/// Time in which the drift's rate fades, s (when a rate is estimated: `top_passes` 2 and
+/// [`FieldSettings::rate_sigma_um_per_min`] set).
+const RATE_TAU_S: f64 = 90.0;
 /// Clearance of each touch's start from the nominal contact, mm.
 const CLEARANCE_MM: f64 = 5.0;
 /// The machine's non-repeatability of one approach as the controller's maker states it, µm (σ
@@ -64,8 +75,13 @@ pub struct Probing {
     pub sphere_radius_mm: f64,
     /// Touches per sphere: axis and direction.
     pub touches: Vec<(usize, f64)>,
-    /// Repeats of each touch (averaged).
+    /// Repeats of each touch along X and Y (averaged).
     pub repeats: usize,
+    /// Repeats of each touch of a top (averaged): the Z drift matters most.
+    pub top_repeats: usize,
+    /// Passes over the spheres' tops per cycle: 1 (after the touches along X and Y) or 2 (one
+    /// before them too, which shows the Z drift's rate within the cycle).
+    pub top_passes: usize,
     /// The drift filter's assumptions (random walks, initial σ; the measurement σ follows
     /// from the probe and the repeats, [`Probing::measurement_sigma_um`]).
     pub field: FieldSettings,
@@ -76,11 +92,12 @@ pub struct Probing {
 impl Probing {
     /// Probing every `every_min` minutes with a typical probe as long as the machine's tool and
     /// four Ø25 mm reference spheres: three on 50 mm stems near the table's X−Y−, X+Y− and X−Y+
-    /// corners, one on a 300 mm column at the table's centre; each touched on +X, +Y and its
-    /// top, each touch three times. The drift is an offset per axis (walk 1 µm/√h, initial σ
+    /// corners, one on a 300 mm column at the table's centre; each touched on +X and +Y twice,
+    /// then the tops nine times each (the Z drift is what matters, and it moves fastest after
+    /// the stop: measured last). The drift is an offset per axis (walk 1 µm/√h, initial σ
     /// 0.7 µm: the model is trusted where it is good); the gradient (`gradient = true`, walks
-    /// 2 µm/m/√h, initial σ 2 µm/m) did worse on the development machines (seeds 21–23), see
-    /// docs/decisions/2026-11-28-probing-drift.md.
+    /// 2 µm/m/√h, initial σ 2 µm/m) and a fading rate did worse on the development machines
+    /// (seeds 21–29), see docs/decisions/2026-11-28-probing-drift.md.
     pub fn every(spec: &MachineSpec, every_min: f64) -> Self {
         let (min, max) = (spec.axes.travel_min_mm, spec.axes.travel_max_mm);
         let low_z = min[2] + 73.0;
@@ -96,13 +113,19 @@ impl Probing {
             ],
             sphere_radius_mm: 12.5,
             touches: FIELD_TOUCHES.to_vec(),
-            repeats: 3,
+            repeats: 2,
+            top_repeats: 9,
+            top_passes: 1,
             field: FieldSettings {
                 walk_offset_um_per_sqrt_h: 1.0,
                 walk_gradient_um_per_m_sqrt_h: 2.0,
                 measurement_sigma_um: 1.0,
                 initial_offset_um: 0.7,
                 initial_gradient_um_per_m: 2.0,
+                // No rate: touching the tops twice per cycle to see it did not pay on the
+                // development machines (the decision record).
+                rate_sigma_um_per_min: 1e-9,
+                rate_tau_s: RATE_TAU_S,
             },
             gradient: false,
         };
@@ -123,14 +146,50 @@ impl Probing {
 
     /// Touches per cycle.
     pub fn touches_per_cycle(&self) -> usize {
-        self.sphere_centres_mm.len() * self.touches.len() * self.repeats
+        self.sequence().len()
     }
 
-    /// Machine time of one cycle, s.
+    /// Repeats of a touch along `axis`.
+    fn repeats_of(&self, axis: usize) -> usize {
+        if axis == 2 {
+            self.top_repeats
+        } else {
+            self.repeats
+        }
+    }
+
+    /// The cycle's touches in the order the machine runs them: `(sphere, axis, direction)`,
+    /// each repeated. The touches along X and Y, sphere by sphere; then the tops, sphere by
+    /// sphere, so that the Z drift is measured last, nearest to the work that follows (the Z
+    /// residual moves fastest after the spindle stops: the decision record); with two top
+    /// passes the tops are touched before the X and Y touches too.
+    pub fn sequence(&self) -> Vec<(usize, usize, f64)> {
+        let pass = |z: bool| {
+            (0..self.sphere_centres_mm.len()).flat_map(move |i| {
+                self.touches
+                    .iter()
+                    .filter(move |t| (t.0 == 2) == z)
+                    .flat_map(move |t| std::iter::repeat_n((i, t.0, t.1), self.repeats_of(t.0)))
+            })
+        };
+        let mut seq: Vec<_> = if self.top_passes >= 2 {
+            pass(true).collect()
+        } else {
+            Vec::new()
+        };
+        seq.extend(pass(false));
+        seq.extend(pass(true));
+        seq
+    }
+
+    /// Machine time of one cycle, s: lead, touches, moves between spheres, tail.
     pub fn cycle_s(&self) -> f64 {
-        CYCLE_OVERHEAD_S
-            + SPHERE_TO_SPHERE_S * self.sphere_centres_mm.len().saturating_sub(1) as f64
-            + self.touches_per_cycle() as f64 * TOUCH_TIME_S
+        let seq = self.sequence();
+        let moves = seq.windows(2).filter(|w| w[0].0 != w[1].0).count();
+        CYCLE_LEAD_S
+            + CYCLE_TAIL_S
+            + SPHERE_TO_SPHERE_S * moves as f64
+            + seq.len() as f64 * TOUCH_TIME_S
     }
 
     /// Machine minutes spent probing per hour of duty.
@@ -138,17 +197,21 @@ impl Probing {
         self.cycle_s() / 60.0 * 3600.0 / self.every_s
     }
 
-    /// σ of one sphere's position per axis from one cycle, µm: one touch's σ (the probe's
-    /// repeatability and latency, the machine's approach scatter) over the touches of the axis
-    /// least touched.
-    pub fn measurement_sigma_um(&self) -> f64 {
+    /// σ of one sphere's position along `axis` from one cycle, µm: one touch's σ (the probe's
+    /// repeatability and latency, the machine's approach scatter) over the touches along it in
+    /// one group; None for an axis not touched.
+    pub fn axis_sigma_um(&self, axis: usize) -> Option<f64> {
         let per_touch = (self.probe.sigma_mm() * 1e3).hypot(APPROACH_SIGMA_UM);
-        let least = (0..3)
-            .map(|a| self.touches.iter().filter(|t| t.0 == a).count())
-            .filter(|&n| n > 0)
-            .min()
-            .unwrap_or(1);
-        per_touch / ((least * self.repeats.max(1)) as f64).sqrt()
+        let n = self.touches.iter().filter(|t| t.0 == axis).count() * self.repeats_of(axis);
+        (n > 0).then(|| per_touch / (n as f64).sqrt())
+    }
+
+    /// σ of one sphere's position per axis from one cycle, µm, for the axis least touched
+    /// (the drift field's default measurement σ; [`Probing::axis_sigma_um`] per axis).
+    pub fn measurement_sigma_um(&self) -> f64 {
+        (0..3)
+            .filter_map(|a| self.axis_sigma_um(a))
+            .fold(f64::NAN, f64::max)
     }
 
     /// The spheres' centroid, mm (the drift field's centre).
@@ -165,7 +228,13 @@ impl Probing {
             s.initial_gradient_um_per_m = 1e-9;
             s.walk_gradient_um_per_m_sqrt_h = 1e-9;
         }
-        DriftField::new(self.centroid_mm(), &s)
+        let mut f = DriftField::new(self.centroid_mm(), &s)?;
+        for a in 0..3 {
+            if let Some(sigma) = self.axis_sigma_um(a) {
+                f.set_measurement_sigma_um(a, sigma)?;
+            }
+        }
+        Ok(f)
     }
 
     fn artefact(&self, centre_mm: [f64; 3]) -> Artefact {
@@ -175,24 +244,18 @@ impl Probing {
         }
     }
 
-    /// The touches' starts on the sphere at `centre_mm`, from the nominal contact out by the
-    /// clearance.
-    fn touches_of(&self, centre_mm: [f64; 3]) -> Vec<Touch> {
+    /// The touch along `axis` in direction `sign` onto the sphere at `centre_mm`: its start
+    /// from the nominal contact out by the clearance.
+    fn touch_of(&self, centre_mm: [f64; 3], axis: usize, sign: f64) -> Touch {
         let rc = self.sphere_radius_mm + self.probe.ball_radius_mm;
-        self.touches
-            .iter()
-            .flat_map(|t| std::iter::repeat_n(*t, self.repeats))
-            .map(|(axis, sign)| {
-                let mut start = centre_mm;
-                start[axis] -= sign * (rc + CLEARANCE_MM);
-                Touch {
-                    start_mm: start,
-                    axis,
-                    sign,
-                    max_travel_mm: 2.0 * CLEARANCE_MM,
-                }
-            })
-            .collect()
+        let mut start = centre_mm;
+        start[axis] -= sign * (rc + CLEARANCE_MM);
+        Touch {
+            start_mm: start,
+            axis,
+            sign,
+            max_travel_mm: 2.0 * CLEARANCE_MM,
+        }
     }
 }
 
@@ -203,53 +266,123 @@ pub struct Qualified {
     pub spheres: Vec<ArtefactFix>,
 }
 
-/// One cycle's touches on `twin` at its present state, as the controller latched them, per
-/// sphere.
-fn touch_all(
-    p: &Probing,
+/// One touch of a cycle as the controller evaluated it at the instant of its trip.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TouchReading {
+    /// Index of the sphere in [`Probing::sphere_centres_mm`].
+    pub sphere: usize,
+    /// Touched axis (0 X, 1 Y, 2 Z).
+    pub axis: usize,
+    /// Latched axis command, mm.
+    pub at_mm: [f64; 3],
+    /// The sphere's position along `axis` as the model saw it then, mm: `q + E_pred(q)` (plus
+    /// the reversal shift of a negative touch), [`artefact_position_mm`].
+    pub position_mm: f64,
+    /// Twin time of the trip, s.
+    pub time_s: f64,
+}
+
+/// Runs one probing cycle on `twin` from now, in machine time: the lead (spindle stopping, probe
+/// in), each touch of [`Probing::sequence`] at its own instant with the moves between spheres,
+/// the tail; the spindle stands still throughout and `ctrl` follows the readings. Each trip is
+/// evaluated at its instant with the model `model(ctrl)` (the model alone, as the controller
+/// would log it when the trip latches).
+///
+/// # Errors
+/// A simulation error, or a probe setting that is not usable.
+pub fn run_cycle<C: Controller, P: ErrorPredictor>(
     twin: &mut Twin,
+    p: &Probing,
+    ctrl: &mut C,
+    model: fn(&mut C) -> &mut P,
     on_twin: &mut ProbeOnTwin,
-) -> Result<Vec<Vec<LatchedTouch>>, TwinError> {
-    let mut out = Vec::new();
-    for &centre in &p.sphere_centres_mm {
-        let mut latched = Vec::new();
-        for t in p.touches_of(centre) {
-            let trip: Option<Trip> = on_twin
-                .touch(twin, &p.artefact(centre), &t)
-                .map_err(|e| TwinError::Sensors(format!("probing: {e}")))?;
-            if let Some(trip) = trip {
-                latched.push(LatchedTouch {
-                    axis_mm: trip.axis_mm,
-                    axis: t.axis,
-                    sign: t.sign,
+) -> Result<Vec<TouchReading>, TwinError> {
+    let seq = p.sequence();
+    let first = seq.first().map_or([0.0; 3], |t| p.sphere_centres_mm[t.0]);
+    park(twin, first, CYCLE_LEAD_S, ctrl)?;
+    let mut out = Vec::with_capacity(seq.len());
+    let mut last_sphere = seq.first().map(|t| t.0);
+    let mut at = first;
+    for (sphere, axis, sign) in seq {
+        let centre = p.sphere_centres_mm[sphere];
+        if last_sphere != Some(sphere) {
+            park(twin, centre, SPHERE_TO_SPHERE_S, ctrl)?;
+            last_sphere = Some(sphere);
+        }
+        at = centre;
+        park(twin, centre, 0.5 * TOUCH_TIME_S, ctrl)?;
+        let trip = on_twin
+            .touch(twin, &p.artefact(centre), &p.touch_of(centre, axis, sign))
+            .map_err(|e| TwinError::Sensors(format!("probing: {e}")))?;
+        if let Some(trip) = trip {
+            let latched = LatchedTouch {
+                axis_mm: trip.axis_mm,
+                axis,
+                sign,
+            };
+            if let Some(position_mm) = artefact_position_mm(model(ctrl), &[latched])[axis] {
+                out.push(TouchReading {
+                    sphere,
+                    axis,
+                    at_mm: trip.axis_mm,
+                    position_mm,
+                    time_s: twin.time_s(),
                 });
             }
         }
-        out.push(latched);
+        park(twin, centre, 0.5 * TOUCH_TIME_S, ctrl)?;
     }
+    park(twin, at, CYCLE_TAIL_S, ctrl)?;
     Ok(out)
 }
 
-/// Where the touches of each axis were latched, mean axis position (mm): where that axis's
-/// measurement of the drift applies.
-fn latched_at_mm(touches: &[LatchedTouch]) -> [Option<[f64; 3]>; 3] {
-    [0, 1, 2].map(|a| {
-        let of: Vec<_> = touches.iter().filter(|t| t.axis == a).collect();
-        (!of.is_empty()).then(|| {
-            [0, 1, 2].map(|k| of.iter().map(|t| t.axis_mm[k]).sum::<f64>() / of.len() as f64)
-        })
-    })
+/// One group of a cycle's readings: the successive touches of one sphere along one axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Group {
+    sphere: usize,
+    axis: usize,
+    /// Mean latched position, mm.
+    at_mm: [f64; 3],
+    /// Mean position along the axis as the model saw it, mm.
+    position_mm: f64,
+    /// Mean trip time, s.
+    time_s: f64,
 }
 
-/// The spindle stopped with the axes parked at the first sphere for `dt_s`, the controller
-/// following.
-fn park(
+/// The readings averaged over each run of successive touches of one sphere along one axis (a
+/// sphere's tops in two passes are two groups), in the cycle's order.
+fn groups(readings: &[TouchReading]) -> Vec<Group> {
+    let mut out: Vec<Vec<&TouchReading>> = Vec::new();
+    for r in readings {
+        match out.last_mut() {
+            Some(g) if g[0].sphere == r.sphere && g[0].axis == r.axis => g.push(r),
+            _ => out.push(vec![r]),
+        }
+    }
+    out.into_iter()
+        .map(|g| {
+            let n = g.len() as f64;
+            Group {
+                sphere: g[0].sphere,
+                axis: g[0].axis,
+                at_mm: [0, 1, 2].map(|k| g.iter().map(|r| r.at_mm[k]).sum::<f64>() / n),
+                position_mm: g.iter().map(|r| r.position_mm).sum::<f64>() / n,
+                time_s: g.iter().map(|r| r.time_s).sum::<f64>() / n,
+            }
+        })
+        .collect()
+}
+
+/// The spindle stopped with the axes parked at `at_mm` for `dt_s`, the controller following.
+///
+/// # Errors
+/// A simulation error.
+pub fn park(
     twin: &mut Twin,
-    p: &Probing,
+    at_mm: [f64; 3],
     dt_s: f64,
     ctrl: &mut dyn Controller,
 ) -> Result<(), TwinError> {
-    let at_mm = p.sphere_centres_mm.first().copied().unwrap_or([0.0; 3]);
     let mut left = dt_s;
     while left > 1e-9 {
         let dt = left.min(1.0);
@@ -288,16 +421,16 @@ pub fn qualify<P: ErrorPredictor + Clone>(
     let mut sum = vec![[0.0; 3]; n_spheres];
     let mut n = vec![[0usize; 3]; n_spheres];
     for _ in 0..QUALIFY_CYCLES {
-        park(&mut twin, p, 0.5 * p.cycle_s(), &mut ctrl)?;
-        let touches = touch_all(p, &mut twin, &mut on_twin)?;
-        for (i, t) in touches.iter().enumerate() {
-            let position = artefact_position_mm(ctrl.predictor_mut(), t);
-            for a in 0..3 {
-                if let Some(v) = position[a] {
-                    sum[i][a] += v;
-                    n[i][a] += 1;
-                }
-            }
+        let readings = run_cycle(
+            &mut twin,
+            p,
+            &mut ctrl,
+            Compensator::predictor_mut,
+            &mut on_twin,
+        )?;
+        for g in groups(&readings) {
+            sum[g.sphere][g.axis] += g.position_mm;
+            n[g.sphere][g.axis] += 1;
         }
     }
     Ok(Qualified {
@@ -309,8 +442,27 @@ pub fn qualify<P: ErrorPredictor + Clone>(
     })
 }
 
+/// A cycle's drift measurements: per group of successive touches of one sphere along one axis
+/// `(time s, component, latched at mm, drift mm)`, the drift being the sphere's reference minus
+/// its position as the model saw it, in the cycle's order.
+pub fn drift_measurements(
+    readings: &[TouchReading],
+    fix: &Qualified,
+) -> Vec<(f64, usize, [f64; 3], f64)> {
+    groups(readings)
+        .into_iter()
+        .filter_map(|g| {
+            let sphere = fix.spheres.get(g.sphere)?;
+            let mut position = [None; 3];
+            position[g.axis] = Some(g.position_mm);
+            let drift = sphere.drift_mm(position)[g.axis]?;
+            Some((g.time_s, g.axis, g.at_mm, drift))
+        })
+        .collect()
+}
+
 /// One probing cycle on `twin`: the touches, evaluated with the model alone, update the drift
-/// field of `ctrl`.
+/// field of `ctrl` in the order they were taken.
 fn probe_cycle<P: ErrorPredictor>(
     twin: &mut Twin,
     p: &Probing,
@@ -318,21 +470,12 @@ fn probe_cycle<P: ErrorPredictor>(
     ctrl: &mut Compensator<WithDrift<P, DriftField>>,
     on_twin: &mut ProbeOnTwin,
 ) -> Result<(), TwinError> {
-    park(twin, p, 0.5 * p.cycle_s(), ctrl)?;
-    let touches = touch_all(p, twin, on_twin)?;
-    let model = ctrl.predictor_mut();
-    let mut measurements = Vec::new();
-    for (t, sphere) in touches.iter().zip(&fix.spheres) {
-        let drift = sphere.drift_mm(artefact_position_mm(model.inner_mut(), t));
-        let at = latched_at_mm(t);
-        for a in 0..3 {
-            if let (Some(d), Some(at)) = (drift[a], at[a]) {
-                measurements.push((a, at, d));
-            }
-        }
+    let readings = run_cycle(twin, p, ctrl, |c| c.predictor_mut().inner_mut(), on_twin)?;
+    let filter = ctrl.predictor_mut().filter_mut();
+    for (time_s, axis, at_mm, drift_mm) in drift_measurements(&readings, fix) {
+        filter.update(time_s, &[(axis, at_mm, drift_mm)]);
     }
-    model.filter_mut().update(twin.time_s(), &measurements);
-    park(twin, p, 0.5 * p.cycle_s(), ctrl)
+    Ok(())
 }
 
 /// Drives `twin` through `state`'s history with probing cycles every [`Probing::every_s`] of
@@ -428,3 +571,6 @@ pub fn run_at_state_probed<P: ErrorPredictor>(
     )?;
     Ok(log.points)
 }
+
+#[cfg(test)]
+mod tests;

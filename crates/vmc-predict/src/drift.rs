@@ -42,6 +42,9 @@ pub use field::{DriftField, FieldSettings};
 pub trait DriftModel {
     /// The estimated drift at axis position `q_mm`, mm per component.
     fn drift_at_mm(&self, q_mm: [f64; 3]) -> [f64; 3];
+
+    /// Notes the present time, s (for a model whose estimate moves on between probings).
+    fn observe_time(&mut self, _time_s: f64) {}
 }
 
 impl DriftModel for DriftFilter {
@@ -56,6 +59,10 @@ impl DriftModel for DriftField {
     #[inline]
     fn drift_at_mm(&self, q_mm: [f64; 3]) -> [f64; 3] {
         DriftField::drift_at_mm(self, q_mm)
+    }
+
+    fn observe_time(&mut self, time_s: f64) {
+        DriftField::observe_time(self, time_s);
     }
 }
 
@@ -199,6 +206,7 @@ impl<P: ErrorPredictor, D: DriftModel> ErrorPredictor for WithDrift<P, D> {
 
     fn observe_readings(&mut self, time_s: f64, temps_degc: &[f64]) {
         self.inner.observe_readings(time_s, temps_degc);
+        self.filter.observe_time(time_s);
     }
 
     fn observe_spindle_speed(&mut self, time_s: f64, rpm: f64) {

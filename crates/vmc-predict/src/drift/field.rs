@@ -1,7 +1,7 @@
 //! The drift the model misses as a linear field over the working volume, estimated from probed
 //! artefacts at several places: per error component `k`, `d_k(q) = b_k + g_k · (q − q₀)` with an
 //! offset `b_k` (mm) and a gradient `g_k` (mm per mm) about a centre `q₀` (mm, the artefacts'
-//! centroid, fixed when the filter is made).
+//! centroid, fixed when the filter is made); the offset moves on with a fading rate `v_k`.
 //!
 //! **Why a field.** One artefact sees the residual at one place; the residual of a warm machine
 //! varies over the volume (a tilt of the spindle head makes `Ex` change with `Z`, an expansion
@@ -9,18 +9,34 @@
 //! corner applied everywhere can double the error in the opposite corner. Artefacts at four
 //! places not in one plane determine the whole first-order field.
 //!
-//! **Estimator**, stated: per component an independent Kalman filter of the state
-//! `x_k = [b_k, g_kx, g_ky, g_kz]`, each a random walk (`b` by `walk_offset` µm/√h, each
-//! gradient by `walk_gradient` µm per metre per √h), the initial state 0 with σ `initial_offset`
-//! µm and `initial_gradient` µm/m. A measurement of component `k` at axis position `p` is
-//! `y = b_k + g_k · (p − q₀) + v`, `v ~ N(0, r)`: each scalar measurement is one update with
-//! `H = [1, p − q₀]` (taken in turn, which is exact for independent noises). The gradient's
-//! prior keeps it near 0 where the artefacts do not see it (all artefacts at one height: no Z
-//! gradient).
+//! **Why a fading rate.** Probing stops the spindle, and in the minutes after a stop the model's
+//! residual moves fast (the spindle's front bearing cools, which no sensor sees in time: several
+//! µm in 5 min on the reference machine). The offset measured during a cycle is already behind
+//! when the work resumes. A rate that persists would run away over the hour to the next cycle; a
+//! rate that fades with a time constant `τ` (an Ornstein–Uhlenbeck process, stationary σ
+//! `rate_sigma`) carries the offset on by at most `v·τ`, and is seen by touching the same
+//! artefacts twice in a cycle.
 //!
-//! Units: mm, mm/mm and s in the state; µm, µm/m and hours in the settings where the names say so.
+//! **Estimator**, stated: per component an independent Kalman filter of the state
+//! `x_k = [b_k, g_kx, g_ky, g_kz, v_k]`: `b` and each gradient random walks (`b` by
+//! `walk_offset` µm/√h, each gradient by `walk_gradient` µm per metre per √h); over `Δt`,
+//! `b ← b + v·τ·(1 − e^(−Δt/τ))`, `v ← v·e^(−Δt/τ)` with the rate's noise keeping its
+//! stationary variance. The initial state is 0 with σ `initial_offset` µm, `initial_gradient`
+//! µm/m and `rate_sigma`. A measurement of component `k` at axis position `p` and time `t` is
+//! `y = b_k + g_k · (p − q₀) + v`, `v ~ N(0, r)`: each scalar measurement is one update with
+//! `H = [1, p − q₀, 0]` after the prediction to `t`. The gradient's prior keeps it near 0 where
+//! the artefacts do not see it (all artefacts at one height: no Z gradient). Between updates the
+//! field is forecast to the time last observed ([`DriftField::observe_time`]).
+//!
+//! Units: mm, mm/mm, mm/s and s in the state; µm, µm/m, µm/min and hours in the settings where
+//! the names say so.
 
-use nalgebra::{Matrix4, Vector4};
+use nalgebra::{SMatrix, SVector};
+
+/// State of one component: offset, three gradient terms, the offset's rate.
+type State = SVector<f64, 5>;
+/// Its covariance.
+type Cov = SMatrix<f64, 5, 5>;
 
 use super::DriftSettingError;
 
@@ -37,6 +53,10 @@ pub struct FieldSettings {
     pub initial_offset_um: f64,
     /// σ of each gradient term before any probing, µm/m.
     pub initial_gradient_um_per_m: f64,
+    /// Stationary σ of the offset's rate, µm per minute (a tiny value: no rate).
+    pub rate_sigma_um_per_min: f64,
+    /// Time in which the rate fades, s.
+    pub rate_tau_s: f64,
 }
 
 impl FieldSettings {
@@ -50,6 +70,8 @@ impl FieldSettings {
             ("measurement_sigma_um", self.measurement_sigma_um),
             ("initial_offset_um", self.initial_offset_um),
             ("initial_gradient_um_per_m", self.initial_gradient_um_per_m),
+            ("rate_sigma_um_per_min", self.rate_sigma_um_per_min),
+            ("rate_tau_s", self.rate_tau_s),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(DriftSettingError { field, value });
@@ -59,16 +81,24 @@ impl FieldSettings {
     }
 }
 
-/// The offset-and-gradient drift filter (module doc).
+/// The offset-and-gradient drift filter with a fading rate of the offset (module doc).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriftField {
     centre_mm: [f64; 3],
-    /// Walk rate per state element, mm² (or (mm/mm)²) per s.
-    walk_per_s: Vector4<f64>,
-    measurement_mm2: f64,
-    state: [Vector4<f64>; 3],
-    cov: [Matrix4<f64>; 3],
+    /// Walk rate of the offset and the gradient terms, mm² (or (mm/mm)²) per s; the rate's
+    /// entry is unused (its noise follows from its stationary variance).
+    walk_per_s: State,
+    /// Stationary variance of the rate, (mm/s)².
+    rate_var: f64,
+    rate_tau_s: f64,
+    /// Variance of one scalar measurement per component, mm².
+    measurement_mm2: [f64; 3],
+    state: [State; 3],
+    cov: [Cov; 3],
+    /// Time the state refers to, s (None before the first update).
     updated_s: Option<f64>,
+    /// Latest time observed, s (the forecast's time).
+    now_s: Option<f64>,
 }
 
 impl DriftField {
@@ -87,40 +117,108 @@ impl DriftField {
         let mm2 = |um: f64| (um * 1e-3).powi(2);
         // A gradient of 1 µm/m is 1e-6 mm/mm.
         let grad2 = |um_per_m: f64| (um_per_m * 1e-6).powi(2);
-        let walk_per_s = Vector4::new(
+        let g_walk = grad2(settings.walk_gradient_um_per_m_sqrt_h);
+        let walk_per_s = State::from([
             mm2(settings.walk_offset_um_per_sqrt_h),
-            grad2(settings.walk_gradient_um_per_m_sqrt_h),
-            grad2(settings.walk_gradient_um_per_m_sqrt_h),
-            grad2(settings.walk_gradient_um_per_m_sqrt_h),
-        ) / 3600.0;
-        let p0 = Matrix4::from_diagonal(&Vector4::new(
+            g_walk,
+            g_walk,
+            g_walk,
+            0.0,
+        ]) / 3600.0;
+        let rate_var = (settings.rate_sigma_um_per_min * 1e-3 / 60.0).powi(2);
+        let g0 = grad2(settings.initial_gradient_um_per_m);
+        let p0 = Cov::from_diagonal(&State::from([
             mm2(settings.initial_offset_um),
-            grad2(settings.initial_gradient_um_per_m),
-            grad2(settings.initial_gradient_um_per_m),
-            grad2(settings.initial_gradient_um_per_m),
-        ));
+            g0,
+            g0,
+            g0,
+            rate_var,
+        ]));
         Ok(DriftField {
             centre_mm,
             walk_per_s,
-            measurement_mm2: mm2(settings.measurement_sigma_um),
-            state: [Vector4::zeros(); 3],
+            rate_var,
+            rate_tau_s: settings.rate_tau_s,
+            measurement_mm2: [mm2(settings.measurement_sigma_um); 3],
+            state: [State::zeros(); 3],
             cov: [p0; 3],
             updated_s: None,
+            now_s: None,
         })
     }
 
+    /// The transition over `dt_s`: `(F, Q)`.
+    fn transition(&self, dt_s: f64) -> (Cov, Cov) {
+        let fade = (-dt_s / self.rate_tau_s).exp();
+        let mut f = Cov::identity();
+        f[(0, 4)] = self.rate_tau_s * (1.0 - fade);
+        f[(4, 4)] = fade;
+        let mut q = Cov::from_diagonal(&(self.walk_per_s * dt_s));
+        q[(4, 4)] = self.rate_var * (1.0 - fade * fade);
+        (f, q)
+    }
+
+    /// Sets the σ of one measurement of component `k` (0 X, 1 Y, 2 Z) to `sigma_um` µm, when
+    /// the components are measured with different care (more touches along Z).
+    ///
+    /// # Errors
+    /// A σ that is not finite and > 0, or a component beyond 2.
+    pub fn set_measurement_sigma_um(
+        &mut self,
+        k: usize,
+        sigma_um: f64,
+    ) -> Result<(), DriftSettingError> {
+        if k > 2 {
+            return Err(DriftSettingError {
+                field: "component",
+                value: k as f64,
+            });
+        }
+        if !(sigma_um.is_finite() && sigma_um > 0.0) {
+            return Err(DriftSettingError {
+                field: "measurement_sigma_um",
+                value: sigma_um,
+            });
+        }
+        self.measurement_mm2[k] = (sigma_um * 1e-3).powi(2);
+        Ok(())
+    }
+
+    /// Notes the present time, s: [`Self::drift_at_mm`] forecasts the state to it.
+    pub fn observe_time(&mut self, time_s: f64) {
+        if time_s.is_finite() {
+            self.now_s = Some(time_s);
+        }
+    }
+
+    /// The state of component `k` forecast to the time last observed.
+    fn forecast(&self, k: usize) -> State {
+        let dt_s = match (self.updated_s, self.now_s) {
+            (Some(u), Some(n)) if n > u => n - u,
+            _ => return self.state[k],
+        };
+        self.transition(dt_s).0 * self.state[k]
+    }
+
     /// The estimated drift at axis position `q_mm`, mm per component (what
-    /// [`super::WithDrift`] adds to the prediction).
+    /// [`super::WithDrift`] adds to the prediction), forecast to the time last observed.
     #[inline]
     pub fn drift_at_mm(&self, q_mm: [f64; 3]) -> [f64; 3] {
         let d = [0, 1, 2].map(|a| q_mm[a] - self.centre_mm[a]);
-        self.state
-            .map(|x| x[0] + x[1] * d[0] + x[2] * d[1] + x[3] * d[2])
+        [0, 1, 2].map(|k| {
+            let x = self.forecast(k);
+            x[0] + x[1] * d[0] + x[2] * d[1] + x[3] * d[2]
+        })
     }
 
-    /// The offset per component, mm (the drift at the centre).
+    /// The offset per component at the last update, mm (the drift at the centre).
     pub fn offset_mm(&self) -> [f64; 3] {
         self.state.map(|x| x[0])
+    }
+
+    /// The offset's rate per component at the last update, mm per s.
+    pub fn rate_mm_per_s(&self) -> [f64; 3] {
+        self.state.map(|x| x[4])
     }
 
     /// The gradient of component `k` (0 X, 1 Y, 2 Z) along X, Y, Z, mm per mm.
@@ -131,28 +229,31 @@ impl DriftField {
 
     /// One probing cycle's measurements at time `time_s` (s): each `(component, at_mm,
     /// drift_mm)` says the drift of that component at axis position `at_mm` was measured as
-    /// `drift_mm`. The walk since the last cycle is added first. Measurements that are not
-    /// finite or name no component are ignored. Returns how many were used.
+    /// `drift_mm`. The state is predicted to `time_s` first (a time before the last update
+    /// counts as the same time). Measurements that are not finite or name no component are
+    /// ignored. Returns how many were used.
     pub fn update(&mut self, time_s: f64, measurements: &[(usize, [f64; 3], f64)]) -> usize {
         let dt_s = self.updated_s.map_or(0.0, |t| (time_s - t).max(0.0));
-        let walk = Matrix4::from_diagonal(&(self.walk_per_s * dt_s));
-        for p in &mut self.cov {
-            *p += walk;
+        let (f, q) = self.transition(dt_s);
+        for k in 0..3 {
+            self.state[k] = f * self.state[k];
+            self.cov[k] = f * self.cov[k] * f.transpose() + q;
         }
-        self.updated_s = Some(time_s);
+        self.updated_s = Some(self.updated_s.map_or(time_s, |t| t.max(time_s)));
         let mut used = 0;
         for &(k, at_mm, y) in measurements {
             if k > 2 || !y.is_finite() || at_mm.iter().any(|v| !v.is_finite()) {
                 continue;
             }
-            let h = Vector4::new(
+            let h = State::from([
                 1.0,
                 at_mm[0] - self.centre_mm[0],
                 at_mm[1] - self.centre_mm[1],
                 at_mm[2] - self.centre_mm[2],
-            );
+                0.0,
+            ]);
             let ph = self.cov[k] * h;
-            let s = h.dot(&ph) + self.measurement_mm2;
+            let s = h.dot(&ph) + self.measurement_mm2[k];
             let gain = ph / s;
             let innovation = y - h.dot(&self.state[k]);
             self.state[k] += gain * innovation;
@@ -177,6 +278,8 @@ mod tests {
             measurement_sigma_um: 0.3,
             initial_offset_um: 10.0,
             initial_gradient_um_per_m: 20.0,
+            rate_sigma_um_per_min: 1e-9,
+            rate_tau_s: 120.0,
         }
     }
 
@@ -254,5 +357,35 @@ mod tests {
         let used = f.update(0.0, &[(3, [0.0; 3], 0.001), (0, [0.0; 3], f64::NAN)]);
         assert_eq!(used, 0);
         assert_eq!(f.drift_at_mm([100.0, 0.0, 0.0]), [0.0; 3]);
+    }
+
+    #[test]
+    fn a_rate_seen_within_a_cycle_carries_the_offset_on_and_then_fades() {
+        let s = FieldSettings {
+            rate_sigma_um_per_min: 1.0,
+            rate_tau_s: 100.0,
+            measurement_sigma_um: 0.05,
+            ..settings()
+        };
+        let mut f = DriftField::new([0.0; 3], &s).unwrap();
+        // Ez drift rising at 0.5 µm/min, measured at 0, 60, 120 s.
+        for k in 0..3 {
+            let t = 60.0 * k as f64;
+            f.update(t, &[(2, [0.0; 3], 0.5e-3 * t / 60.0)]);
+        }
+        let at = |f: &mut DriftField, t: f64| {
+            f.observe_time(t);
+            f.drift_at_mm([0.0; 3])[2] * 1e3
+        };
+        let now = at(&mut f, 120.0);
+        let later = at(&mut f, 180.0);
+        let much_later = at(&mut f, 7200.0);
+        assert!(later > now + 0.1, "{now} then {later}");
+        // It fades: an hour on it has moved by at most rate × τ.
+        assert!(
+            much_later - now < 0.5e-3 / 60.0 * 100.0 * 1e3 * 1.5,
+            "{much_later}"
+        );
+        assert!((much_later - at(&mut f, 3600.0)).abs() < 1e-3);
     }
 }
