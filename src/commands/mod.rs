@@ -23,6 +23,7 @@ pub mod probe_campaign;
 pub mod program_placement;
 pub mod run;
 pub mod run_fiveaxis;
+mod run_stream;
 pub mod select_sensors;
 pub mod select_shard;
 pub mod thermal;

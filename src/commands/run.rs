@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
+use super::run_stream::{self, ProgramScan, Spill};
 use super::{wrote_recording, RrdOutput};
 use crate::files;
 use crate::predict::controller::Compensator;
@@ -16,7 +17,6 @@ use crate::progress::Progress;
 use crate::record;
 use crate::report::{self, RunLog, RunSummary};
 use vmc_machine::machine::MachineSpec;
-use vmc_machine::motion::{Plan, SegmentKind};
 use vmc_machine::program;
 use vmc_machine::setup::Placement;
 use vmc_machine::sim::{self, Observer, RunStart, SampleMode, SimConfig};
@@ -72,11 +72,7 @@ struct Sampling {
 /// At the program's dwells (G4) as in a diagonal test; during motion with `--every-cycle`;
 /// during motion every [`RunConfig::motion_sample_s`] for a program without dwells (it would
 /// have no measurement point at all).
-fn sampling(cfg: &RunConfig, plan: &Plan) -> Result<Sampling> {
-    let has_dwell = plan
-        .segments()
-        .iter()
-        .any(|s| matches!(s.kind, SegmentKind::Dwell));
+fn sampling(cfg: &RunConfig, has_dwell: bool) -> Result<Sampling> {
     let cycle_ms = cfg.sim.interp_cycle_s() * 1e3;
     Ok(if cfg.every_cycle {
         Sampling {
@@ -138,7 +134,7 @@ type RunController = Guarded<Compensator<AnyPredictor>>;
 pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     let machine = &cfg.machine;
     // Check everything the user gave before minutes of simulation: programs and outputs.
-    let (warmups, plan, sampling) = load_plans(cfg)?;
+    let (warmups, scan, sampling) = load_plans(cfg)?;
     let out_files =
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let (mut controller, ranges_known) = match &cfg.model {
@@ -148,7 +144,21 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         }
         None => (None, false),
     };
-    let (log, recorder) = simulate(cfg, &sampling, &warmups, &plan, controller.as_mut())?;
+    // The rows go out as the points come: the table to a temporary file until the report is
+    // printed, samples.csv to its temporary file, named when the run has succeeded.
+    let mut table = Spill::new()?;
+    let mut csv = match &out_files {
+        Some((csv, _)) => Some(files::AtomicFile::create(csv, cfg.force)?),
+        None => None,
+    };
+    let compensated = controller.is_some();
+    let mut log = report::RunLog::new(
+        compensated,
+        table.writer(),
+        csv.as_mut().map(|f| f as &mut dyn Write),
+    );
+    let recorder = simulate(cfg, &sampling, &warmups, &scan, controller.as_mut(), &mut log)?;
+    log.check().context("writing the run's table")?;
 
     let warmup_names: Vec<String> = cfg
         .warmups
@@ -193,21 +203,31 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
             );
         }
     }
-    // The report goes to `out` and, with --rrd, into the recording.
-    let text = report_text(cfg, &sampling, &log, &summary)?;
-    out.write_all(text.as_bytes())?;
+    // The report goes to `out` and, with --rrd, into the recording (its table cut short).
+    let head = report_head(cfg, &sampling, &log, &summary)?;
+    drop(log);
+    let mut tail: Vec<u8> = Vec::new();
+    report::write_summary(&summary, &mut tail)?;
+    let tail = String::from_utf8_lossy(&tail).to_string();
+    out.write_all(head.as_bytes())?;
+    table.copy_to(out)?;
+    out.write_all(tail.as_bytes())?;
     if let (Some((rec, file)), Some(rrd)) = (recorder, &cfg.rrd) {
-        let md = record::run_markdown(&text, rrd.settings.magnify, controller.is_some());
+        let text = format!(
+            "{head}{}{tail}",
+            table.head(run_stream::RECORDED_TABLE_ROWS)?
+        );
+        let md = record::run_markdown(&text, rrd.settings.magnify, compensated);
         rec.finish(Some(&md))?;
         let path = file.path().to_path_buf();
         let bytes = file.finish()?;
         wrote_recording(out, &path, bytes, "")?;
     }
-    if let Some((csv, json)) = out_files {
-        files::write_atomic(&csv, log.samples_csv().as_bytes(), cfg.force)?;
+    if let (Some((csv_path, json)), Some(csv)) = (out_files, csv) {
+        csv.finish()?;
         let text = serde_json::to_string_pretty(&summary)?;
         files::write_atomic(&json, text.as_bytes(), cfg.force)?;
-        writeln!(out, "wrote {} and {}", csv.display(), json.display())?;
+        writeln!(out, "wrote {} and {}", csv_path.display(), json.display())?;
     }
     Ok(())
 }
@@ -233,9 +253,9 @@ impl Warmup {
     }
 }
 
-/// The warm-ups (every piece planned and checked once, then dropped) and the program's plan,
-/// each starting where the previous one ends; the run's size checked.
-fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan, Sampling)> {
+/// The warm-ups and the measured program (every piece planned and checked once, then
+/// dropped), each starting where the previous one ends; the run's size checked.
+fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, ProgramScan, Sampling)> {
     let mut start = cfg.machine.axes.home_mm;
     let mut warmups = Vec::new();
     for w in &cfg.warmups {
@@ -254,24 +274,17 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan, Sampling)> {
         warmup.duration_s = duration_s;
         warmups.push(warmup);
     }
-    let (plan, _) = program::load_plan_placed(
-        &cfg.program,
-        &cfg.machine,
-        start,
-        &cfg.tools,
-        &cfg.placement,
-        true,
-    )?;
-    let sampling = sampling(cfg, &plan)?;
-    let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + plan.duration_s();
+    let scan = run_stream::scan(cfg, start, cfg.rrd.is_some())?;
+    let sampling = sampling(cfg, scan.has_dwell)?;
+    let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + scan.duration_s;
     program::check_run_size(
         &cfg.program.display().to_string(),
         total_s,
         cfg.sim.thermal_step_s(),
-        plan.duration_s(),
+        scan.duration_s,
         matches!(sampling.mode, SampleMode::EveryCycle).then_some(sampling.sim.interp_cycle_s()),
     )?;
-    Ok((warmups, plan, sampling))
+    Ok((warmups, scan, sampling))
 }
 
 /// The model of `path` as a compensator for the run's machine (see
@@ -299,9 +312,10 @@ fn simulate(
     cfg: &RunConfig,
     sampling: &Sampling,
     warmups: &[Warmup],
-    plan: &Plan,
+    scan: &ProgramScan,
     mut controller: Option<&mut RunController>,
-) -> Result<(RunLog, Option<(record::Recorder, record::RrdFile)>)> {
+    log: &mut RunLog,
+) -> Result<Option<(record::Recorder, record::RrdFile)>> {
     let machine = &cfg.machine;
     let mut twin = Twin::new(machine, cfg.seed)?;
     twin.set_tool_table(cfg.tools.clone());
@@ -311,10 +325,13 @@ fn simulate(
         // The run report splits each error into cold geometry and thermal part.
         .with_thermal_part(true);
     let warm_cfg = sim_cfg.sampling(SampleMode::Dwells);
-    let total_s: f64 = warmups.iter().map(|p| p.duration_s).sum::<f64>() + plan.duration_s();
+    let total_s: f64 = warmups.iter().map(|p| p.duration_s).sum::<f64>() + scan.duration_s;
     let mut progress = Progress::new(total_s.ceil() as u64, "s");
     let mut recording = match &cfg.rrd {
-        Some(rrd) => Some(open_recording(cfg, rrd, plan, controller.is_some())?),
+        Some(rrd) => {
+            let diagonal = record::Diagonal::through(&scan.dwell_points_mm);
+            Some(open_recording(cfg, rrd, diagonal, controller.is_some())?)
+        }
         None => None,
     };
     let mut null = sim::NullObserver;
@@ -339,33 +356,25 @@ fn simulate(
             sim::execute(&mut twin, &piece?, &warm_cfg, ctrl, &mut obs)?;
         }
     }
-    let mut log = RunLog::default();
     {
         let rec: &mut dyn Observer = match recording.as_mut() {
             Some((r, _)) => r,
             None => &mut null,
         };
         let mut watch = sim::Tee(rec, &mut progress);
-        let mut obs = sim::Tee(&mut log, &mut watch);
-        obs.on_run_start(&RunStart {
-            label: cfg.program.display().to_string(),
-            time_s: twin.time_s(),
-            duration_s: plan.duration_s(),
-            measured: true,
-        });
+        let mut obs = sim::Tee(log, &mut watch);
         let ctrl = controller.map(|c| c as &mut dyn sim::Controller);
-        sim::execute(&mut twin, plan, &sim_cfg, ctrl, &mut obs)
-            .with_context(|| cfg.program.display().to_string())?;
+        run_stream::run_measured(cfg, scan, &mut twin, &sim_cfg, ctrl, &mut obs)?;
     }
     progress.finish();
-    Ok((log, recording))
+    Ok(recording)
 }
 
 /// The recording of a run, its id naming everything that makes the run.
 fn open_recording(
     cfg: &RunConfig,
     rrd: &RrdOutput,
-    plan: &Plan,
+    diagonal: Option<record::Diagonal>,
     compensated: bool,
 ) -> Result<(record::Recorder, record::RrdFile)> {
     let id = format!(
@@ -385,13 +394,13 @@ fn open_recording(
         &id,
         record::layout::run_blueprint(rrd.settings.magnify),
     )?;
-    let diagonal = record::Diagonal::of_plan(plan);
     let rec = record::Recorder::new(&file, &cfg.machine, rrd.settings, diagonal)?;
     Ok((rec, file))
 }
 
-/// The printed report: the thermal state, the first readings, the per-point table, the summary.
-fn report_text(
+/// The printed report's head: the thermal state, the first readings (the per-point table and
+/// the summary follow).
+fn report_head(
     cfg: &RunConfig,
     sampling: &Sampling,
     log: &RunLog,
@@ -426,7 +435,7 @@ fn report_text(
         super::program_placement::placement_line(&cfg.placement)
     )?;
     writeln!(out, "measured {}", sampling.note)?;
-    if let Some(temps) = log.sensor_degc.first() {
+    if let Some(temps) = &log.first_degc {
         let list: Vec<String> = log
             .sensor_names
             .iter()
@@ -436,7 +445,5 @@ fn report_text(
         writeln!(out, "sensors at the first point (°C): {}", list.join(", "))?;
     }
     writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")?;
-    log.write_table(&mut out)?;
-    report::write_summary(summary, &mut out)?;
     Ok(String::from_utf8_lossy(&out).to_string())
 }
