@@ -157,7 +157,14 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         table.writer(),
         csv.as_mut().map(|f| f as &mut dyn Write),
     );
-    let recorder = simulate(cfg, &sampling, &warmups, &scan, controller.as_mut(), &mut log)?;
+    let recorder = simulate(
+        cfg,
+        &sampling,
+        &warmups,
+        &scan,
+        controller.as_mut(),
+        &mut log,
+    )?;
     log.check().context("writing the run's table")?;
 
     let warmup_names: Vec<String> = cfg

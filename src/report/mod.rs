@@ -11,7 +11,6 @@ use std::io::Write;
 
 use serde::Serialize;
 
-
 /// Statistics of an error series, µm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ErrorStats {

@@ -33,7 +33,11 @@ pub struct RunLog<'w> {
 impl<'w> RunLog<'w> {
     /// A log writing the terminal table to `table` and `samples.csv` to `csv` (if any); with
     /// the compensated columns if `compensated` (a model in the loop).
-    pub fn new(compensated: bool, table: &'w mut dyn Write, csv: Option<&'w mut dyn Write>) -> Self {
+    pub fn new(
+        compensated: bool,
+        table: &'w mut dyn Write,
+        csv: Option<&'w mut dyn Write>,
+    ) -> Self {
         Self {
             sensor_names: Vec::new(),
             first_degc: None,
