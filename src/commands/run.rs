@@ -281,7 +281,7 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, ProgramScan, Sampling)> {
         warmup.duration_s = duration_s;
         warmups.push(warmup);
     }
-    let scan = run_stream::scan(cfg, start, cfg.rrd.is_some())?;
+    let scan = run_stream::scan(&measured(cfg), start, cfg.rrd.is_some())?;
     let sampling = sampling(cfg, scan.has_dwell)?;
     let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + scan.duration_s;
     program::check_run_size(
@@ -292,6 +292,16 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, ProgramScan, Sampling)> {
         matches!(sampling.mode, SampleMode::EveryCycle).then_some(sampling.sim.interp_cycle_s()),
     )?;
     Ok((warmups, scan, sampling))
+}
+
+/// The measured program of `cfg` and what it runs on.
+fn measured(cfg: &RunConfig) -> run_stream::Measured<'_> {
+    run_stream::Measured {
+        program: &cfg.program,
+        machine: &cfg.machine,
+        tools: &cfg.tools,
+        placement: &cfg.placement,
+    }
 }
 
 /// The model of `path` as a compensator for the run's machine (see
@@ -371,7 +381,7 @@ fn simulate(
         let mut watch = sim::Tee(rec, &mut progress);
         let mut obs = sim::Tee(log, &mut watch);
         let ctrl = controller.map(|c| c as &mut dyn sim::Controller);
-        run_stream::run_measured(cfg, scan, &mut twin, &sim_cfg, ctrl, &mut obs)?;
+        run_stream::run_measured(&measured(cfg), scan, &mut twin, &sim_cfg, ctrl, &mut obs)?;
     }
     progress.finish();
     Ok(recording)

@@ -15,12 +15,23 @@ use std::io::{BufRead, Seek, Write};
 
 use anyhow::{Context, Result};
 
-use super::run::RunConfig;
 use vmc_machine::motion::SegmentKind;
 use vmc_machine::program::{self, PlanStream};
 use vmc_machine::sensors::SensorReadings;
 use vmc_machine::sim::{self, Observer, PointRecord, RunStart, SimConfig, SimEvent};
 use vmc_machine::twin::Twin;
+
+/// The measured program and what it runs on.
+pub(super) struct Measured<'a> {
+    /// The program file.
+    pub program: &'a std::path::Path,
+    /// The machine.
+    pub machine: &'a vmc_machine::machine::MachineSpec,
+    /// The tool table.
+    pub tools: &'a vmc_machine::tools::ToolTable,
+    /// Where the program sits.
+    pub placement: &'a vmc_machine::setup::Placement,
+}
 
 /// What the measured program is, from one pass over its pieces.
 pub(super) struct ProgramScan {
@@ -38,7 +49,11 @@ pub(super) struct ProgramScan {
 
 /// The program's pieces, each planned and checked and then dropped; `dwell_points` keeps the
 /// dwell points.
-pub(super) fn scan(cfg: &RunConfig, start_mm: [f64; 3], dwell_points: bool) -> Result<ProgramScan> {
+pub(super) fn scan(
+    cfg: &Measured<'_>,
+    start_mm: [f64; 3],
+    dwell_points: bool,
+) -> Result<ProgramScan> {
     let stream = stream(cfg, start_mm)?;
     let mut scan = ProgramScan {
         start_mm,
@@ -62,13 +77,13 @@ pub(super) fn scan(cfg: &RunConfig, start_mm: [f64; 3], dwell_points: bool) -> R
     Ok(scan)
 }
 
-fn stream<'a>(cfg: &'a RunConfig, start_mm: [f64; 3]) -> Result<PlanStream<'a>> {
+fn stream<'a>(cfg: &Measured<'a>, start_mm: [f64; 3]) -> Result<PlanStream<'a>> {
     Ok(PlanStream::load(
-        &cfg.program,
-        &cfg.machine,
+        cfg.program,
+        cfg.machine,
         start_mm,
-        &cfg.tools,
-        &cfg.placement,
+        cfg.tools,
+        cfg.placement,
         program::MOVES_PER_PIECE,
     )?)
 }
@@ -76,7 +91,7 @@ fn stream<'a>(cfg: &'a RunConfig, start_mm: [f64; 3]) -> Result<PlanStream<'a>> 
 /// Runs the measured program on `twin` piece by piece, telling `obs` (the run log, the
 /// recorder, the progress) its start and every point, numbered across the pieces.
 pub(super) fn run_measured(
-    cfg: &RunConfig,
+    cfg: &Measured<'_>,
     scan: &ProgramScan,
     twin: &mut Twin,
     sim_cfg: &SimConfig,
