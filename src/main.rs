@@ -57,6 +57,7 @@ fn run(command: Command) -> Result<()> {
         },
         Command::Chatter(args) => commands::chatter::chatter(&args.config()?, out),
         Command::Export(args) => commands::export::export(&args.config()?, out),
+        Command::Replay(args) => commands::replay::replay(&args.config()?, out),
         Command::Interpret(args) => commands::interpret::interpret(&args.config()?, out),
         Command::ProbeCampaign(args) => {
             commands::probe_campaign::probe_campaign(&args.config()?, out)

@@ -177,7 +177,7 @@ fn bad_input_gets_one_clear_message() {
     );
     assert_eq!(
         with(CUT, BOX, &["--immersion-bin", "1.5"]),
-        "--immersion-bin must be in (0, 1], got 1.5"
+        "--immersion-bin must be in [0.01, 1], got 1.5"
     );
     assert_eq!(
         with("G1 X1 F100 Q3\n", BOX, &[]).split(':').next(),

@@ -568,7 +568,7 @@ fn lobes_writes_the_csv_of_its_table_and_refuses_bad_input_in_one_line() {
     for (args, want) in [
         (
             &["lobes", "--immersion", "0"][..],
-            "--immersion: immersion a_e/D must be in (0, 1], got 0",
+            "--immersion: immersion a_e/D must be in [0.01, 1] (a radial depth of at least 1 % of the tool diameter), got 0",
         ),
         (
             &["lobes", "--rpm", "0"][..],

@@ -100,7 +100,7 @@ fn time_domain_cuts_confirm_the_lobes_of_the_robust_hinf_on_perturbed_blades() {
                 rpm,
             ],
         );
-        assert!(lobes.contains(&format!("judged on")), "{lobes}");
+        assert!(lobes.contains("judged on"), "{lobes}");
         let a = closed_depth(&lobes);
         for (factor, expected) in [(0.95, "stable"), (1.05, "chatter")] {
             let depth = format!("{:.4}", factor * a);

@@ -141,11 +141,11 @@ fn bad_cut_input_fails_in_one_line_without_a_panic() {
         (&["--depth-mm", "0"][..], "--depth-mm must be > 0 mm, got 0"),
         (
             &["--immersion", "1.5"][..],
-            "--immersion: immersion a_e/D must be in (0, 1], got 1.5",
+            "--immersion: immersion a_e/D must be in [0.01, 1] (a radial depth of at least 1 % of the tool diameter), got 1.5",
         ),
         (
             &["--immersion", "0"][..],
-            "--immersion: immersion a_e/D must be in (0, 1], got 0",
+            "--immersion: immersion a_e/D must be in [0.01, 1] (a radial depth of at least 1 % of the tool diameter), got 0",
         ),
         (
             &["--feed-per-tooth-mm", "-0.1"][..],

@@ -101,7 +101,13 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
     let p = std::fs::read_to_string(t.0.join("p.csv")).unwrap();
     assert_eq!(p, std::fs::read_to_string(t.0.join("q.csv")).unwrap());
     assert!(p.starts_with("# machine: trunnion-ac\n# seed: 2\n"));
-    assert!(p.contains("config,sphere,C_deg,A_deg,X_nominal_mm"));
+    assert!(p.contains(
+        "config,sphere,placement,target_x_mm,target_y_mm,target_z_mm,C_deg,A_deg,X_nominal_mm"
+    ));
+    assert!(
+        out.contains("4 placement(s) of a relocated sphere"),
+        "{out}"
+    );
     let report = succeed(
         &t.0,
         &[
@@ -127,8 +133,8 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
     let max = json["heldout_max_residual_um"].as_f64().unwrap();
     assert!(share > 0.9 && share < 1.0, "{share}");
     assert!(mean > 0.0 && mean < max, "{mean} {max}");
-    // The default model: 19 location and assembly errors and the harmonics of the orders the
-    // cross-validation chose per rotary axis.
+    // The default model: 19 location and assembly errors, the harmonics of the orders the
+    // cross-validation chose per rotary axis, and the offsets of the 4 placements.
     let orders: Vec<u64> = json["harmonic_orders"]
         .as_array()
         .unwrap()
@@ -141,8 +147,9 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
     let per_axis = |h: u64| if h == 0 { 0 } else { 10 * (h - 1) + 2 * h };
     assert_eq!(
         json["parameters"].as_array().unwrap().len() as u64,
-        19 + per_axis(orders[0]) + per_axis(orders[1])
+        19 + per_axis(orders[0]) + per_axis(orders[1]) + 12
     );
+    assert!(report.contains("E_ZP4"), "{report}");
     // The D-optimal choice of 20 of them.
     succeed(
         &t.0,
@@ -251,6 +258,8 @@ fn too_few_configurations_for_the_parameters_are_refused() {
             &m,
             "--configs",
             "5",
+            "--placements",
+            "0",
             "-o",
             "p.csv",
         ],

@@ -556,36 +556,116 @@ fn thermal_file(text: &str) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// The linear thermal-drift model of the small slice (two temperatures and the speed to two
+/// channels).
+fn fit_small_thermal_model(csv: &str) -> vmc_twin::predict::thermal_fit::ThermalModel {
+    use vmc_twin::predict::thermal_fit::{self, Architecture, FitSettings, Split, TableRequest};
+    let cols = ["t1_degc", "t5_degc", "spindle_rpm", "ch1_um", "ch5_um"];
+    let request = TableRequest {
+        time: None,
+        required: cols.iter().map(|c| (c.to_string(), "input")).collect(),
+        optional: Vec::new(),
+        min_rows: 20,
+    };
+    let table = thermal_fit::read_csv(csv, "t.csv", &request).unwrap();
+    let rpm = table.column("spindle_rpm").unwrap();
+    let split = Split::resolve(&table.time_s, None, Some(("spindle_rpm", rpm)), 0.25).unwrap();
+    let settings = FitSettings {
+        architecture: Architecture::Linear,
+        ..FitSettings::default()
+    };
+    let inputs: Vec<String> = cols[..3].iter().map(|c| c.to_string()).collect();
+    let outputs: Vec<String> = cols[3..].iter().map(|c| c.to_string()).collect();
+    thermal_fit::fit(&table, &inputs, &outputs, &split, &settings).unwrap()
+}
+
 #[test]
 fn mutated_thermal_measurement_files_never_panic_and_every_rejection_is_one_line() {
     let csv = small_thermal_csv();
     // The unmutated slice reads and fits: the property is not vacuous.
-    {
-        use vmc_twin::predict::thermal_fit::{
-            self, Architecture, FitSettings, Split, TableRequest,
-        };
-        let cols = ["t1_degc", "t5_degc", "spindle_rpm", "ch1_um", "ch5_um"];
-        let request = TableRequest {
-            time: None,
-            required: cols.iter().map(|c| (c.to_string(), "input")).collect(),
-            optional: Vec::new(),
-            min_rows: 20,
-        };
-        let table = thermal_fit::read_csv(&csv, "t.csv", &request).unwrap();
-        let rpm = table.column("spindle_rpm").unwrap();
-        let split = Split::resolve(&table.time_s, None, Some(("spindle_rpm", rpm)), 0.25).unwrap();
-        let settings = FitSettings {
-            architecture: Architecture::Linear,
-            ..FitSettings::default()
-        };
-        let inputs: Vec<String> = cols[..3].iter().map(|c| c.to_string()).collect();
-        let outputs: Vec<String> = cols[3..].iter().map(|c| c.to_string()).collect();
-        thermal_fit::fit(&table, &inputs, &outputs, &split, &settings).unwrap();
-    }
+    fit_small_thermal_model(&csv);
     runner(1000)
         .run(&prop::collection::vec(mutation(), 1..4), |muts| {
             let text = muts.iter().fold(csv.clone(), |t, m| apply(&t, m));
             thermal_file(&text)
+        })
+        .unwrap();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Model files (`run --model`, `predict-thermal --model`).
+
+/// One mutation of a JSON text: a number replaced by an extreme value, a character deleted, the
+/// text truncated, a line duplicated or deleted.
+fn mutate_json(text: &str, muts: &[Mutation]) -> String {
+    muts.iter().fold(text.to_string(), |t, m| apply(&t, m))
+}
+
+/// Accepted predictor models predict (a finite or NaN error, never a panic) from readings;
+/// rejected ones give a one-line error.
+fn predictor_file(text: &str, n_sensors: usize) -> Result<(), TestCaseError> {
+    use vmc_twin::predict::predictor::{AnyPredictor, ErrorPredictor};
+    match AnyPredictor::from_json_str(text) {
+        Ok(mut p) => {
+            let n = p.sensor_names().len().min(4 * n_sensors);
+            p.observe_readings(0.0, &vec![21.0; n]);
+            p.observe_readings(60.0, &vec![22.0; n]);
+            let _ = p.predict_error_mm([280.0, 200.0, -225.0]);
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            prop_assert!(!msg.is_empty() && !msg.contains('\n'), "{}", msg);
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn mutated_predictor_model_files_never_panic_and_every_rejection_is_one_line() {
+    use vmc_twin::predict::predictor::{self, AnyPredictor};
+    let csv = small_dataset_csv();
+    let ds = vmc_twin::predict::dataset::Dataset::from_csv(&csv, "cal.csv").unwrap();
+    let geometry = MachineSpec::reference().geometry();
+    let (model, _) = predictor::train_linear(&ds, &geometry, &Default::default()).unwrap();
+    let n_sensors = ds.sensor_names.len();
+    let json = AnyPredictor::Linear(model).to_json_string().unwrap();
+    // The unmutated file loads: the property is not vacuous.
+    AnyPredictor::from_json_str(&json).unwrap();
+    runner(600)
+        .run(&prop::collection::vec(mutation(), 1..4), |muts| {
+            predictor_file(&mutate_json(&json, &muts), n_sensors)
+        })
+        .unwrap();
+}
+
+#[test]
+fn mutated_thermal_model_files_never_panic_and_every_rejection_names_the_file() {
+    use vmc_twin::predict::thermal_fit::ThermalModel;
+    let model = fit_small_thermal_model(&small_thermal_csv());
+    let json = model.to_json();
+    ThermalModel::from_json(&json, "m.json").unwrap();
+    let time_s: Vec<f64> = (0..50).map(|i| 60.0 * f64::from(i)).collect();
+    let column = vec![25.0; time_s.len()];
+    runner(600)
+        .run(&prop::collection::vec(mutation(), 1..4), |muts| {
+            match ThermalModel::from_json(&mutate_json(&json, &muts), "m.json") {
+                Ok(m) => {
+                    let cols: Vec<&[f64]> = m.inputs.iter().map(|_| column.as_slice()).collect();
+                    if let Err(e) = m.predict(&time_s, &cols) {
+                        prop_assert!(!e.to_string().contains('\n'), "{}", e);
+                    }
+                }
+                Err(e) => {
+                    let msg = e.to_string();
+                    prop_assert!(
+                        msg.starts_with("m.json: ") || msg.contains("m.json"),
+                        "{}",
+                        msg
+                    );
+                    prop_assert!(!msg.contains('\n'), "{}", msg);
+                }
+            }
+            Ok(())
         })
         .unwrap();
 }

@@ -2,45 +2,19 @@
 //! its own name or another), a symbolic link, a device node or FIFO replaced by a regular
 //! file, and two writers racing for one new name.
 
+mod common;
+use common::{refused, repo_file, vmc, TempDir, BIN};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
-
-struct Tmp(PathBuf);
-
-impl Tmp {
-    fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("vmc-twin-out-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Tmp(d)
-    }
-}
-
-impl Drop for Tmp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn vmc(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap()
-}
-
 fn error_of(o: &Output) -> String {
-    assert_eq!(o.status.code(), Some(1), "{o:?}");
-    String::from_utf8_lossy(&o.stderr).trim_end().to_string()
+    refused(o, "the write").trim_end().to_string()
 }
 
 fn spindle_data(dir: &Path) -> PathBuf {
     let to = dir.join("d.csv");
     std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/spindle-thermal/train_every60s.csv"),
+        repo_file("tests/data/spindle-thermal/train_every60s.csv"),
         &to,
     )
     .unwrap();
@@ -61,17 +35,17 @@ const FIT: [&str; 9] = [
 
 #[test]
 fn an_input_is_never_written_over_even_with_force() {
-    let t = Tmp::new("input");
-    let data = spindle_data(&t.0);
+    let t = TempDir::new("input");
+    let data = spindle_data(t.path());
     let before = std::fs::read(&data).unwrap();
-    let fit = vmc(&t.0, &[&FIT[..], &["-o", "m.json"]].concat());
+    let fit = vmc(t.path(), &[&FIT[..], &["-o", "m.json"]].concat());
     assert!(fit.status.success(), "{fit:?}");
     // The measured data as the predictions' file, by its name and through a hard link.
-    std::fs::hard_link(&data, t.0.join("alias.csv")).unwrap();
+    std::fs::hard_link(&data, t.path().join("alias.csv")).unwrap();
     for out in ["d.csv", "alias.csv", "./sub/../d.csv"] {
-        std::fs::create_dir_all(t.0.join("sub")).unwrap();
+        std::fs::create_dir_all(t.path().join("sub")).unwrap();
         let o = vmc(
-            &t.0,
+            t.path(),
             &[
                 "predict-thermal",
                 "--model",
@@ -87,7 +61,7 @@ fn an_input_is_never_written_over_even_with_force() {
         assert!(err.contains("is an input of this command"), "{err}");
     }
     // The model file as the model's own output.
-    let again = vmc(&t.0, &[&FIT[..], &["-o", "d.csv", "--force"]].concat());
+    let again = vmc(t.path(), &[&FIT[..], &["-o", "d.csv", "--force"]].concat());
     assert!(error_of(&again).contains("is an input"));
     assert_eq!(std::fs::read(&data).unwrap(), before);
 }
@@ -95,11 +69,11 @@ fn an_input_is_never_written_over_even_with_force() {
 #[cfg(unix)]
 #[test]
 fn a_symbolic_link_is_refused_and_its_target_kept() {
-    let t = Tmp::new("link");
-    std::fs::write(t.0.join("precious.txt"), "keep").unwrap();
-    std::os::unix::fs::symlink("precious.txt", t.0.join("cal.csv")).unwrap();
+    let t = TempDir::new("link");
+    std::fs::write(t.path().join("precious.txt"), "keep").unwrap();
+    std::os::unix::fs::symlink("precious.txt", t.path().join("cal.csv")).unwrap();
     let o = vmc(
-        &t.0,
+        t.path(),
         &[
             "calibrate",
             "--measure-every-min",
@@ -110,10 +84,10 @@ fn a_symbolic_link_is_refused_and_its_target_kept() {
         ],
     );
     assert!(error_of(&o).contains("is a symbolic link"));
-    let meta = std::fs::symlink_metadata(t.0.join("cal.csv")).unwrap();
+    let meta = std::fs::symlink_metadata(t.path().join("cal.csv")).unwrap();
     assert!(meta.file_type().is_symlink());
     assert_eq!(
-        std::fs::read_to_string(t.0.join("precious.txt")).unwrap(),
+        std::fs::read_to_string(t.path().join("precious.txt")).unwrap(),
         "keep"
     );
 }
@@ -122,11 +96,11 @@ fn a_symbolic_link_is_refused_and_its_target_kept() {
 #[test]
 fn a_device_is_written_through_with_force_and_never_replaced() {
     use std::os::unix::fs::FileTypeExt;
-    let t = Tmp::new("dev");
+    let t = TempDir::new("dev");
     let args = ["calibrate", "--measure-every-min", "120", "-o", "/dev/null"];
-    let refused = vmc(&t.0, &args);
+    let refused = vmc(t.path(), &args);
     assert!(error_of(&refused).contains("--force"));
-    let o = vmc(&t.0, &[&args[..], &["--force"]].concat());
+    let o = vmc(t.path(), &[&args[..], &["--force"]].concat());
     assert!(o.status.success(), "{o:?}");
     let meta = std::fs::symlink_metadata("/dev/null").unwrap();
     assert!(meta.file_type().is_char_device());
@@ -137,8 +111,8 @@ fn a_device_is_written_through_with_force_and_never_replaced() {
 fn a_fifo_receives_the_contents_and_stays_a_fifo() {
     use std::io::Read;
     use std::os::unix::fs::FileTypeExt;
-    let t = Tmp::new("fifo");
-    let fifo = t.0.join("pipe.csv");
+    let t = TempDir::new("fifo");
+    let fifo = t.path().join("pipe.csv");
     let made = Command::new("mkfifo").arg(&fifo).status();
     if !made.is_ok_and(|s| s.success()) {
         eprintln!("no mkfifo here: skipped");
@@ -156,7 +130,7 @@ fn a_fifo_receives_the_contents_and_stays_a_fifo() {
         })
     };
     let o = vmc(
-        &t.0,
+        t.path(),
         &[
             "calibrate",
             "--measure-every-min",
@@ -175,7 +149,7 @@ fn a_fifo_receives_the_contents_and_stays_a_fifo() {
 
 #[test]
 fn of_writers_racing_for_one_new_name_exactly_one_wins_and_its_file_stays() {
-    let t = Tmp::new("race");
+    let t = TempDir::new("race");
     // Different seeds give different files, so the survivor can be matched to its writer.
     let children: Vec<_> = (1..=4)
         .map(|seed| {
@@ -190,7 +164,7 @@ fn of_writers_racing_for_one_new_name_exactly_one_wins_and_its_file_stays() {
                     "-o",
                     "r.csv",
                 ])
-                .current_dir(&t.0)
+                .current_dir(t.path())
                 .stdout(std::process::Stdio::null())
                 .stderr(std::process::Stdio::piped())
                 .spawn()
@@ -212,7 +186,7 @@ fn of_writers_racing_for_one_new_name_exactly_one_wins_and_its_file_stays() {
     for l in &losers {
         assert!(l.contains("already exists"), "{l}");
     }
-    let names: Vec<_> = std::fs::read_dir(&t.0)
+    let names: Vec<_> = std::fs::read_dir(t.path())
         .unwrap()
         .map(|e| e.unwrap().file_name())
         .collect();

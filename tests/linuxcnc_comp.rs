@@ -14,12 +14,15 @@
 //! about 13 s each (four sessions). The check's own Python unit tests run without LinuxCNC.
 
 mod common;
+#[path = "common/linuxcnc.rs"]
+mod linuxcnc_common;
 
 use std::path::Path;
 use std::process::{Command, Output};
 use std::sync::Mutex;
 
 use common::{repo_file, vmc, TempDir};
+use linuxcnc_common::text;
 use vmc_predict::predictor::{AnyPredictor, ErrorPredictor};
 
 /// LinuxCNC sessions of this file run one after the other (the fallback without namespaces
@@ -46,28 +49,9 @@ fn compare_again(run: &Path, strict: bool) -> Output {
     cmd.output().expect("python3 starts")
 }
 
-fn text(out: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
 /// Whether LinuxCNC can run here; prints why not (a failure under `VMC_REQUIRE_LINUXCNC=1`).
 fn linuxcnc_available() -> bool {
-    let out = comp_check(&["--probe"]);
-    match out.status.code() {
-        Some(0) => true,
-        Some(77) => {
-            let reason = text(&out);
-            let required = std::env::var("VMC_REQUIRE_LINUXCNC").is_ok_and(|v| v == "1");
-            assert!(!required, "VMC_REQUIRE_LINUXCNC=1 but {reason}");
-            eprintln!("{reason}");
-            false
-        }
-        _ => panic!("comp-check.sh --probe: {}", text(&out)),
-    }
+    linuxcnc_common::available("comp-check.sh")
 }
 
 /// One arrival of the check's table: joint, direction, status (`ok`, `held`, `MISMATCH`).

@@ -10,14 +10,16 @@
 //! module cannot be shown to `loadrt` (`VMC_REQUIRE_LINUXCNC=1` turns the skip into a
 //! failure). About 2 s: no motion controller, one short HAL session per test.
 
+#[path = "common/linuxcnc.rs"]
+mod linuxcnc_common;
 #[path = "../crates/vmc-predict/tests/common/mod.rs"]
 mod predict_common;
 #[path = "../crates/vmc-gcode/tests/common/temp_dir.rs"]
 mod temp_dir;
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
+use linuxcnc_common::{build_module, script, text};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use temp_dir::TempDir;
@@ -30,72 +32,9 @@ const SAME_MM: f64 = 1e-9;
 const RPM: f64 = 8000.0;
 const FEEDS_MM_PER_MIN: [f64; 3] = [1200.0, -600.0, 300.0];
 
-fn script(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("deploy/linuxcnc")
-        .join(name)
-}
-
-fn text(out: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
 /// Whether the check can run here; prints why not (a failure under `VMC_REQUIRE_LINUXCNC=1`).
 fn available() -> bool {
-    let out = Command::new(script("hal-check.sh"))
-        .arg("--probe")
-        .output()
-        .expect("hal-check.sh starts");
-    match out.status.code() {
-        Some(0) => true,
-        Some(77) => {
-            let reason = text(&out);
-            let required = std::env::var("VMC_REQUIRE_LINUXCNC").is_ok_and(|v| v == "1");
-            assert!(!required, "VMC_REQUIRE_LINUXCNC=1 but {reason}");
-            eprintln!("{reason}");
-            false
-        }
-        _ => panic!("hal-check.sh --probe: {}", text(&out)),
-    }
-}
-
-/// The static library cargo built for this test (a dev-dependency), newest first.
-fn static_library() -> PathBuf {
-    let exe = std::env::current_exe().expect("the test's path");
-    let deps = exe.parent().expect("the deps folder");
-    let mut found: Vec<(std::time::SystemTime, PathBuf)> = std::fs::read_dir(deps)
-        .expect("the deps folder lists")
-        .filter_map(Result::ok)
-        .map(|e| e.path())
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with("libvmc_rtcomp") && n.ends_with(".a"))
-        })
-        .filter_map(|p| Some((p.metadata().ok()?.modified().ok()?, p)))
-        .collect();
-    found.sort();
-    found
-        .pop()
-        .expect("cargo built libvmc_rtcomp.a next to the test")
-        .1
-}
-
-/// Builds the module into `dir` with the library of this build.
-fn build_module(dir: &Path) -> PathBuf {
-    let out = Command::new(script("build-comp.sh"))
-        .arg("--lib")
-        .arg(static_library())
-        .arg("--out")
-        .arg(dir)
-        .output()
-        .expect("build-comp.sh starts");
-    assert!(out.status.success(), "build-comp.sh: {}", text(&out));
-    dir.join("vmc_comp.so")
+    linuxcnc_common::available("hal-check.sh")
 }
 
 /// The reference machine's features with the spindle speed as an input, 6 units per net.

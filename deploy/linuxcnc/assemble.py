@@ -17,7 +17,7 @@ Units: mm, mm/s, mm/s^2 (the machine file's rapid rates in mm/min are divided by
 
 Usage:
     assemble.py --machine machines/vmc-reference.toml --run-dir RUN [--tables EXPORT_DIR]
-                [--program FILE.ngc] [--set KEY=VALUE ...]
+                [--program FILE.ngc] [--hal FILE.hal ...] [--set KEY=VALUE ...]
 
 e.g. a program run, sampled every 0.1 s:
     assemble.py --machine M --run-dir RUN --tables EXPORT --program warmup.ngc \
@@ -251,9 +251,11 @@ def fmt_mm(value):
     return "0" if text in ("-0", "") else text
 
 
-def ini_text(machine, run_dir, tables, settings, servo_period_ns):
-    """The INI file of a run folder from the template."""
+def ini_text(machine, run_dir, tables, settings, servo_period_ns, hal_files=()):
+    """The INI file of a run folder from the template; `hal_files` (names in the run folder)
+    are loaded after vmc-sim.hal, in order."""
     values = {
+        "EXTRA_HALFILES": "\n".join(f"HALFILE = {run_dir / name}" for name in hal_files),
         "SERVO_PERIOD_NS": str(servo_period_ns),
         "MACHINE": machine.name,
         "MACHINE_FILE": str(machine.path),
@@ -286,11 +288,13 @@ def ini_text(machine, run_dir, tables, settings, servo_period_ns):
 
 
 def assemble(machine, run_dir, export_dir, settings, program=None,
-             servo_period_ns=DEFAULT_SERVO_PERIOD_NS):
+             servo_period_ns=DEFAULT_SERVO_PERIOD_NS, hal_files=()):
     """Writes a run folder; gives its INI file and the joint tables it loads.
 
     A G-code `program` is copied into the folder and named by the PROGRAM setting: the
-    session may see nothing outside its run folder (run-headless.sh gives it a private /tmp)."""
+    session may see nothing outside its run folder (run-headless.sh gives it a private /tmp).
+    `hal_files` are copied in too and loaded after vmc-sim.hal (e.g. a compensation component
+    between the joints' motor-pos-cmd and the drives)."""
     run_dir = Path(run_dir).resolve()
     settings = list(settings)
     tables = read_comp_tables(export_dir) if export_dir else {}
@@ -318,13 +322,23 @@ def assemble(machine, run_dir, export_dir, settings, program=None,
         except OSError as e:
             raise InputError(f"{program}: cannot read the program: {e.strerror}") from e
         settings = [(k, v) for k, v in settings if k != "PROGRAM"] + [("PROGRAM", str(copy))]
+    hal_names = []
+    for hal_file in hal_files:
+        name = Path(hal_file).name
+        if name in ("vmc-sim.hal", INI_NAME) or (run_dir / name).exists():
+            raise InputError(f"{hal_file}: its name is taken in the run folder")
+        try:
+            shutil.copyfile(hal_file, run_dir / name)
+        except OSError as e:
+            raise InputError(f"{hal_file}: cannot read the HAL file: {e.strerror}") from e
+        hal_names.append(name)
     (run_dir / "tool.tbl").write_text("")
     # The interpreter's parameter file: LinuxCNC complains at shutdown when there is none.
     (run_dir / "vmc.var").write_text("")
     ini = run_dir / INI_NAME
     if not 100_000 <= servo_period_ns <= 10_000_000:
         raise InputError(f"servo period {servo_period_ns} ns: expected 100000 to 10000000")
-    ini.write_text(ini_text(machine, run_dir, tables, settings, servo_period_ns))
+    ini.write_text(ini_text(machine, run_dir, tables, settings, servo_period_ns, hal_names))
     return ini, tables
 
 
@@ -342,6 +356,8 @@ def main(argv):
     p.add_argument("--run-dir", required=True, help="new or empty folder for the run")
     p.add_argument("--tables", help="export folder with comp-tables.ini and joint*.comp")
     p.add_argument("--program", help="G-code file to copy in and run (MODE = program)")
+    p.add_argument("--hal", action="append", default=[], metavar="FILE",
+                   help="a HAL file to copy in and load after vmc-sim.hal (repeatable)")
     p.add_argument("--servo-period-ns", type=int, default=DEFAULT_SERVO_PERIOD_NS)
     p.add_argument("--set", action="append", default=[], type=parse_setting,
                    metavar="KEY=VALUE", help="a [VMC_DRIVER] setting (repeatable)")
@@ -349,7 +365,7 @@ def main(argv):
     try:
         machine = read_machine(args.machine)
         ini, _ = assemble(machine, args.run_dir, args.tables, args.set, args.program,
-                          args.servo_period_ns)
+                          args.servo_period_ns, args.hal)
     except InputError as e:
         print(f"assemble: error: {e}", file=sys.stderr)
         return 1

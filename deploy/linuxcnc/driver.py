@@ -19,7 +19,11 @@ Modes (settings in `[VMC_DRIVER]`):
   move began.
 - `program`: runs the G-code file `PROGRAM` in AUTO mode and samples every joint's
   `pos-cmd` and `motor-pos-cmd` every `SAMPLE_S` seconds (wall clock; programs run in real
-  time). CSV: `time_s,pos_cmd_<j>_mm,motor_pos_cmd_<j>_mm,...`.
+  time). CSV: `time_s,pos_cmd_<j>_mm,motor_pos_cmd_<j>_mm,...`. With `HALSAMPLER = FILE`
+  the servo-rate log of a `sampler` component loaded by the HAL files (`sampler.0`, loaded
+  with its `enable` pin at 0) is written too: `halsampler -t` copies its FIFO into FILE, the
+  sampler is enabled just before the program starts and disabled when it has ended, and the
+  session fails if the FIFO overflowed (`sampler.0.overruns`).
 
 `CSV` is the output file; `TIMEOUT_S` bounds the session. Values are read with the `hal`
 module as doubles (`halcmd getp` prints 7 significant digits only, 10 um at 500 mm).
@@ -28,6 +32,8 @@ It runs under the distribution's Python (`/usr/bin/python3`), which has LinuxCNC
 and `hal` modules.
 """
 
+import signal
+import subprocess
 import sys
 import time
 
@@ -215,13 +221,43 @@ def comp_check(session):
     return header, rows
 
 
+class ServoLog:
+    """`halsampler -t` copying the FIFO of `sampler.0` into a file while the program runs."""
+
+    def __init__(self, path):
+        self.path = path
+        self.proc = subprocess.Popen(["halsampler", "-t", "-c", "0", path])
+        hal.set_p("sampler.0.enable", "1")
+
+    def finish(self, session):
+        """Stops sampling, waits until halsampler has emptied the FIFO, ends halsampler."""
+        hal.set_p("sampler.0.enable", "0")
+        while hal.get_value("sampler.0.curr-depth") > 0:
+            session.remaining_s()
+            time.sleep(0.05)
+        # curr-depth 0: halsampler has taken the last sample; let it write it out.
+        time.sleep(0.3)
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired as e:
+            self.proc.kill()
+            raise DriverError("halsampler did not stop") from e
+        overruns = hal.get_value("sampler.0.overruns")
+        if overruns:
+            raise DriverError(f"the servo log lost samples: sampler.0.overruns = {overruns}")
+
+
 def run_program(session):
-    """Runs PROGRAM in AUTO mode, sampling the joints every SAMPLE_S seconds."""
+    """Runs PROGRAM in AUTO mode, sampling the joints every SAMPLE_S seconds (and, with
+    HALSAMPLER, every servo period through the HAL sampler)."""
     c, ln = session.cmd, linuxcnc
     program = session.setting("PROGRAM")
     sample_s = float(session.setting("SAMPLE_S", "0.1"))
+    log_path = session.setting("HALSAMPLER", "")
     session.command("auto mode", lambda: c.mode(ln.MODE_AUTO))
     session.command("open program", lambda: c.program_open(program))
+    servo_log = ServoLog(log_path) if log_path else None
     # Not `command`: wait_complete on AUTO_RUN would wait for the whole program.
     c.auto(ln.AUTO_RUN, 0)
     columns = []
@@ -248,6 +284,8 @@ def run_program(session):
             break
         session.remaining_s()
         time.sleep(POLL_S)
+    if servo_log:
+        servo_log.finish(session)
     return "time_s," + ",".join(columns), rows
 
 

@@ -10,6 +10,10 @@
 # and RTAPI_FIFO_PATH, the path of its socket (not a folder), in a folder that user can reach
 # and write.
 #
+# HAL modules: a folder `modules` in the run folder (e.g. vmc_comp.so) is shown to loadrt in
+# /usr/lib/linuxcnc/modules through an overlay mount inside the namespaces (as root); without
+# namespaces the modules must be installed there.
+#
 # Isolation and clean-up: as root, the session runs in its own PID, IPC and mount namespaces
 # with a private /tmp. LinuxCNC's start script finds and kills "its" processes by name
 # (pidof milltask, ...), keeps its lock in /tmp/linuxcnc.lock and its HAL and NML data in
@@ -32,6 +36,12 @@ if [ "${1:-}" = "--inside-namespace" ]; then
   ini=$2
   run=$(dirname "$ini")
   mount --make-rprivate /
+  if [ -d "$run/modules" ]; then
+    # HAL modules of the run folder (e.g. vmc_comp.so): loadrt takes names, not paths, so
+    # they are shown in LinuxCNC's modules folder through an overlay (nothing installed).
+    modules=/usr/lib/linuxcnc/modules
+    mount -t overlay overlay -o "lowerdir=$run/modules:$modules" "$modules"
+  fi
   private=$run/.private-tmp
   mkdir -p "$private"
   chmod 1777 "$private"

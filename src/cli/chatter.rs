@@ -58,8 +58,8 @@ impl ChatterArgs {
             );
         }
         anyhow::ensure!(
-            self.immersion_bin > 0.0 && self.immersion_bin <= 1.0,
-            "--immersion-bin must be in (0, 1], got {}",
+            (crate::dynamics::params::MIN_IMMERSION..=1.0).contains(&self.immersion_bin),
+            "--immersion-bin must be in [0.01, 1], got {}",
             self.immersion_bin
         );
         let options = ChatterOptions {

@@ -178,13 +178,19 @@ pub fn lobes_config(
     })
 }
 
-/// The fixed resolution of `--steps M` (at least 4); `None` without it.
+/// Most steps per tooth period `--steps` accepts.
+pub const MAX_STEPS: usize = 20_000;
+
+/// The fixed resolution of `--steps M` (4 to [`MAX_STEPS`]); `None` without it.
 ///
 /// # Errors
-/// Fewer than 4 steps.
+/// Fewer than 4 steps or more than [`MAX_STEPS`].
 pub fn steps_resolution(steps: Option<usize>) -> Result<Option<Resolution>> {
     match steps {
         Some(m) if m < 4 => bail!("--steps must be >= 4, got {m}"),
+        // Memory and time grow with the steps (10⁹ steps asked for 120 GB); the converged
+        // resolution settles in the hundreds.
+        Some(m) if m > MAX_STEPS => bail!("--steps must be <= {MAX_STEPS}, got {m}"),
         Some(m) => Ok(Some(Resolution::Fixed(m))),
         None => Ok(None),
     }

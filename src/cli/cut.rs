@@ -7,7 +7,7 @@ use anyhow::{anyhow, bail, Result};
 use super::{ForceArg, MillingArg};
 use crate::commands;
 use crate::dynamics::cut::{CutOptions, MAX_TOOTH_PERIODS};
-use crate::dynamics::params::{validate_immersion, validate_speed};
+use crate::dynamics::params::{readable, validate_immersion, validate_speed};
 use crate::dynamics::{Cut, Milling};
 use vmc_machine::milling::ToolDynamics;
 
@@ -27,7 +27,7 @@ pub struct CutArgs {
     /// Axial depth of cut a_p, mm (> 0).
     #[arg(long, allow_negative_numbers = true)]
     pub depth_mm: f64,
-    /// Radial immersion a_e/D, in (0, 1] (1 = slotting).
+    /// Radial immersion a_e/D, in [0.01, 1] (1 = slotting).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub immersion: f64,
     /// Feed per tooth f_z, mm (> 0).
@@ -113,6 +113,7 @@ impl CutArgs {
         positive("--depth-mm", self.depth_mm, "mm")?;
         positive("--feed-per-tooth-mm", self.feed_per_tooth_mm, "mm")?;
         validate_immersion(self.immersion).map_err(|e| anyhow!("--immersion: {e}"))?;
+        within_tool(&tool.tool, self.depth_mm, self.feed_per_tooth_mm)?;
         let teeth = f64::from(tool.tool.teeth);
         let period_s = tool.tool.tooth_period_s(self.rpm);
         let periods = match (self.revolutions, self.duration_s) {
@@ -128,13 +129,14 @@ impl CutArgs {
         };
         let periods = periods.round();
         let what = match (self.revolutions, self.duration_s) {
-            (Some(r), _) => format!("--revolutions {r}"),
-            (None, Some(d)) => format!("--duration-s {d}"),
+            (Some(r), _) => format!("--revolutions {}", readable(r)),
+            (None, Some(d)) => format!("--duration-s {}", readable(d)),
             (None, None) => String::new(),
         };
         if periods < MIN_TOOTH_PERIODS as f64 {
             bail!(
-                "{what} is {periods} tooth periods at {} rpm; at least {MIN_TOOTH_PERIODS} are needed ({:.4} s, {:.1} revolutions)",
+                "{what} is {} tooth periods at {} rpm; at least {MIN_TOOTH_PERIODS} are needed ({:.4} s, {:.1} revolutions)",
+                readable(periods),
                 self.rpm,
                 MIN_TOOTH_PERIODS as f64 * period_s,
                 MIN_TOOTH_PERIODS as f64 / teeth
@@ -142,7 +144,8 @@ impl CutArgs {
         }
         if periods > MAX_TOOTH_PERIODS as f64 {
             bail!(
-                "{what} is {periods} tooth periods at {} rpm; at most {MAX_TOOTH_PERIODS} are simulated ({:.3} s, {:.0} revolutions)",
+                "{what} is {} tooth periods at {} rpm; at most {MAX_TOOTH_PERIODS} are simulated ({:.3} s, {:.0} revolutions)",
+                readable(periods),
                 self.rpm,
                 MAX_TOOTH_PERIODS as f64 * period_s,
                 MAX_TOOTH_PERIODS as f64 / teeth
@@ -173,6 +176,29 @@ impl CutArgs {
 }
 
 /// Refuses a value that is not a finite number > 0.
+/// Depth and feed a tool of this diameter can take: an axial depth of at most 10 diameters (a
+/// long-reach end mill) and a feed per tooth of at most the radius. Beyond, the cut is not one a
+/// tool makes, and its figures (a depth of 10³⁰⁰ % of the critical one) mean nothing.
+fn within_tool(tool: &crate::dynamics::params::Tool, depth_mm: f64, feed_mm: f64) -> Result<()> {
+    let d_mm = tool.diameter_mm;
+    let show = crate::dynamics::params::readable;
+    if depth_mm > 10.0 * d_mm {
+        bail!(
+            "--depth-mm {} is more than 10 tool diameters ({} mm for a {d_mm} mm tool)",
+            show(depth_mm),
+            10.0 * d_mm
+        );
+    }
+    if feed_mm > 0.5 * d_mm {
+        bail!(
+            "--feed-per-tooth-mm {} is more than the tool's radius ({} mm)",
+            show(feed_mm),
+            0.5 * d_mm
+        );
+    }
+    Ok(())
+}
+
 fn positive(option: &str, v: f64, unit: &str) -> Result<()> {
     if v > 0.0 && v.is_finite() {
         Ok(())

@@ -17,9 +17,15 @@ pub struct ProbeCampaignArgs {
     /// Five-axis machine file (e.g. machines/trunnion-ac.toml).
     #[arg(long)]
     pub machine: PathBuf,
-    /// Number of configurations to probe (spread over the rotary travels).
-    #[arg(long, default_value_t = 50)]
+    /// Number of configurations to probe (spread over the rotary travels and the targets).
+    #[arg(long, default_value_t = 80)]
     pub configs: usize,
+    /// Placements of a relocated sphere probed besides the artefact: the first N of the
+    /// machine file's `[sphere] placements_mm`, or of a layout spread over the working volume
+    /// when the file has none (at most 8). Default: all of the file's, or 4. 0: the artefact
+    /// only.
+    #[arg(long)]
+    pub placements: Option<usize>,
     /// Machine realisation (seed of its random error parts and of the trigger noise).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -49,9 +55,13 @@ impl ProbeCampaignArgs {
                 "--noise-2sigma-um must be ≥ 0, got {n}"
             );
         }
+        let placements =
+            vmc_machine::fiveaxis::campaign::placements_w_mm(&machine, self.placements)
+                .map_err(|e| anyhow::anyhow!("--placements: {e}"))?;
         Ok(ProbeCampaignConfig {
             machine,
             configs: self.configs,
+            placements,
             seed: self.seed,
             noise_2sigma_um: self.noise_2sigma_um,
             out: self.out,

@@ -31,7 +31,7 @@ pub struct LobesArgs {
     /// Stability method.
     #[arg(long, value_enum, default_value = "sdm")]
     pub method: MethodArg,
-    /// Radial immersion a_e/D, in (0, 1] (1 = slotting).
+    /// Radial immersion a_e/D, in [0.01, 1] (1 = slotting).
     #[arg(long, default_value_t = 1.0)]
     pub immersion: f64,
     /// Milling direction.
@@ -142,7 +142,7 @@ impl LobesArgs {
     /// The validated config.
     ///
     /// # Errors
-    /// An unreadable or invalid tool file, an immersion outside (0, 1], malformed speeds.
+    /// An unreadable or invalid tool file, an immersion outside [0.01, 1], malformed speeds.
     pub fn config(self) -> Result<commands::lobes::LobesConfig> {
         let (tool, tool_source) =
             vmc_machine::milling::ToolDynamics::from_option(self.tool.as_deref())?;

@@ -14,6 +14,7 @@ mod identify_thermal;
 mod lobes;
 mod modal_fit;
 mod placement;
+mod replay;
 mod thermal;
 
 use std::path::{Path, PathBuf};
@@ -35,6 +36,7 @@ pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
 pub use identify_thermal::IdentifyThermalArgs;
 pub use lobes::{LobesArgs, MethodArg};
 pub use modal_fit::ModalFitArgs;
+pub use replay::{LogFormatArg, ReplayArgs};
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
 
 /// `vmc-twin`: the whole command line.
@@ -106,6 +108,10 @@ pub enum Command {
     /// 840D sl CEC) from a trained model at a thermal state (readings or a warm-up on the twin),
     /// with what each table loses against the model.
     Export(ExportArgs),
+    /// Play a controller's servo log (commanded positions, optionally its corrections) on the
+    /// twin after its warm-ups and report the tool-tip error before and after compensation, as
+    /// `run` does.
+    Replay(ReplayArgs),
     /// Print the canonical machine actions of a program in the call syntax of LinuxCNC's
     /// `rs274`, to compare with a controller.
     Interpret(InterpretArgs),

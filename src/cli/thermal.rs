@@ -101,6 +101,17 @@ pub struct PredictThermalArgs {
     /// Time column; default: the only column whose name starts with "time".
     #[arg(long)]
     pub time: Option<String>,
+    /// Earlier measurements (same columns, ending before the data begins) that set the
+    /// filters' state; not predicted.
+    #[arg(long)]
+    pub history: Option<PathBuf>,
+    /// Refuse, rather than warn, when the data and history cover less than the model's memory.
+    #[arg(long)]
+    pub strict: bool,
+    /// The data begins with the machine at rest (idle long enough to be at steady state): no
+    /// history is needed.
+    #[arg(long, conflicts_with = "history")]
+    pub starts_at_rest: bool,
 }
 
 impl FitThermalArgs {
@@ -170,6 +181,9 @@ impl PredictThermalArgs {
             out: self.out,
             force: self.force.force,
             time: self.time,
+            history: self.history,
+            strict: self.strict,
+            starts_at_rest: self.starts_at_rest,
         }
     }
 }

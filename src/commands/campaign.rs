@@ -113,24 +113,38 @@ pub fn campaign(cfg: &CampaignConfig, out: &mut dyn Write) -> Result<()> {
     Ok(())
 }
 
-/// The probing line of a campaign with probing: artefact, interval, cycle and its cost.
+/// The probing line of a campaign with probing: artefacts, interval, cycle and its cost.
 fn write_probing(p: &Probing, out: &mut dyn Write) -> Result<()> {
-    let c = p.sphere_centre_mm;
+    let at: Vec<String> = p
+        .sphere_centres_mm
+        .iter()
+        .map(|c| format!("({:.0}, {:.0}, {:.0})", c[0], c[1], c[2]))
+        .collect();
+    let model = if p.gradient {
+        format!(
+            "drift offset and gradient per component, walks {:.1} µm/√h and {:.1} µm/m/√h",
+            p.field.walk_offset_um_per_sqrt_h, p.field.walk_gradient_um_per_m_sqrt_h
+        )
+    } else {
+        format!(
+            "drift offset per axis, walk {:.1} µm/√h",
+            p.field.walk_offset_um_per_sqrt_h
+        )
+    };
     writeln!(
         out,
-        "probing: a {:.0} mm reference sphere at ({:.0}, {:.0}, {:.0}) mm, 10 touches every {:.0} \
-         min from the start of each run (and right before the diagonal), {:.0} s per cycle: \
-         {:.2} machine min per hour; probe {:.1} µm 2σ, pre-travel {:.1} µm, drift walk {:.1} µm/√h",
+        "probing: {} Ø{:.0} mm reference sphere(s) at {} mm, {} touches every {:.0} min from the \
+         start of each run (and right before the diagonal), {:.0} s per cycle: {:.2} machine min \
+         per hour; probe {:.1} µm 2σ, pre-travel {:.1} µm; {model}",
+        p.sphere_centres_mm.len(),
         2.0 * p.sphere_radius_mm,
-        c[0],
-        c[1],
-        c[2],
+        at.join(" "),
+        p.touches_per_cycle(),
         p.every_s / 60.0,
         p.cycle_s(),
         p.cost_min_per_h(),
         p.probe.repeatability_2sigma_um,
         p.probe.pretravel_mm() * 1e3,
-        p.walk_sigma_um_per_sqrt_h
     )?;
     Ok(())
 }

@@ -169,8 +169,7 @@ pub fn design(cfg: &DesignConfig, out: &mut dyn Write) -> Result<()> {
         SAMPLES_PER_ACTED_PERIOD / 2.0,
     )
     .map_err(|e| anyhow::anyhow!("{}: {e}", cfg.plant_source))?;
-    let (k, gamma) =
-        design_controller(cfg, &bp).with_context(|| format!("{}", cfg.plant_source))?;
+    let (k, gamma) = design_controller(cfg, &bp).with_context(|| cfg.plant_source.to_string())?;
     let (fig, closed) = figures(p, &bp, &k)?;
     let mut text = String::new();
     writeln!(

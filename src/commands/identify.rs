@@ -14,7 +14,7 @@ use crate::files;
 use vmc_identify::chain::Pose;
 use vmc_identify::design::d_optimal;
 use vmc_identify::identify::{
-    identify as fit, Identification, IdentifyOptions, Observation, Relation, Status,
+    identify as fit, placements_in, Identification, IdentifyOptions, Observation, Relation, Status,
 };
 use vmc_identify::order::{choose_order, parameter_set, OrderChoice, OrderOptions};
 use vmc_machine::fiveaxis::campaign::parse_csv;
@@ -124,14 +124,17 @@ pub fn identify(cfg: &IdentifyConfig, out: &mut dyn Write) -> Result<()> {
     if let Some(k) = cfg.design_configs {
         // The design sees the nominal sensitivity only; with the order still to be chosen it
         // designs for the second harmonics on every axis.
-        let design_set = parameter_set(&geom, &vec![cfg.harmonics.unwrap_or(2); geom.rotary.len()]);
+        let design_set = parameter_set(&geom, &vec![cfg.harmonics.unwrap_or(2); geom.rotary.len()])
+            .with_placements(placements_in(&obs));
         let d = d_optimal(&geom, &design_set, &obs, k).with_context(|| name.clone())?;
         obs = d.chosen.iter().map(|&i| obs[i]).collect();
         chosen = Some(d.chosen);
     }
     let t0 = Instant::now();
     let (order_choice, orders) = model_orders(cfg, &geom, &obs).with_context(|| name.clone())?;
-    let set = parameter_set(&geom, &orders);
+    // The relocated sphere's offsets are fitted with the machine's errors and written with
+    // them; they never enter a compensation.
+    let set = parameter_set(&geom, &orders).with_placements(placements_in(&obs));
     let id = fit(&geom, &set, &obs, &IdentifyOptions::default()).with_context(|| name.clone())?;
     let time_ms = t0.elapsed().as_secs_f64() * 1e3;
     let seed = cfg.seed.or(file.seed).with_context(|| {

@@ -28,7 +28,7 @@ pub struct LobesConfig {
     /// Resolution of the semi-discretisation (`--steps N`: [`Resolution::Fixed`]; default the
     /// converged rule, [`Resolution::default`]); the other methods ignore it.
     pub resolution: Resolution,
-    /// Radial immersion a_e/D, in (0, 1].
+    /// Radial immersion a_e/D, in [0.01, 1].
     pub immersion: f64,
     /// Up or down milling.
     pub milling: Milling,

@@ -21,6 +21,7 @@ pub mod modal_fit;
 pub(crate) mod model;
 pub mod probe_campaign;
 pub mod program_placement;
+pub mod replay;
 pub mod run;
 pub mod run_fiveaxis;
 mod run_stream;

@@ -17,6 +17,8 @@ pub struct ProbeCampaignConfig {
     pub machine: FiveAxisSpec,
     /// Configurations.
     pub configs: usize,
+    /// Nominal centres of the relocated sphere's placements, workpiece frame, mm.
+    pub placements: Vec<[f64; 3]>,
     /// Machine realisation and trigger-noise seed.
     pub seed: u64,
     /// Trigger noise override, µm at 2σ.
@@ -41,7 +43,7 @@ pub fn probe_campaign(cfg: &ProbeCampaignConfig, out: &mut dyn Write) -> Result<
     let spec = &cfg.machine;
     let machine = TrueMachine::new(spec, cfg.seed)?;
     let probe = VirtualProbe::of(spec, cfg.noise_2sigma_um);
-    let configs = campaign::spread_configurations(spec, &probe, cfg.configs);
+    let configs = campaign::spread_configurations(spec, &probe, cfg.configs, &cfg.placements);
     anyhow::ensure!(
         configs.len() == cfg.configs,
         "only {} of {} configurations keep the probe within the travels of machine {}",
@@ -64,11 +66,12 @@ pub fn probe_campaign(cfg: &ProbeCampaignConfig, out: &mut dyn Write) -> Result<
     let mut text = Vec::new();
     writeln!(
         text,
-        "probing campaign on {} (seed {}): {} configurations × {} points, trigger noise {} µm (2σ) → {}",
+        "probing campaign on {} (seed {}): {} configurations × {} points on the artefact and {} placement(s) of a relocated sphere, trigger noise {} µm (2σ) → {}",
         spec.machine.name,
         cfg.seed,
         rows.len(),
         probe.points,
+        cfg.placements.len(),
         probe.noise_sigma_mm * 2e3,
         cfg.out.display()
     )?;

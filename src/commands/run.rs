@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use super::run_stream::{self, ProgramScan, Spill};
+use super::run_stream::{self, ProgramScan, Rows};
 use super::{wrote_recording, RrdOutput};
 use crate::files;
 use crate::predict::controller::Compensator;
@@ -124,7 +124,7 @@ pub fn run_target(target: &RunTarget, out: &mut dyn Write) -> Result<()> {
 
 /// The compensating controller of a run: the model, its inputs checked against its trained
 /// ranges.
-type RunController = Guarded<Compensator<AnyPredictor>>;
+pub(super) type RunController = Guarded<Compensator<AnyPredictor>>;
 
 /// Runs the program and prints the report to `out`.
 ///
@@ -139,24 +139,21 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let (mut controller, ranges_known) = match &cfg.model {
         Some(path) => {
-            let (c, known) = compensator(cfg, path, out)?;
+            let (c, known) = compensator(
+                &cfg.machine,
+                cfg.seed,
+                path,
+                cfg.allow_other_machine,
+                cfg.strict,
+                out,
+            )?;
             (Some(c), known)
         }
         None => (None, false),
     };
-    // The rows go out as the points come: the table to a temporary file until the report is
-    // printed, samples.csv to its temporary file, named when the run has succeeded.
-    let mut table = Spill::new()?;
-    let mut csv = match &out_files {
-        Some((csv, _)) => Some(files::AtomicFile::create(csv, cfg.force)?),
-        None => None,
-    };
     let compensated = controller.is_some();
-    let mut log = report::RunLog::new(
-        compensated,
-        table.writer(),
-        csv.as_mut().map(|f| f as &mut dyn Write),
-    );
+    let mut rows = Rows::new(out_files, cfg.force)?;
+    let mut log = rows.log(compensated);
     let recorder = simulate(
         cfg,
         &sampling,
@@ -185,13 +182,54 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
                 "{program_name}: the program has no measurement points (no motion and no G4 dwell)"
             )
         })?;
+    judge_extrapolation(&mut summary, controller.as_ref(), ranges_known, cfg.strict)?;
+    let head = report_head(cfg, &sampling, &log, &summary)?;
+    drop(log);
+    deliver(
+        Delivery {
+            summary: &summary,
+            head,
+            rows,
+            recording: recorder.zip(cfg.rrd.as_ref()),
+            compensated,
+            force: cfg.force,
+        },
+        out,
+    )
+}
+
+/// What a measured run (or replay) hands to [`deliver`].
+pub(super) struct Delivery<'a> {
+    /// The summary of the points.
+    pub summary: &'a RunSummary,
+    /// The printed report's head (the per-point table and the summary follow).
+    pub head: String,
+    /// The rows written as the points came.
+    pub rows: Rows,
+    /// The recording and where it goes, if one is written.
+    pub recording: Option<((record::Recorder, record::RrdFile), &'a RrdOutput)>,
+    /// Whether the points have an error after compensation.
+    pub compensated: bool,
+    /// Overwrite existing files.
+    pub force: bool,
+}
+
+/// The extrapolation verdict of `controller` (if any) in `summary`.
+///
+/// # Errors
+/// `strict` and the model was used outside its trained ranges.
+pub(super) fn judge_extrapolation(
+    summary: &mut RunSummary,
+    controller: Option<&RunController>,
+    ranges_known: bool,
+    strict: bool,
+) -> Result<()> {
     // Without recorded training ranges nothing was checked: no verdict (the report says "not
     // checked"), never "inside the trained ranges".
     summary.extrapolation = controller
-        .as_ref()
         .filter(|_| ranges_known)
         .map(|c| c.extrapolation().clone());
-    if let (true, Some(e)) = (cfg.strict, &summary.extrapolation) {
+    if let (true, Some(e)) = (strict, &summary.extrapolation) {
         if let Some(first) = e.inputs.first() {
             anyhow::bail!(
                 "--strict: the model was used outside the range it was trained on: {} (first at \
@@ -210,21 +248,33 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
             );
         }
     }
-    // The report goes to `out` and, with --rrd, into the recording (its table cut short).
-    let head = report_head(cfg, &sampling, &log, &summary)?;
-    drop(log);
+    Ok(())
+}
+
+/// The end of a measured run: the report printed (head, the rows, the summary) and put in the
+/// recording (its table cut short), `samples.csv` named and `summary.json` written.
+///
+/// # Errors
+/// Files or the recording that cannot be written.
+pub(super) fn deliver(d: Delivery<'_>, out: &mut dyn Write) -> Result<()> {
+    let Rows {
+        mut table,
+        csv,
+        out_files,
+    } = d.rows;
     let mut tail: Vec<u8> = Vec::new();
-    report::write_summary(&summary, &mut tail)?;
+    report::write_summary(d.summary, &mut tail)?;
     let tail = String::from_utf8_lossy(&tail).to_string();
-    out.write_all(head.as_bytes())?;
+    out.write_all(d.head.as_bytes())?;
     table.copy_to(out)?;
     out.write_all(tail.as_bytes())?;
-    if let (Some((rec, file)), Some(rrd)) = (recorder, &cfg.rrd) {
+    if let Some(((rec, file), rrd)) = d.recording {
         let text = format!(
-            "{head}{}{tail}",
+            "{}{}{tail}",
+            d.head,
             table.head(run_stream::RECORDED_TABLE_ROWS)?
         );
-        let md = record::run_markdown(&text, rrd.settings.magnify, compensated);
+        let md = record::run_markdown(&text, rrd.settings.magnify, d.compensated);
         rec.finish(Some(&md))?;
         let path = file.path().to_path_buf();
         let bytes = file.finish()?;
@@ -232,8 +282,8 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     }
     if let (Some((csv_path, json)), Some(csv)) = (out_files, csv) {
         csv.finish()?;
-        let text = serde_json::to_string_pretty(&summary)?;
-        files::write_atomic(&json, text.as_bytes(), cfg.force)?;
+        let text = serde_json::to_string_pretty(d.summary)?;
+        files::write_atomic(&json, text.as_bytes(), d.force)?;
         writeln!(out, "wrote {} and {}", csv_path.display(), json.display())?;
     }
     Ok(())
@@ -242,38 +292,46 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
 /// A warm-up: its canonical moves, where it starts and how long it takes. Its timed plan is
 /// built piece by piece as it runs ([`program::ProgramMoves::pieces`]), so a week of duty
 /// never holds a week of plan.
-struct Warmup {
+pub(super) struct Warmup {
     moves: program::ProgramMoves,
     start_mm: [f64; 3],
-    duration_s: f64,
+    /// Its duration, s.
+    pub duration_s: f64,
 }
 
 impl Warmup {
     /// The warm-up's plans, piece by piece (each checked).
-    fn pieces<'a>(&'a self, cfg: &'a RunConfig) -> program::PlanPieces<'a> {
-        self.moves.pieces(
-            &cfg.machine,
-            self.start_mm,
-            &cfg.tools,
-            program::MOVES_PER_PIECE,
-        )
+    fn pieces<'a>(
+        &'a self,
+        machine: &'a MachineSpec,
+        tools: &'a vmc_machine::tools::ToolTable,
+    ) -> program::PlanPieces<'a> {
+        self.moves
+            .pieces(machine, self.start_mm, tools, program::MOVES_PER_PIECE)
     }
 }
 
-/// The warm-ups and the measured program (every piece planned and checked once, then
-/// dropped), each starting where the previous one ends; the run's size checked.
-fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, ProgramScan, Sampling)> {
-    let mut start = cfg.machine.axes.home_mm;
+/// The warm-ups of `paths` (every piece planned and checked once, then dropped), each starting
+/// where the previous one ends, the first at the machine's home; and where the last ends.
+///
+/// # Errors
+/// Unreadable or invalid programs.
+pub(super) fn load_warmups(
+    machine: &MachineSpec,
+    tools: &vmc_machine::tools::ToolTable,
+    paths: &[PathBuf],
+) -> Result<(Vec<Warmup>, [f64; 3])> {
+    let mut start = machine.axes.home_mm;
     let mut warmups = Vec::new();
-    for w in &cfg.warmups {
-        let moves = program::ProgramMoves::load(w, &cfg.machine, start, &cfg.tools)?;
+    for w in paths {
+        let moves = program::ProgramMoves::load(w, machine, start, tools)?;
         let mut warmup = Warmup {
             moves,
             start_mm: start,
             duration_s: 0.0,
         };
         let mut duration_s = 0.0;
-        for piece in warmup.pieces(cfg) {
+        for piece in warmup.pieces(machine, tools) {
             let piece = piece?;
             duration_s += piece.duration_s();
             start = piece.end_mm();
@@ -281,6 +339,13 @@ fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, ProgramScan, Sampling)> {
         warmup.duration_s = duration_s;
         warmups.push(warmup);
     }
+    Ok((warmups, start))
+}
+
+/// The warm-ups and the measured program (every piece planned and checked once, then
+/// dropped), each starting where the previous one ends; the run's size checked.
+fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, ProgramScan, Sampling)> {
+    let (warmups, start) = load_warmups(&cfg.machine, &cfg.tools, &cfg.warmups)?;
     let scan = run_stream::scan(&measured(cfg), start, cfg.rrd.is_some())?;
     let sampling = sampling(cfg, scan.has_dwell)?;
     let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + scan.duration_s;
@@ -307,10 +372,16 @@ fn measured(cfg: &RunConfig) -> run_stream::Measured<'_> {
 /// The model of `path` as a compensator for the run's machine (see
 /// [`super::model::load_for_machine`]), guarded by its trained ranges; and whether the file
 /// records them (a model without them is not checked).
-fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<(RunController, bool)> {
-    let machine = &cfg.machine;
+pub(super) fn compensator(
+    machine: &MachineSpec,
+    seed: u64,
+    path: &Path,
+    allow_other_machine: bool,
+    strict: bool,
+    out: &mut dyn Write,
+) -> Result<(RunController, bool)> {
     let (model, trained_on) =
-        super::model::load_for_machine(machine, cfg.seed, path, cfg.allow_other_machine, out)?;
+        super::model::load_for_machine(machine, seed, path, allow_other_machine, out)?;
     let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
     let ctrl = Compensator::for_machine(model, &names)
         .with_context(|| super::model::does_not_fit(path, machine))?;
@@ -320,6 +391,12 @@ fn compensator(cfg: &RunConfig, path: &Path, out: &mut dyn Write) -> Result<(Run
         spindle_rpm: None,
         axis_feeds: None,
     };
+    anyhow::ensure!(
+        !(strict && trained_on.is_none()),
+        "{}: --strict refuses readings outside the model's trained ranges, and this model file \
+         records none (a file older than version 8): retrain it, or run without --strict",
+        path.display()
+    );
     let ranges = trained_on.as_ref().map(|t| &t.inputs).unwrap_or(&none);
     Ok((Guarded::new(ctrl, ranges, &names), trained_on.is_some()))
 }
@@ -352,26 +429,25 @@ fn simulate(
         None => None,
     };
     let mut null = sim::NullObserver;
-    for (p, name) in warmups.iter().zip(&cfg.warmups) {
+    {
         let rec: &mut dyn Observer = match recording.as_mut() {
             Some((r, _)) => r,
             None => &mut null,
         };
         let mut obs = sim::Tee(rec, &mut progress);
-        obs.on_run_start(&RunStart {
-            label: format!("warm-up {}", name.display()),
-            time_s: twin.time_s(),
-            duration_s: p.duration_s,
-            measured: false,
-        });
-        for piece in p.pieces(cfg) {
-            // The controller follows the readings (and the commanded motion) through the
-            // warm-up, as on the machine: a model with history features needs the thermal past.
-            let ctrl = controller
-                .as_deref_mut()
-                .map(|c| c as &mut dyn sim::Controller);
-            sim::execute(&mut twin, &piece?, &warm_cfg, ctrl, &mut obs)?;
-        }
+        let ctx = WarmupContext {
+            machine,
+            tools: &cfg.tools,
+            names: &cfg.warmups,
+            sim: &warm_cfg,
+        };
+        run_warmups(
+            &ctx,
+            &mut twin,
+            warmups,
+            controller.as_deref_mut(),
+            &mut obs,
+        )?;
     }
     {
         let rec: &mut dyn Observer = match recording.as_mut() {
@@ -385,6 +461,48 @@ fn simulate(
     }
     progress.finish();
     Ok(recording)
+}
+
+/// What the warm-ups run with.
+pub(super) struct WarmupContext<'a> {
+    /// The machine.
+    pub machine: &'a MachineSpec,
+    /// The tool table `M6` loads from.
+    pub tools: &'a vmc_machine::tools::ToolTable,
+    /// The warm-ups' files, for the labels.
+    pub names: &'a [PathBuf],
+    /// Thermal step (no measurement).
+    pub sim: &'a SimConfig,
+}
+
+/// Runs the warm-ups in order on `twin`, the controller (if any) following the readings.
+///
+/// # Errors
+/// Invalid pieces, simulation errors.
+pub(super) fn run_warmups(
+    ctx: &WarmupContext<'_>,
+    twin: &mut Twin,
+    warmups: &[Warmup],
+    mut controller: Option<&mut RunController>,
+    obs: &mut dyn Observer,
+) -> Result<()> {
+    for (p, name) in warmups.iter().zip(ctx.names) {
+        obs.on_run_start(&RunStart {
+            label: format!("warm-up {}", name.display()),
+            time_s: twin.time_s(),
+            duration_s: p.duration_s,
+            measured: false,
+        });
+        for piece in p.pieces(ctx.machine, ctx.tools) {
+            // The controller follows the readings (and the commanded motion) through the
+            // warm-up, as on the machine: a model with history features needs the thermal past.
+            let ctrl = controller
+                .as_deref_mut()
+                .map(|c| c as &mut dyn sim::Controller);
+            sim::execute(twin, &piece?, ctx.sim, ctrl, obs)?;
+        }
+    }
+    Ok(())
 }
 
 /// The recording of a run, its id naming everything that makes the run.
@@ -405,13 +523,27 @@ fn open_recording(
             .collect::<Vec<_>>()
             .join(", "),
     );
+    open_run_recording(&id, rrd, cfg.force, &cfg.machine, diagonal)
+}
+
+/// A recording with a run's layout, named `id`, its diagonal timeline along `diagonal`.
+///
+/// # Errors
+/// A file that may not be written, a recording that cannot start.
+pub(super) fn open_run_recording(
+    id: &str,
+    rrd: &RrdOutput,
+    force: bool,
+    machine: &MachineSpec,
+    diagonal: Option<record::Diagonal>,
+) -> Result<(record::Recorder, record::RrdFile)> {
     let file = record::RrdFile::create(
         &rrd.path,
-        cfg.force,
-        &id,
+        force,
+        id,
         record::layout::run_blueprint(rrd.settings.magnify),
     )?;
-    let rec = record::Recorder::new(&file, &cfg.machine, rrd.settings, diagonal)?;
+    let rec = record::Recorder::new(&file, machine, rrd.settings, diagonal)?;
     Ok((rec, file))
 }
 
@@ -431,27 +563,39 @@ fn report_head(
         cfg.machine.machine.name,
         cfg.seed
     )?;
-    if cfg.warmups.is_empty() {
-        writeln!(out, "thermal state: cold start (machine at ambient)")?;
-    } else {
-        let names: Vec<String> = cfg
-            .warmups
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect();
-        writeln!(
-            out,
-            "thermal state: after warm-up {} ({:.1} h)",
-            names.join(", "),
-            summary.time_span_s[0] / 3600.0
-        )?;
-    }
+    write_thermal_state(&mut out, &cfg.warmups, summary)?;
     writeln!(
         out,
         "{}",
         super::program_placement::placement_line(&cfg.placement)
     )?;
     writeln!(out, "measured {}", sampling.note)?;
+    write_first_readings(&mut out, log)?;
+    Ok(String::from_utf8_lossy(&out).to_string())
+}
+
+/// The report's thermal-state line: cold, or after which warm-ups.
+pub(super) fn write_thermal_state(
+    out: &mut dyn Write,
+    warmups: &[PathBuf],
+    summary: &RunSummary,
+) -> std::io::Result<()> {
+    if warmups.is_empty() {
+        writeln!(out, "thermal state: cold start (machine at ambient)")
+    } else {
+        let names: Vec<String> = warmups.iter().map(|p| p.display().to_string()).collect();
+        writeln!(
+            out,
+            "thermal state: after warm-up {} ({:.1} h)",
+            names.join(", "),
+            summary.time_span_s[0] / 3600.0
+        )
+    }
+}
+
+/// The report's line of the sensor readings at the first point, and the table's legend (the
+/// per-point table follows).
+pub(super) fn write_first_readings(out: &mut dyn Write, log: &RunLog) -> std::io::Result<()> {
     if let Some(temps) = &log.first_degc {
         let list: Vec<String> = log
             .sensor_names
@@ -461,6 +605,5 @@ fn report_head(
             .collect();
         writeln!(out, "sensors at the first point (°C): {}", list.join(", "))?;
     }
-    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")?;
-    Ok(String::from_utf8_lossy(&out).to_string())
+    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")
 }

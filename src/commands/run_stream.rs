@@ -159,6 +159,48 @@ impl Observer for Numbered<'_> {
     }
 }
 
+/// Where a measured run's rows go as the points come: the terminal table (spilled until the
+/// report is printed) and, with `--out`, `samples.csv` (a temporary file named when the run
+/// has succeeded, see [`crate::files::AtomicFile`]).
+pub(super) struct Rows {
+    /// The terminal table's rows.
+    pub table: Spill,
+    /// `samples.csv` being written.
+    pub csv: Option<crate::files::AtomicFile>,
+    /// The paths of `samples.csv` and `summary.json`, if written.
+    pub out_files: Option<(std::path::PathBuf, std::path::PathBuf)>,
+}
+
+impl Rows {
+    /// Opens the table's temporary file and `samples.csv`'s (if `out_files`).
+    ///
+    /// # Errors
+    /// A temporary file that cannot be created, `samples.csv` that may not be written.
+    pub fn new(
+        out_files: Option<(std::path::PathBuf, std::path::PathBuf)>,
+        force: bool,
+    ) -> Result<Self> {
+        let csv = match &out_files {
+            Some((csv, _)) => Some(crate::files::AtomicFile::create(csv, force)?),
+            None => None,
+        };
+        Ok(Self {
+            table: Spill::new()?,
+            csv,
+            out_files,
+        })
+    }
+
+    /// A run log writing into these rows, with the compensated columns if `compensated`.
+    pub fn log(&mut self, compensated: bool) -> crate::report::RunLog<'_> {
+        crate::report::RunLog::new(
+            compensated,
+            self.table.writer(),
+            self.csv.as_mut().map(|f| f as &mut dyn Write),
+        )
+    }
+}
+
 /// Rows of the terminal table written as the points come, read back when the report is
 /// printed: an unnamed temporary file (removed from its folder as soon as it is opened, so
 /// nothing is left behind whatever happens to the run).

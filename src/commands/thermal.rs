@@ -50,6 +50,13 @@ pub struct PredictThermalConfig {
     pub force: bool,
     /// Time column (None: the only one whose name starts with "time").
     pub time: Option<String>,
+    /// Earlier measurements of the same machine (same columns, times before the data's), run
+    /// through the filters first and not predicted.
+    pub history: Option<PathBuf>,
+    /// Refuse, rather than warn, when the past given covers less than the model's memory.
+    pub strict: bool,
+    /// The data begins at rest (steady state): the filters' starting state is right.
+    pub starts_at_rest: bool,
 }
 
 /// `vmc-twin fit-thermal`: fits the model, writes it and prints its evaluation.
@@ -307,27 +314,43 @@ pub fn predict_thermal(cfg: &PredictThermalConfig, out: &mut dyn Write) -> Resul
     let model_name = cfg.model.display().to_string();
     let model = ThermalModel::from_json(&files::read_named(&cfg.model, "model")?, &model_name)?;
     let source = cfg.data.display().to_string();
-    let text = files::read_named(&cfg.data, "measurements")?;
-    let request = TableRequest {
-        time: cfg.time.clone(),
-        required: model
-            .inputs
-            .iter()
-            .map(|c| (c.name.clone(), "input"))
-            .collect(),
-        optional: model.outputs.iter().map(|c| c.name.clone()).collect(),
-        min_rows: 1,
+    let read = |path: &std::path::Path, what: &'static str| {
+        read_for_model(path, what, &model, cfg.time.as_ref())
+            .with_context(|| format!("data does not fit model {model_name}"))
     };
-    let table = thermal_fit::read_csv(&text, &source, &request)
-        .with_context(|| format!("data does not fit model {model_name}"))?;
-    let inputs: Vec<&[f64]> = model
+    let table = read(&cfg.data, "measurements")?;
+    let history = match &cfg.history {
+        Some(path) => Some(read(path, "history")?),
+        None => None,
+    };
+    if !cfg.starts_at_rest {
+        if let Some(warning) = history_check(&model, &table, history.as_ref(), cfg.strict)? {
+            writeln!(out, "{warning}")?;
+        }
+    }
+    // The history rows go through the filters first; only the data's rows are predicted.
+    let n_past = history.as_ref().map_or(0, thermal_fit::Table::len);
+    let mut time_s = history.as_ref().map_or(Vec::new(), |h| h.time_s.clone());
+    time_s.extend_from_slice(&table.time_s);
+    let inputs: Vec<Vec<f64>> = model
         .inputs
         .iter()
-        .filter_map(|c| table.column(&c.name))
+        .filter_map(|c| {
+            let now = table.column(&c.name)?;
+            let past = history
+                .as_ref()
+                .and_then(|h| h.column(&c.name))
+                .unwrap_or(&[]);
+            Some([past, now].concat())
+        })
         .collect();
-    let pred = model
-        .predict(&table.time_s, &inputs)
-        .with_context(|| source.clone())?;
+    let input_refs: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
+    let pred: Vec<Vec<f64>> = model
+        .predict(&time_s, &input_refs)
+        .with_context(|| source.clone())?
+        .into_iter()
+        .map(|col| col[n_past..].to_vec())
+        .collect();
     let measured: Vec<(&str, &[f64])> = model
         .outputs
         .iter()
@@ -370,4 +393,81 @@ pub fn predict_thermal(cfg: &PredictThermalConfig, out: &mut dyn Write) -> Resul
         cfg.out.display()
     )?;
     Ok(())
+}
+
+/// A measurement file with the model's input columns (and its output columns when present).
+fn read_for_model(
+    path: &std::path::Path,
+    what: &'static str,
+    model: &ThermalModel,
+    time: Option<&String>,
+) -> Result<thermal_fit::Table> {
+    let source = path.display().to_string();
+    let text = files::read_named(path, what)?;
+    let request = TableRequest {
+        time: time.cloned(),
+        required: model
+            .inputs
+            .iter()
+            .map(|c| (c.name.clone(), "input"))
+            .collect(),
+        optional: model.outputs.iter().map(|c| c.name.clone()).collect(),
+        min_rows: 1,
+    };
+    Ok(thermal_fit::read_csv(&text, &source, &request)?)
+}
+
+/// Does the past given (the history file, if any) cover the model's memory? `Ok(None)` when it
+/// does; a warning line when it does not (an error under `strict`). A history must end before
+/// the data begins.
+fn history_check(
+    model: &ThermalModel,
+    data: &thermal_fit::Table,
+    history: Option<&thermal_fit::Table>,
+    strict: bool,
+) -> Result<Option<String>> {
+    let memory_s = model.features.memory_s();
+    let Some(&t0_s) = data.time_s.first() else {
+        return Ok(None);
+    };
+    let covered_s = match history {
+        Some(h) => {
+            let (first_s, last_s) = (h.time_s[0], h.time_s[h.len() - 1]);
+            if last_s >= t0_s {
+                anyhow::bail!(
+                    "{}: the history ends at t = {last_s} s, not before the data's first row \
+                     (t = {t0_s} s in {}): give the measurements that came before",
+                    h.source,
+                    data.source
+                );
+            }
+            t0_s - first_s
+        }
+        None => 0.0,
+    };
+    if covered_s >= memory_s {
+        return Ok(None);
+    }
+    let affected = data
+        .time_s
+        .iter()
+        .filter(|t| **t - t0_s < memory_s - covered_s)
+        .count();
+    let past = match history {
+        Some(h) => format!("its history {} covers {covered_s:.0} s", h.source),
+        None => "no history is given".to_string(),
+    };
+    let what = format!(
+        "{}: the model remembers {memory_s:.0} s (3 × its longest filter time constant) and \
+         {past} before the first row (t = {t0_s} s); the predictions of the first {affected} \
+         of {} rows assume the machine was at rest at the start of what is given, and are wrong if \
+         it was not",
+        data.source,
+        data.len()
+    );
+    let how = "give the earlier measurements with --history FILE, or say --starts-at-rest";
+    if strict {
+        anyhow::bail!("{what} (--strict): {how}");
+    }
+    Ok(Some(format!("warning: {what}; {how}")))
 }

@@ -62,6 +62,9 @@ pub enum EvalError {
     /// A diagonal program failed to plan.
     #[error(transparent)]
     Program(#[from] ProgramError),
+    /// A compensator with a drift field that could not be built.
+    #[error(transparent)]
+    Probed(#[from] probing::ProbedCompensatorError),
 }
 
 /// Drives `twin` through `state`'s cycle up to the state (1 s thermal steps, cycle time 0 at

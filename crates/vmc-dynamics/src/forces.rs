@@ -42,7 +42,7 @@ pub struct Engagement {
 }
 
 impl Engagement {
-    /// Window for a radial immersion a_e/D in (0, 1] and a milling direction.
+    /// Window for a radial immersion a_e/D in [0.01, 1] and a milling direction.
     pub fn new(immersion: f64, milling: Milling) -> Result<Self, DynamicsError> {
         validate_immersion(immersion)?;
         Ok(match milling {

@@ -35,15 +35,21 @@ pub enum DynamicsError {
         /// The value given.
         value: f64,
     },
-    /// Radial immersion a_e/D is outside (0, 1].
-    #[error("immersion a_e/D must be in (0, 1], got {0}")]
+    /// Radial immersion a_e/D is outside [`MIN_IMMERSION`], 1].
+    #[error(
+        "immersion a_e/D must be in [{MIN_IMMERSION}, 1] (a radial depth of at least 1 % of the \
+         tool diameter), got {}", readable(*.0)
+    )]
     ImmersionOutOfRange(f64),
     /// The spindle speed is zero (or negative).
     #[error("spindle speed must be > 0 rpm, got {0}")]
     ZeroSpeed(f64),
     /// The spindle speed is positive but below [`MIN_SPINDLE_RPM`].
-    #[error("spindle speed {0} rpm is below {MIN_SPINDLE_RPM} rpm: a tooth period of minutes or more is not a milling cut (milling runs at hundreds to tens of thousands of rpm)")]
+    #[error("spindle speed {} rpm is below {MIN_SPINDLE_RPM} rpm: a tooth period of minutes or more is not a milling cut (milling runs at hundreds to tens of thousands of rpm)", readable(*.0))]
     SpeedTooLow(f64),
+    /// The spindle speed is above [`MAX_SPINDLE_RPM`].
+    #[error("spindle speed {} rpm is above {MAX_SPINDLE_RPM} rpm, faster than any machine-tool spindle", readable(*.0))]
+    SpeedTooHigh(f64),
     /// Neither direction has a mode.
     #[error("at least one mode in x or y is required")]
     NoModes,
@@ -273,7 +279,7 @@ pub enum Milling {
 pub struct Cut {
     /// Spindle speed in rpm.
     pub spindle_rpm: f64,
-    /// Radial immersion a_e/D in (0, 1].
+    /// Radial immersion a_e/D in [0.01, 1].
     pub immersion: f64,
     /// Up or down milling.
     pub milling: Milling,
@@ -293,10 +299,12 @@ impl Cut {
     }
 }
 
-/// Checks that a spindle speed is finite and > 0.
+/// Checks that a spindle speed is finite and in [[`MIN_SPINDLE_RPM`], [`MAX_SPINDLE_RPM`]].
 pub fn validate_speed(spindle_rpm: f64) -> Result<(), DynamicsError> {
     finite("spindle_rpm", spindle_rpm)?;
-    if spindle_rpm >= MIN_SPINDLE_RPM {
+    if spindle_rpm > MAX_SPINDLE_RPM {
+        Err(DynamicsError::SpeedTooHigh(spindle_rpm))
+    } else if spindle_rpm >= MIN_SPINDLE_RPM {
         Ok(())
     } else if spindle_rpm > 0.0 {
         Err(DynamicsError::SpeedTooLow(spindle_rpm))
@@ -309,10 +317,30 @@ pub fn validate_speed(spindle_rpm: f64) -> Result<(), DynamicsError> {
 /// the models' notion of a steady cut, its spectra and step counts lose their meaning).
 pub const MIN_SPINDLE_RPM: f64 = 1.0;
 
-/// Checks that a_e/D is finite and in (0, 1].
+/// Fastest spindle speed the dynamics accepts, rpm (the machine files' bound for a speed; the
+/// fastest machining spindles turn at about 10⁵ rpm).
+pub const MAX_SPINDLE_RPM: f64 = 2e5;
+
+/// A number as a person reads it in a message: plain between 10⁻⁴ and 10⁶, else in exponent
+/// form (never three hundred digits).
+pub fn readable(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Smallest radial immersion a_e/D accepted: 1 % of the diameter (0.1 mm on a 10 mm cutter, a
+/// light finishing pass). Below, the tooth is in the cut for under 12° of its turn, the
+/// discretised models need thousands of steps per period, and the limiting depths they give run
+/// to metres or kilometres: numbers without a physical cut behind them.
+pub const MIN_IMMERSION: f64 = 0.01;
+
+/// Checks that a_e/D is finite and in [[`MIN_IMMERSION`], 1].
 pub fn validate_immersion(immersion: f64) -> Result<(), DynamicsError> {
     finite("immersion", immersion)?;
-    if immersion > 0.0 && immersion <= 1.0 {
+    if (MIN_IMMERSION..=1.0).contains(&immersion) {
         Ok(())
     } else {
         Err(DynamicsError::ImmersionOutOfRange(immersion))

@@ -70,6 +70,7 @@ fn bench(c: &mut Criterion) {
                         nominal_mm: nominal_linear_axes(&g, *rot, Vector3::zeros()),
                         measured_mm: fit.centre_mm.into(),
                         cov_mm2: fit.cov_per_var * 1.5625e-8 + Matrix3::zeros(),
+                        placement: 0,
                     }
                 })
                 .collect();

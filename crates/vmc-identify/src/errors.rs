@@ -111,6 +111,17 @@ pub enum Component {
     Workpiece(usize),
     /// Tool tip offset along x/y/z.
     Tool(usize),
+    /// Where a relocated sphere really sits relative to where it was put, along x/y/z of the
+    /// workpiece frame, for placement `placement` ≥ 1 of a probing campaign (a sphere moved
+    /// over the table between blocks of configurations; its nominal position is known to a
+    /// fraction of a millimetre only). Not a machine error: it moves only the readings of its
+    /// own placement and never enters a compensation.
+    Placement {
+        /// 1-based placement.
+        placement: usize,
+        /// 0–2: x, y, z.
+        axis: usize,
+    },
 }
 
 const LETTERS: [char; 6] = ['X', 'Y', 'Z', 'A', 'B', 'C'];
@@ -132,6 +143,9 @@ impl Component {
             } => format!("E_{}{}", LETTERS[component], axis.letter()),
             Component::Workpiece(i) => format!("E_{}W", LETTERS[i]),
             Component::Tool(i) => format!("E_{}T", LETTERS[i]),
+            Component::Placement { placement, axis } => {
+                format!("E_{}P{placement}", LETTERS[axis])
+            }
         }
     }
 
@@ -143,7 +157,7 @@ impl Component {
             | Component::Location { component, .. }
             | Component::Motion { component, .. } => component >= 3,
             Component::Squareness(_) => true,
-            Component::Workpiece(_) | Component::Tool(_) => false,
+            Component::Workpiece(_) | Component::Tool(_) | Component::Placement { .. } => false,
         }
     }
 
@@ -162,6 +176,8 @@ impl Component {
             } => *state.rotary_motion[rotary].get_mut(component) += value,
             Component::Workpiece(i) => state.workpiece_mm[i] += value,
             Component::Tool(i) => state.tool_mm[i] += value,
+            // An artefact's position, not the machine's: nothing to compensate.
+            Component::Placement { .. } => {}
         }
     }
 
@@ -316,6 +332,35 @@ impl ParameterSet {
             }
         }
         self
+    }
+
+    /// Adds the offsets (x, y, z) of relocated-sphere placements 1…`n` ([`Component::Placement`]).
+    #[must_use]
+    pub fn with_placements(mut self, n: usize) -> Self {
+        for placement in 1..=n {
+            for axis in 0..3 {
+                self.params.push(Parameter::constant(Component::Placement {
+                    placement,
+                    axis,
+                }));
+            }
+        }
+        self
+    }
+
+    /// The fitted offset of placement `placement` (zero for placement 0, the artefact, or a
+    /// placement the set does not hold), mm.
+    #[must_use]
+    pub fn placement_offset_mm(&self, values: &[f64], placement: usize) -> [f64; 3] {
+        let mut out = [0.0; 3];
+        for (p, v) in self.params.iter().zip(values) {
+            if let Component::Placement { placement: k, axis } = p.component {
+                if k == placement {
+                    out[axis] += v;
+                }
+            }
+        }
+        out
     }
 
     /// Number of parameters.

@@ -2,8 +2,10 @@
 //! on the exact model.
 //!
 //! # Method
-//! Each observation (one configuration) is the fitted centre of a sphere (the datum sphere, or
-//! another sphere of a calibrated artefact at a known offset from it) in linear-axis coordinates
+//! Each observation (one configuration) is the fitted centre of a sphere (the datum sphere,
+//! another sphere of a calibrated artefact at a known offset from it, or a sphere relocated over
+//! the table whose offset from its nominal placement is fitted with the machine's errors) in
+//! linear-axis coordinates
 //! `q_meas` with its covariance `Σ`; the nominal reading `q_nom` follows from the nominal
 //! geometry. To first order `q_meas − q_nom = S·E + noise` ([`crate::sensitivity`]). Rows are
 //! whitened by the Cholesky factor of `Σ` (`A = L⁻¹S`, `b = L⁻¹(q_meas − q_nom)`), columns
@@ -33,7 +35,7 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::chain::{Geometry, Pose};
-use crate::errors::ParameterSet;
+use crate::errors::{Component, ParameterSet};
 use crate::inverse::{linear_axes_for, HtmError};
 use crate::sensitivity::probe_sensitivity;
 
@@ -51,6 +53,34 @@ pub struct Observation {
     pub measured_mm: [f64; 3],
     /// Covariance of the measured centre, mm².
     pub cov_mm2: Matrix3<f64>,
+    /// 0: a sphere of the calibrated artefact; k ≥ 1: the k-th placement of a relocated sphere,
+    /// whose offset from `target_w_mm` is fitted with the parameters
+    /// ([`crate::errors::Component::Placement`]).
+    pub placement: usize,
+}
+
+/// The number of relocated-sphere placements the observations use (their highest index).
+#[must_use]
+pub fn placements_in(obs: &[Observation]) -> usize {
+    obs.iter().map(|o| o.placement).max().unwrap_or(0)
+}
+
+/// The 3 × p sensitivity of one observation's reading: [`probe_sensitivity`] at its pose, with
+/// the offsets of the other placements acting on nothing.
+pub(crate) fn observation_sensitivity(
+    geom: &Geometry,
+    o: &Observation,
+    set: &ParameterSet,
+) -> DMatrix<f64> {
+    let mut s = probe_sensitivity(geom, &pose_of(o), set);
+    for (j, p) in set.params.iter().enumerate() {
+        if let Component::Placement { placement, .. } = p.component {
+            if placement != o.placement {
+                s.column_mut(j).fill(0.0);
+            }
+        }
+    }
+    s
 }
 
 /// Settings of [`identify`].
@@ -241,7 +271,7 @@ pub(crate) fn build_system(
                 index: i,
                 msg: "covariance is singular".into(),
             })?;
-        let s = probe_sensitivity(geom, &pose_of(o), set);
+        let s = observation_sensitivity(geom, o, set);
         a.view_mut((3 * i, 0), (3, p)).copy_from(&(l_inv * s));
         let y = Vector3::from(o.measured_mm) - Vector3::from(o.nominal_mm);
         b.fixed_rows_mut::<3>(3 * i).copy_from(&(l_inv * y));
@@ -442,10 +472,11 @@ pub fn identify(
     let exact_readings = |values: &[f64]| -> Result<Vec<[f64; 3]>, HtmError> {
         obs.iter()
             .map(|o| {
+                let offset = Vector3::from(set.placement_offset_mm(values, o.placement));
                 linear_axes_for(
                     geom,
                     o.rotary_deg,
-                    Vector3::from(o.target_w_mm),
+                    Vector3::from(o.target_w_mm) + offset,
                     &|pose: &Pose| set.state_at(values, pose),
                 )
             })
@@ -463,7 +494,7 @@ pub fn identify(
     let mut lin_err: f64 = 0.0;
     let x_vec = DVector::from_vec(x_lin.clone());
     for (i, o) in obs.iter().enumerate() {
-        let s = probe_sensitivity(geom, &pose_of(o), set);
+        let s = observation_sensitivity(geom, o, set);
         let q1 = Vector3::from(o.nominal_mm) + s * &x_vec;
         lin_err = lin_err.max((Vector3::from(first[i]) - q1).norm());
     }

@@ -81,6 +81,7 @@ pub(crate) fn observe(
                 nominal_mm: nominal_linear_axes(&g, rot, Vector3::zeros()),
                 measured_mm: (Vector3::from(q) + noise).into(),
                 cov_mm2: cov,
+                placement: 0,
             }
         })
         .collect()
@@ -352,4 +353,66 @@ fn a_second_sphere_separates_the_zero_offset_of_c_from_the_datum_offset() {
         let e = id2.estimates.iter().find(|e| e.name == name).unwrap();
         assert_eq!(e.status, Status::Identified, "{name}");
     }
+}
+
+#[test]
+fn a_relocated_sphere_s_unknown_offset_is_fitted_beside_the_machine_s_errors() {
+    let g = trunnion();
+    let set = ParameterSet::location_and_assembly(&g).with_motion_harmonics(&g, 2);
+    let mut rng = Rng(5);
+    let values = truth(&set, &mut rng);
+    let configs = spread(60, None);
+    let datum = observe(&set, &values, &configs, 0.0, &mut rng);
+    // A third of the configurations probe the artefact's second sphere (its offset from the
+    // datum calibrated), a third a sphere put at (−200, 150, 120) mm, really 0.3 mm away.
+    // (Without the calibrated pair, the zero offset of C could not be told from the relocated
+    // sphere's tangential offset.)
+    let (target, offset) = ([-200.0, 150.0, 120.0], Vector3::new(0.3, -0.2, 0.1));
+    let obs: Vec<Observation> = datum
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            let (target, real, placement) = match i % 3 {
+                0 => return *o,
+                1 => ([-250.0, 80.0, -50.0], Vector3::new(-250.0, 80.0, -50.0), 0),
+                _ => (target, Vector3::from(target) + offset, 1),
+            };
+            let q = linear_axes_for(&g, o.rotary_deg, real, &|pose: &Pose| {
+                set.state_at(&values, pose)
+            })
+            .unwrap();
+            Observation {
+                target_w_mm: target,
+                nominal_mm: nominal_linear_axes(&g, o.rotary_deg, Vector3::from(target)),
+                measured_mm: q,
+                placement,
+                ..*o
+            }
+        })
+        .collect();
+    assert_eq!(placements_in(&obs), 1);
+    let with = set.clone().with_placements(1);
+    let id = identify(&g, &with, &obs, &IdentifyOptions::default()).unwrap();
+    let got = with.placement_offset_mm(&id.values(), 1);
+    for k in 0..3 {
+        assert!((got[k] - offset[k]).abs() < 1e-7, "{got:?}");
+    }
+    assert!(id.rms_residual_mm < 1e-8, "{}", id.rms_residual_mm);
+    // Ignoring the offset (the sphere taken where it was put) leaves it in the residual.
+    let without = identify(&g, &set, &obs, &IdentifyOptions::default()).unwrap();
+    assert!(
+        without.rms_residual_mm > 1e-3,
+        "{}",
+        without.rms_residual_mm
+    );
+    // The offset never enters a compensation.
+    let pose = Pose {
+        linear_mm: [0.0; 3],
+        rotary_deg: [30.0, -20.0],
+    };
+    let n = set.len();
+    assert_eq!(
+        with.state_at(&id.values(), &pose),
+        set.state_at(&id.values()[..n], &pose)
+    );
 }

@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::chain::Geometry;
 use crate::errors::ParameterSet;
-use crate::identify::{build_system, select, IdentifyError, Observation};
+use crate::identify::{build_system, placements_in, select, IdentifyError, Observation};
 
 /// Settings of [`choose_order`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -184,7 +184,8 @@ pub fn choose_order(
     opts: &OrderOptions,
 ) -> Result<OrderChoice, IdentifyError> {
     let folds = opts.folds.max(2);
-    let base = parameter_set(geom, &[]).len();
+    let placements = placements_in(obs);
+    let base = parameter_set(geom, &[]).with_placements(placements).len();
     // The smallest training set is n − ⌈n/folds⌉ configurations; the smallest model needs
     // more readings than parameters.
     let trainable = |n: usize| 3 * (n - n.div_ceil(folds)) > base;
@@ -198,13 +199,13 @@ pub fn choose_order(
         return Err(too_few());
     }
     let n_axes = geom.rotary.len();
-    let largest = parameter_set(geom, &vec![opts.max_order; n_axes]);
+    let largest = parameter_set(geom, &vec![opts.max_order; n_axes]).with_placements(placements);
     let sys = build_system(geom, &largest, obs)?;
     let all_names = largest.names();
     let order = shuffled(obs.len(), opts.seed);
     let mut candidates = Vec::new();
     for orders in candidate_orders(n_axes, opts.max_order) {
-        let set = parameter_set(geom, &orders);
+        let set = parameter_set(geom, &orders).with_placements(placements);
         let cols: Vec<usize> = set
             .names()
             .iter()

@@ -188,7 +188,10 @@ impl Frames {
                 let (l, a) = unit(component);
                 self.sites[self.rotary_index[rotary]].effect(l, a)
             }
-            Component::Workpiece(i) => self.workpiece.effect(unit(i).0, Vector3::zeros()),
+            // A relocated sphere's offset acts on its readings as the datum's does.
+            Component::Workpiece(i) | Component::Placement { axis: i, .. } => {
+                self.workpiece.effect(unit(i).0, Vector3::zeros())
+            }
             Component::Tool(i) => self.tool.effect(unit(i).0, Vector3::zeros()),
         }
     }
@@ -221,6 +224,7 @@ pub fn value_of(component: &Component, state: &ErrorState) -> f64 {
         } => state.rotary_motion[rotary].get(component),
         Component::Workpiece(i) => state.workpiece_mm[i],
         Component::Tool(i) => state.tool_mm[i],
+        Component::Placement { .. } => 0.0,
     }
 }
 

@@ -330,6 +330,14 @@ fn plan_text(
     let units = LineUnits::new(&moves, &units);
     refuse_rotary(&moves, file, &machine.machine.name)?;
     let plan = motion::plan(&moves, start_mm, &machine.motion).map_err(|err| {
+        // A move far outside the travel (a wild work offset) takes days at a feed: the travel
+        // is what is wrong, and is what the user is told.
+        let err = match err {
+            motion::MotionError::ProgramTooLong { line, .. } => {
+                first_end_beyond_travel(&moves, line, machine).unwrap_or(err)
+            }
+            err => err,
+        };
         let unit = units.at(err_line(&err));
         ProgramError::Motion {
             file: file.to_string(),
@@ -339,6 +347,36 @@ fn plan_text(
     })?;
     check_tools(&plan, file, machine, tools)?;
     Ok((plan, units))
+}
+
+/// The first move, up to source line `last_line`, whose end lies outside the machine's linear
+/// travel, as a travel error.
+fn first_end_beyond_travel(
+    moves: &[interp::CanonMove],
+    last_line: usize,
+    machine: &MachineSpec,
+) -> Option<motion::MotionError> {
+    let (lo, hi) = (machine.axes.travel_min_mm, machine.axes.travel_max_mm);
+    moves
+        .iter()
+        .take_while(|mv| mv.line <= last_line)
+        .find_map(|mv| {
+            let end_mm = match &mv.kind {
+                interp::CanonKind::Traverse { end_mm, .. }
+                | interp::CanonKind::Feed { end_mm, .. }
+                | interp::CanonKind::Arc { end_mm, .. } => *end_mm,
+                _ => return None,
+            };
+            (0..3)
+                .find(|&i| !(lo[i]..=hi[i]).contains(&end_mm[i]))
+                .map(|i| motion::MotionError::AxisOutOfTravel {
+                    line: mv.line,
+                    axis: ['X', 'Y', 'Z'][i],
+                    pos_mm: end_mm[i],
+                    min_mm: lo[i],
+                    max_mm: hi[i],
+                })
+        })
 }
 
 /// Refuses a plan whose `M6` loads a tool the table does not have.

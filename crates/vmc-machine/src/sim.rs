@@ -20,6 +20,8 @@ use crate::sensors::SensorReadings;
 use crate::thermal::Activity;
 use crate::twin::{Twin, TwinError};
 
+pub mod replay;
+
 /// Where measurement points are taken.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SampleMode {
@@ -308,6 +310,16 @@ pub enum SimError {
         p_mm: [f64; 3],
         /// Distance of the axis command from it, mm (NaN if not a number).
         correction_mm: f64,
+    },
+    /// A replayed sample is not later than the one before it.
+    #[error("line {line}: time {time_s} s does not follow the previous sample's {previous_s} s")]
+    TimeNotIncreasing {
+        /// Log line of the sample.
+        line: usize,
+        /// Its time, s.
+        time_s: f64,
+        /// The previous sample's time, s.
+        previous_s: f64,
     },
     /// The controller cannot compensate with the tool the program loads.
     #[error("line {line}: tool change: {message}")]

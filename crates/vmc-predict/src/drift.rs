@@ -25,13 +25,39 @@
 //! residual before any probing).
 //!
 //! What it cannot do: a residual that varies over the volume (a screw's expansion the model
-//! missed) is corrected only as the artefact's position sees it.
+//! missed, a tilt of the head) is corrected only as the artefact's position sees it. For that,
+//! [`DriftField`] estimates an offset and a gradient per component from artefacts at several
+//! places (its own module doc).
 //!
 //! Units: mm and s in the state; µm and hours in the settings where the names say so.
 
 use thiserror::Error;
 
 use crate::predictor::{ErrorPredictor, PredictError};
+
+mod field;
+pub use field::{DriftField, FieldSettings};
+
+/// An estimate of the drift the model misses, as a function of the axis position.
+pub trait DriftModel {
+    /// The estimated drift at axis position `q_mm`, mm per component.
+    fn drift_at_mm(&self, q_mm: [f64; 3]) -> [f64; 3];
+}
+
+impl DriftModel for DriftFilter {
+    /// The per-axis offset, the same everywhere.
+    #[inline]
+    fn drift_at_mm(&self, _q_mm: [f64; 3]) -> [f64; 3] {
+        self.drift_mm
+    }
+}
+
+impl DriftModel for DriftField {
+    #[inline]
+    fn drift_at_mm(&self, q_mm: [f64; 3]) -> [f64; 3] {
+        DriftField::drift_at_mm(self, q_mm)
+    }
+}
 
 /// A setting of the drift filter that is not a usable number.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
@@ -124,16 +150,18 @@ impl DriftFilter {
     }
 }
 
-/// A predictor whose prediction carries the probed drift: `E_pred(q) + b`.
+/// A predictor whose prediction carries the probed drift: `E_pred(q) + d(q)`, `d` the estimate
+/// of a [`DriftModel`] (a per-axis offset [`DriftFilter`] or an offset-and-gradient
+/// [`DriftField`]).
 #[derive(Debug, Clone)]
-pub struct WithDrift<P> {
+pub struct WithDrift<P, D = DriftFilter> {
     inner: P,
-    filter: DriftFilter,
+    filter: D,
 }
 
-impl<P: ErrorPredictor> WithDrift<P> {
+impl<P: ErrorPredictor, D: DriftModel> WithDrift<P, D> {
     /// `inner` corrected by `filter`'s estimate.
-    pub fn new(inner: P, filter: DriftFilter) -> Self {
+    pub fn new(inner: P, filter: D) -> Self {
         WithDrift { inner, filter }
     }
 
@@ -143,17 +171,17 @@ impl<P: ErrorPredictor> WithDrift<P> {
     }
 
     /// The filter.
-    pub fn filter(&self) -> &DriftFilter {
+    pub fn filter(&self) -> &D {
         &self.filter
     }
 
     /// The filter, to update it with a probing cycle.
-    pub fn filter_mut(&mut self) -> &mut DriftFilter {
+    pub fn filter_mut(&mut self) -> &mut D {
         &mut self.filter
     }
 }
 
-impl<P: ErrorPredictor> ErrorPredictor for WithDrift<P> {
+impl<P: ErrorPredictor, D: DriftModel> ErrorPredictor for WithDrift<P, D> {
     fn sensor_names(&self) -> &[String] {
         self.inner.sensor_names()
     }
@@ -161,7 +189,7 @@ impl<P: ErrorPredictor> ErrorPredictor for WithDrift<P> {
     #[inline]
     fn predict_error_mm(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
         let e = self.inner.predict_error_mm(q_mm);
-        let b = self.filter.drift_mm;
+        let b = self.filter.drift_at_mm(q_mm);
         [e[0] + b[0], e[1] + b[1], e[2] + b[2]]
     }
 

@@ -340,8 +340,10 @@ pub fn check(
 
 fn validate(o: &ChatterOptions) -> Result<(), ChatterError> {
     let bad = |name, range, value| Err(ChatterError::Option { name, range, value });
-    if !(o.immersion_bin > 0.0 && o.immersion_bin <= 1.0) {
-        return bad("the immersion bin", "in (0, 1]", o.immersion_bin);
+    // A bin's top is the immersion its cuts are judged at: the smallest bin is the smallest
+    // immersion the lobes accept.
+    if !(crate::dynamics::params::MIN_IMMERSION..=1.0).contains(&o.immersion_bin) {
+        return bad("the immersion bin", "in [0.01, 1]", o.immersion_bin);
     }
     if !(o.marginal_below >= 1.0 && o.marginal_below.is_finite()) {
         return bad("the marginal threshold", ">= 1", o.marginal_below);

@@ -143,7 +143,7 @@ fn bad_programs_are_refused_with_one_clear_message() {
     .unwrap_err();
     assert_eq!(
         bad_bin.to_string(),
-        "the immersion bin must be in (0, 1], got 0"
+        "the immersion bin must be in [0.01, 1], got 0"
     );
 }
 

@@ -331,7 +331,8 @@ pub fn check_sampling(
         .map(|(_, (f, _))| *f)
         .fold(0.0, f64::max);
     let limit = sample_rate_hz / 2.0 / margin;
-    if !(highest < limit) {
+    // NaN (a mode without a frequency) is refused with the undersampled ones.
+    if highest.partial_cmp(&limit) != Some(std::cmp::Ordering::Less) {
         return Err(ControlError::Undersampled {
             sample_rate_hz,
             mode_hz: highest,

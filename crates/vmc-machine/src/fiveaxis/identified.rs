@@ -117,8 +117,16 @@ impl IdentifiedModel {
             }
         }
         let harmonics = orders.iter().copied().max().unwrap_or(0);
-        let set =
-            ParameterSet::location_and_assembly(geom).with_motion_harmonics_per_axis(geom, &orders);
+        // The offsets of a relocated sphere's placements (`E_XP1` …) follow the machine's
+        // errors; read back to keep the list whole, they act on no compensation.
+        let placements = file
+            .parameters
+            .iter()
+            .filter(|p| p.name.starts_with("E_XP"))
+            .count();
+        let set = ParameterSet::location_and_assembly(geom)
+            .with_motion_harmonics_per_axis(geom, &orders)
+            .with_placements(placements);
         let names = set.names();
         if names.len() != file.parameters.len() {
             return Err(bad(format!(

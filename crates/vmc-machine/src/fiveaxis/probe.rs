@@ -47,11 +47,36 @@ impl VirtualProbe {
     }
 }
 
+/// Which sphere to probe and where it nominally is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProbeTarget {
+    /// Which sphere of the artefact (0: the datum); 0 for a relocated sphere.
+    pub sphere: usize,
+    /// 0: the calibrated artefact; k ≥ 1: the k-th placement of a relocated sphere.
+    pub placement: usize,
+    /// Nominal centre in the workpiece frame, mm.
+    pub target_w_mm: [f64; 3],
+}
+
+impl ProbeTarget {
+    /// Sphere `sphere` of the calibrated artefact at its nominal centre.
+    #[must_use]
+    pub fn artefact(sphere: usize, target_w_mm: [f64; 3]) -> Self {
+        ProbeTarget {
+            sphere,
+            placement: 0,
+            target_w_mm,
+        }
+    }
+}
+
 /// What probing a sphere at one configuration gives.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProbedSphere {
     /// Which sphere of the artefact (0: the datum).
     pub sphere: usize,
+    /// 0: the calibrated artefact; k ≥ 1: the k-th placement of a relocated sphere.
+    pub placement: usize,
     /// Its nominal centre in the workpiece frame, mm.
     pub target_w_mm: [f64; 3],
     /// Rotary angles, degrees.
@@ -80,21 +105,32 @@ pub enum ProbeError {
     Fit(#[from] SphereError),
 }
 
-/// Probes sphere `sphere` (nominal centre `target_w_mm` in the workpiece frame; the artefact is
-/// rigid, so its real centre is there too) at `rotary_deg`, drawing the trigger noise from `rng`.
+/// Probes the sphere of `target` at `rotary_deg`, drawing the trigger noise from `rng`. An
+/// artefact's sphere really is at its nominal centre (the artefact is calibrated); a relocated
+/// sphere sits where the truth put it ([`TrueMachine::placement_offset_mm`]), and the probe
+/// approaches its nominal centre as a user's cycle would.
 ///
 /// # Errors
 /// [`ProbeError`] when an approach does not trigger or the fit fails.
 pub fn probe_sphere(
     machine: &TrueMachine,
     probe: &VirtualProbe,
-    (sphere, target_w_mm): (usize, [f64; 3]),
+    target: ProbeTarget,
     rotary_deg: [f64; 2],
     rng: &mut StdRng,
 ) -> Result<ProbedSphere, ProbeError> {
     let geom = machine.geometry();
-    let target = Vector3::from(target_w_mm);
-    let qc = Vector3::from(nominal_linear_axes(geom, rotary_deg, target));
+    let ProbeTarget {
+        sphere,
+        placement,
+        target_w_mm,
+    } = target;
+    let qc = Vector3::from(nominal_linear_axes(
+        geom,
+        rotary_deg,
+        Vector3::from(target_w_mm),
+    ));
+    let real = Vector3::from(target_w_mm) + Vector3::from(machine.placement_offset_mm(placement));
     let noise = Normal::new(0.0, probe.noise_sigma_mm.max(0.0)).expect("σ ≥ 0");
     let rc = probe.contact_radius_mm;
     let mut points = Vec::with_capacity(probe.points);
@@ -107,7 +143,7 @@ pub fn probe_sphere(
                 linear_mm: q.into(),
                 rotary_deg,
             };
-            (tip_in_workpiece_mm(geom, &pose, &machine.state_at(&pose)) - target).norm() - rc
+            (tip_in_workpiece_mm(geom, &pose, &machine.state_at(&pose)) - real).norm() - rc
         };
         // d(gap)/dt ≈ −1 (the approach runs along the normal): fixed-point on t.
         let mut t = 0.0;
@@ -132,6 +168,7 @@ pub fn probe_sphere(
     let fit = fit_centre(&points, rc)?;
     Ok(ProbedSphere {
         sphere,
+        placement,
         target_w_mm,
         rotary_deg,
         nominal_mm: qc.into(),
@@ -161,7 +198,14 @@ mod tests {
         let probe = VirtualProbe::of(&spec, Some(0.0));
         let mut rng = StdRng::seed_from_u64(1);
         for rot in [[0.0, 0.0], [123.0, -75.0], [300.0, 20.0]] {
-            let got = probe_sphere(&m, &probe, (0, [0.0; 3]), rot, &mut rng).unwrap();
+            let got = probe_sphere(
+                &m,
+                &probe,
+                ProbeTarget::artefact(0, [0.0; 3]),
+                rot,
+                &mut rng,
+            )
+            .unwrap();
             let exact =
                 vmc_identify::inverse::linear_axes_for(m.geometry(), rot, Vector3::zeros(), &|p| {
                     m.state_at(p)
@@ -184,7 +228,7 @@ mod tests {
         let clean = probe_sphere(
             &m,
             &VirtualProbe::of(&spec, Some(0.0)),
-            (0, [0.0; 3]),
+            ProbeTarget::artefact(0, [0.0; 3]),
             [40.0, -30.0],
             &mut rng,
         )
@@ -192,7 +236,14 @@ mod tests {
         let n = 400;
         let mut z2 = 0.0;
         for _ in 0..n {
-            let p = probe_sphere(&m, &probe, (0, [0.0; 3]), [40.0, -30.0], &mut rng).unwrap();
+            let p = probe_sphere(
+                &m,
+                &probe,
+                ProbeTarget::artefact(0, [0.0; 3]),
+                [40.0, -30.0],
+                &mut rng,
+            )
+            .unwrap();
             let d = p.fit.centre_mm - clean.fit.centre_mm;
             let cov = p.fit.cov_per_var * probe.noise_sigma_mm.powi(2);
             z2 += (d.transpose() * cov.try_inverse().unwrap() * d)[0];

@@ -43,6 +43,12 @@ pub struct SphereSpec {
     /// CMM), nominal centres in the same coordinates, mm; default none.
     #[serde(default)]
     pub extra_centres_mm: Vec<[f64; 3]>,
+    /// Where a single sphere is put, one block of configurations after another, to probe the
+    /// working volume (`probe-campaign`'s placements), nominal centres in the same coordinates,
+    /// mm. Only roughly known: identification fits each placement's offset. Default none (the
+    /// campaign then spreads its own over the working volume).
+    #[serde(default)]
+    pub placements_mm: Vec<[f64; 3]>,
     /// Radius of the reference spheres, mm.
     pub radius_mm: f64,
     /// Radius of the stylus ball, mm.
@@ -334,6 +340,9 @@ impl FiveAxisSpec {
         }
         if !s.extra_centres_mm.iter().flatten().all(|v| v.is_finite()) {
             return Err(invalid(path, "sphere.extra_centres_mm", "must be finite"));
+        }
+        if !s.placements_mm.iter().flatten().all(|v| v.is_finite()) {
+            return Err(invalid(path, "sphere.placements_mm", "must be finite"));
         }
         let p = &self.probe;
         if !(p.trigger_noise_2sigma_um >= 0.0 && p.trigger_noise_2sigma_um.is_finite()) {

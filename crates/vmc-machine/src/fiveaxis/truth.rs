@@ -91,7 +91,12 @@ pub struct TrueMachine {
     location: Vec<SixErrors>,
     workpiece_mm: [f64; 3],
     tool_mm: [f64; 3],
+    seed: u64,
 }
+
+/// How far (σ per axis) a relocated sphere really sits from where it was meant to be put, mm:
+/// a sphere bolted down by eye on a stem of nominal length.
+pub const PLACEMENT_SIGMA_MM: f64 = 0.2;
 
 impl TrueMachine {
     /// Compiles a validated spec with the random parts drawn from `seed`.
@@ -141,7 +146,24 @@ impl TrueMachine {
             location,
             workpiece_mm: [asm[0], asm[1], asm[2]],
             tool_mm: [asm[3], asm[4], asm[5]],
+            seed,
         })
+    }
+
+    /// Where the sphere of placement `placement` really sits relative to its nominal centre, in
+    /// the workpiece frame, mm: zero for placement 0 (the calibrated artefact), else drawn with
+    /// σ = [`PLACEMENT_SIGMA_MM`] from the realisation's seed and the placement alone (so adding
+    /// placements changes no other draw).
+    #[must_use]
+    pub fn placement_offset_mm(&self, placement: usize) -> [f64; 3] {
+        if placement == 0 {
+            return [0.0; 3];
+        }
+        let mut rng = StdRng::seed_from_u64(
+            self.seed ^ 0x0005_1ace_0000_0000 ^ (placement as u64).wrapping_mul(0x9e37_79b9),
+        );
+        let n = Normal::new(0.0, PLACEMENT_SIGMA_MM).expect("σ > 0");
+        [n.sample(&mut rng), n.sample(&mut rng), n.sample(&mut rng)]
     }
 
     /// The nominal geometry.

@@ -155,7 +155,16 @@ impl<'a> PlanStream<'a> {
             &self.machine.motion,
             &RotaryLimits::default(),
         )
-        .map_err(motion_err)?;
+        .map_err(|err| {
+            // A wild work offset: the travel is what is wrong (as in a whole plan).
+            let err = match err {
+                motion::MotionError::ProgramTooLong { line, .. } => {
+                    super::first_end_beyond_travel(&self.moves, line, self.machine).unwrap_or(err)
+                }
+                err => err,
+            };
+            motion_err(err)
+        })?;
         check_tools(&plan, &self.file, self.machine, self.tools)?;
         motion::check_travel(
             &plan,

@@ -80,6 +80,14 @@ pub fn is_speed(name: &str) -> bool {
 }
 
 impl FeatureSpec {
+    /// How far back the filters remember, s: three times the longest time constant (a
+    /// starting state has decayed to e⁻³ ≈ 5 % of its size by then); 0 without filters.
+    /// Predictions closer than this to the first row depend on the state assumed there (the
+    /// inputs at rest at their first values).
+    pub fn memory_s(&self) -> f64 {
+        3.0 * self.time_constants_s.iter().copied().fold(0.0, f64::max)
+    }
+
     /// Checks the time constants.
     pub fn validate(&self) -> Result<(), ThermalFitError> {
         if let Some(t) = crate::history::invalid_tau(&self.time_constants_s) {
@@ -275,6 +283,17 @@ impl FeatureSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_memory_is_three_of_the_longest_time_constants_and_none_without_filters() {
+        let spec = FeatureSpec::default();
+        assert_eq!(spec.memory_s(), 3.0 * 10800.0);
+        let none = FeatureSpec {
+            time_constants_s: Vec::new(),
+            ..FeatureSpec::default()
+        };
+        assert_eq!(none.memory_s(), 0.0);
+    }
 
     #[test]
     fn filter_of_a_step_follows_one_minus_exp_minus_t_over_tau() {

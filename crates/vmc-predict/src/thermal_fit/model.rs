@@ -379,7 +379,11 @@ impl ThermalModel {
         }
         let m: ThermalModel =
             serde_json::from_value(value).map_err(|e| bad(format!("malformed model: {e}")))?;
-        m.features.validate_inputs(&m.input_names())?;
+        // The feature spec as a fit would have checked it, named by the file.
+        m.features
+            .validate()
+            .and_then(|()| m.features.validate_inputs(&m.input_names()))
+            .map_err(|e| bad(e.to_string()))?;
         let width = m.feature_width();
         let n_out = m.outputs.len();
         let net_ok = |nets: &[Regressor], form: OutputModel| {
