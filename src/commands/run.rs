@@ -289,25 +289,40 @@ pub(super) fn deliver(d: Delivery<'_>, out: &mut dyn Write) -> Result<()> {
     Ok(())
 }
 
-/// A warm-up: its canonical moves, where it starts and how long it takes. Its timed plan is
-/// built piece by piece as it runs ([`program::ProgramMoves::pieces`]), so a week of duty
-/// never holds a week of plan.
+/// A warm-up: its file, where it starts and how long it takes. It is interpreted and planned
+/// piece by piece as it runs ([`program::PlanStream`]), so a week of duty never holds a week
+/// of moves or of plan.
 pub(super) struct Warmup {
-    moves: program::ProgramMoves,
+    path: PathBuf,
     start_mm: [f64; 3],
+    /// The text's hash when it was checked (see [`program::PlanStream::fingerprint`]).
+    fingerprint: Option<u64>,
     /// Its duration, s.
     pub duration_s: f64,
 }
 
 impl Warmup {
-    /// The warm-up's plans, piece by piece (each checked).
+    /// The warm-up's plans, piece by piece (each checked), in machine coordinates.
     fn pieces<'a>(
-        &'a self,
+        &self,
         machine: &'a MachineSpec,
         tools: &'a vmc_machine::tools::ToolTable,
-    ) -> program::PlanPieces<'a> {
-        self.moves
-            .pieces(machine, self.start_mm, tools, program::MOVES_PER_PIECE)
+    ) -> Result<program::PlanStream<'a>> {
+        let placement = Placement::of_machine(machine);
+        let stream = program::PlanStream::load(
+            &self.path,
+            machine,
+            self.start_mm,
+            tools,
+            &placement,
+            program::MOVES_PER_PIECE,
+        )?;
+        anyhow::ensure!(
+            self.fingerprint.is_none_or(|f| f == stream.fingerprint()),
+            "{}: the warm-up file changed while the run was starting; run again",
+            self.path.display()
+        );
+        Ok(stream)
     }
 }
 
@@ -324,19 +339,19 @@ pub(super) fn load_warmups(
     let mut start = machine.axes.home_mm;
     let mut warmups = Vec::new();
     for w in paths {
-        let moves = program::ProgramMoves::load(w, machine, start, tools)?;
         let mut warmup = Warmup {
-            moves,
+            path: w.clone(),
             start_mm: start,
+            fingerprint: None,
             duration_s: 0.0,
         };
-        let mut duration_s = 0.0;
-        for piece in warmup.pieces(machine, tools) {
+        let stream = warmup.pieces(machine, tools)?;
+        warmup.fingerprint = Some(stream.fingerprint());
+        for piece in stream {
             let piece = piece?;
-            duration_s += piece.duration_s();
+            warmup.duration_s += piece.duration_s();
             start = piece.end_mm();
         }
-        warmup.duration_s = duration_s;
         warmups.push(warmup);
     }
     Ok((warmups, start))
@@ -493,7 +508,7 @@ pub(super) fn run_warmups(
             duration_s: p.duration_s,
             measured: false,
         });
-        for piece in p.pieces(ctx.machine, ctx.tools) {
+        for piece in p.pieces(ctx.machine, ctx.tools)? {
             // The controller follows the readings (and the commanded motion) through the
             // warm-up, as on the machine: a model with history features needs the thermal past.
             let ctrl = controller
