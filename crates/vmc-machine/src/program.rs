@@ -13,7 +13,9 @@ use crate::tools::ToolTable;
 use vmc_gcode::interp::{self, InterpConfig, LengthUnit};
 
 mod pieces;
+mod stream;
 pub use pieces::{PlanPieces, ProgramMoves, MOVES_PER_PIECE};
+pub use stream::{PlanStream, Source};
 
 /// A program that cannot be run.
 #[derive(Debug, Error)]
