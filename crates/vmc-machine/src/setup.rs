@@ -325,17 +325,23 @@ impl Placement {
             .probe(crate::tools::master_length_mm(machine))
     }
 
-    /// What a probe's ball can touch: the artefacts, then the setup's bodies (fixtures and
-    /// stock).
-    pub fn probe_solids(&self) -> Vec<NamedSolid> {
+    /// What a probe's ball can touch: the artefacts, the setup's bodies (fixtures and stock),
+    /// `extra` bodies (a fixture file's) and the machine's own (its `[collision]` table).
+    pub fn probe_solids(&self, machine: &MachineSpec, extra: &[BodySpec]) -> Vec<NamedSolid> {
         let artefacts = self.artefacts.iter().map(|a| NamedSolid {
             name: a.name.clone(),
             solid: a.solid(),
         });
-        let bodies = self.bodies.iter().map(|b| NamedSolid {
-            name: b.name.clone(),
-            solid: Solid::of_body(b),
-        });
+        let machine_bodies = machine.collision.iter().flat_map(|c| c.bodies.iter());
+        let bodies = self
+            .bodies
+            .iter()
+            .chain(extra)
+            .chain(machine_bodies)
+            .map(|b| NamedSolid {
+                name: b.name.clone(),
+                solid: Solid::of_body(b),
+            });
         artefacts.chain(bodies).collect()
     }
 

@@ -134,9 +134,12 @@ fn a_setup_file_describes_the_probe_and_the_artefacts_it_touches() {
     let placed = Placement::of_machine(&machine).with_setup(setup, Path::new("p.setup.toml"));
     let probe = placed.touch_probe(&machine);
     assert_eq!((probe.stylus_length_mm, probe.ball_radius_mm), (120.0, 2.0));
-    let solids = placed.probe_solids();
-    let names: Vec<&str> = solids.iter().map(|s| s.name.as_str()).collect();
+    let solids = placed.probe_solids(&machine, &[]);
+    let names: Vec<&str> = solids.iter().map(|s| s.name.as_str()).take(3).collect();
     assert_eq!(names, ["block", "sphere", "stock"]);
+    // Then the machine's own bodies (its table).
+    let table = machine.collision.as_ref().map_or(0, |c| c.bodies.len());
+    assert_eq!(solids.len(), 3 + table);
     // Without a [probe] section: the typical probe, as long as the machine's own tool.
     let bare = Placement::of_machine(&machine).touch_probe(&machine);
     assert_eq!(
