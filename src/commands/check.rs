@@ -13,9 +13,7 @@ use crate::record;
 use vmc_gcode::interp::ProbeRequest;
 use vmc_machine::collision::{self, FixtureSpec, Problem, Scene};
 use vmc_machine::machine::MachineSpec;
-use vmc_machine::probe_setup::Solid;
 use vmc_machine::program;
-use vmc_machine::touch_probe::{nominal_move, ProbeMotion};
 
 /// What to check, validated.
 pub struct CheckConfig {
@@ -56,15 +54,9 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
         ),
     };
     // Probe moves end where the nominal machine's probe would trip.
-    let probe = cfg.placement.touch_probe(machine);
-    let solids: Vec<Solid> = cfg
-        .placement
-        .probe_solids(machine, file_bodies.as_deref().unwrap_or_default())
-        .into_iter()
-        .map(|s| s.solid)
-        .collect();
-    let motion = ProbeMotion::of_machine(machine, probe.stylus_length_mm);
-    let mut answer = |r: &ProbeRequest| nominal_move(&probe, &solids, &motion, r).outcome;
+    let extra = file_bodies.unwrap_or_default();
+    let station = cfg.placement.probe_station(machine, &extra, 0)?;
+    let mut answer = |r: &ProbeRequest| station.nominal(r).outcome;
     let probed = program::load_plan_probed(
         &cfg.program,
         machine,
@@ -163,8 +155,8 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
             out,
             "probe moves: {} (G38.x), each ending where the probe trips on the nominal machine (ball Ø{} mm, pre-travel {:.1} µm)",
             probed.probes.len(),
-            2.0 * probe.ball_radius_mm,
-            probe.pretravel_mm() * 1e3
+            2.0 * station.probe().ball_radius_mm,
+            station.probe().pretravel_mm() * 1e3
         )?;
     }
     if let Some(stop) = &probed.stopped {

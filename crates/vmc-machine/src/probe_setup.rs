@@ -11,11 +11,11 @@
 use serde::Deserialize;
 
 use crate::collision_spec::{check_coord, check_size, BodySpec, FieldError, ShapeKind};
-use crate::touch_probe::TouchProbe;
 
 /// The `[probe]` section: the touch probe used by every G38 move. A field left out takes the
-/// value of [`TouchProbe::typical`]; the stylus length defaults to the machine's own tool
-/// length (the ball's centre is then the commanded tool tip without any tool table).
+/// value of `TouchProbe::typical`; the stylus length defaults to the machine's own tool
+/// length (the ball's centre is then the commanded tool tip without any tool table); see
+/// `Placement::touch_probe`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProbeSpec {
@@ -34,25 +34,6 @@ pub struct ProbeSpec {
 }
 
 impl ProbeSpec {
-    /// The probe, with `master_length_mm` (the machine's own tool length) as the default stylus
-    /// length; the feed is each probe move's own and is set per move.
-    pub fn probe(&self, master_length_mm: f64) -> TouchProbe {
-        let d = TouchProbe::typical(self.stylus_length_mm.unwrap_or(master_length_mm));
-        TouchProbe {
-            stylus_length_mm: d.stylus_length_mm,
-            ball_radius_mm: self.ball_radius_mm.unwrap_or(d.ball_radius_mm),
-            trigger_force_n: self.trigger_force_n.unwrap_or(d.trigger_force_n),
-            stylus_stiffness_n_per_um: self
-                .stylus_stiffness_n_per_um
-                .unwrap_or(d.stylus_stiffness_n_per_um),
-            repeatability_2sigma_um: self
-                .repeatability_2sigma_um
-                .unwrap_or(d.repeatability_2sigma_um),
-            servo_period_s: self.servo_period_s.unwrap_or(d.servo_period_s),
-            feed_mm_per_min: d.feed_mm_per_min,
-        }
-    }
-
     /// Checks every given field (`probe.…` in errors).
     pub fn validate(&self) -> Result<(), FieldError> {
         let fields = [
@@ -368,22 +349,5 @@ mod tests {
             flat.validate("artefacts[2]").unwrap_err().0,
             "artefacts[2].size_mm[1]"
         );
-    }
-
-    #[test]
-    fn probe_fields_left_out_take_the_typical_probe_and_the_machine_tool_length() {
-        let p = ProbeSpec {
-            ball_radius_mm: Some(1.0),
-            ..ProbeSpec::default()
-        }
-        .probe(120.0);
-        assert_eq!(p.stylus_length_mm, 120.0);
-        assert_eq!(p.ball_radius_mm, 1.0);
-        assert_eq!(p.trigger_force_n, TouchProbe::typical(1.0).trigger_force_n);
-        let bad = ProbeSpec {
-            servo_period_s: Some(-1.0),
-            ..ProbeSpec::default()
-        };
-        assert_eq!(bad.validate().unwrap_err().0, "probe.servo_period_s");
     }
 }

@@ -140,6 +140,9 @@ fn a_setup_file_describes_the_probe_and_the_artefacts_it_touches() {
     // Then the machine's own bodies (its table).
     let table = machine.collision.as_ref().map_or(0, |c| c.bodies.len());
     assert_eq!(solids.len(), 3 + table);
+    // Fields left out are the typical probe's.
+    let typical = crate::touch_probe::TouchProbe::typical(1.0);
+    assert_eq!(probe.trigger_force_n, typical.trigger_force_n);
     // Without a [probe] section: the typical probe, as long as the machine's own tool.
     let bare = Placement::of_machine(&machine).touch_probe(&machine);
     assert_eq!(

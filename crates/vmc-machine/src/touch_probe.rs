@@ -320,7 +320,9 @@ impl ProbeOnTwin {
     }
 }
 
+mod station;
 mod straight;
+pub use station::ProbeStation;
 pub use straight::{nominal_move, ProbeMotion, ProbeMove};
 
 #[cfg(test)]
