@@ -144,49 +144,130 @@ pub fn write_atomic_with(
     force: bool,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), OutputError> {
-    check_writable(path, force)?;
-    let io = |err| OutputError::Io {
+    let mut file = AtomicFile::create(path, force)?;
+    write(&mut file).map_err(|err| OutputError::Io {
         path: path.to_path_buf(),
         err,
-    };
-    if let Ok(meta) = std::fs::symlink_metadata(path) {
-        if let Target::Device = target_kind(&meta) {
-            // Never rename over a device or FIFO: write through it.
-            let mut f = std::fs::OpenOptions::new()
-                .write(true)
-                .open(path)
-                .map_err(io)?;
-            let mut w = std::io::BufWriter::new(&mut f);
-            return write(&mut w).and_then(|()| w.flush()).map_err(io);
+    })?;
+    file.finish()
+}
+
+/// A file written as its contents are produced (a run's table, row by row): into a temporary
+/// file in the target's folder, which [`AtomicFile::finish`] gives its name (see [`publish`]).
+/// Dropped unfinished (an error, an interrupted run), the temporary file is removed: no
+/// partial file is ever left under the final name. A device node or FIFO target (with
+/// `--force`) is written through instead.
+pub struct AtomicFile {
+    path: PathBuf,
+    force: bool,
+    /// The temporary file (None: writing through to a device).
+    tmp: Option<PathBuf>,
+    out: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl AtomicFile {
+    /// Checks that `path` may be written ([`check_writable`]) and opens the temporary file.
+    ///
+    /// # Errors
+    /// The checks', and the temporary file cannot be created.
+    pub fn create(path: &Path, force: bool) -> Result<Self, OutputError> {
+        check_writable(path, force)?;
+        let io = |err| OutputError::Io {
+            path: path.to_path_buf(),
+            err,
+        };
+        if let Ok(meta) = std::fs::symlink_metadata(path) {
+            if let Target::Device = target_kind(&meta) {
+                // Never rename over a device or FIFO: write through it.
+                let f = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(path)
+                    .map_err(io)?;
+                return Ok(Self {
+                    path: path.to_path_buf(),
+                    force,
+                    tmp: None,
+                    out: Some(std::io::BufWriter::new(f)),
+                });
+            }
+        }
+        let dir = path
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        static WRITES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let tmp = dir.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+            .map_err(io)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            force,
+            tmp: Some(tmp),
+            out: Some(std::io::BufWriter::new(f)),
+        })
+    }
+
+    /// The file's final path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Flushes, syncs and gives the file its name (removing the temporary file).
+    ///
+    /// # Errors
+    /// Writing, syncing or publishing failed (the temporary file is removed).
+    pub fn finish(mut self) -> Result<(), OutputError> {
+        let io = |err| OutputError::Io {
+            path: self.path.clone(),
+            err,
+        };
+        let Some(out) = self.out.take() else {
+            return Ok(());
+        };
+        let f = out.into_inner().map_err(|e| io(e.into_error()))?;
+        let Some(tmp) = self.tmp.clone() else {
+            return Ok(());
+        };
+        f.sync_all().map_err(io)?;
+        let result = publish(&tmp, &self.path, self.force);
+        let _ = std::fs::remove_file(&tmp);
+        self.tmp = None;
+        result
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.out.as_mut() {
+            Some(w) => w.write(buf),
+            None => Err(std::io::Error::other("the file is finished")),
         }
     }
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    static WRITES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp = dir.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
-    let written = (|| {
-        let mut f = std::io::BufWriter::new(
-            std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&tmp)?,
-        );
-        write(&mut f)?;
-        let f = f.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()
-    })();
-    let result = written
-        .map_err(io)
-        .and_then(|()| publish(&tmp, path, force));
-    let _ = std::fs::remove_file(&tmp);
-    result
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self.out.as_mut() {
+            Some(w) => w.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        // Unfinished: nothing may be left that looks like a finished file.
+        drop(self.out.take());
+        if let Some(tmp) = self.tmp.take() {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
 }
 
 /// Gives the finished temporary file `tmp` its final name `path` (the caller removes `tmp`
@@ -284,6 +365,32 @@ mod tests {
                 dir.join("no-such-folder").display()
             )
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_file_written_piece_by_piece_appears_only_when_finished() {
+        let dir = std::env::temp_dir().join(format!("vmc-atomic-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("rows.csv");
+        let _ = std::fs::remove_file(&f);
+        {
+            let mut w = AtomicFile::create(&f, false).unwrap();
+            w.write_all(b"a,b\n").unwrap();
+            // Dropped unfinished (an error on the way): no file, no temporary left.
+        }
+        assert!(!f.exists());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        let mut w = AtomicFile::create(&f, false).unwrap();
+        w.write_all(b"a,b\n").unwrap();
+        assert!(!f.exists(), "visible before it is finished");
+        w.write_all(b"1,2\n").unwrap();
+        w.finish().unwrap();
+        assert_eq!(std::fs::read(&f).unwrap(), b"a,b\n1,2\n");
+        assert!(matches!(
+            AtomicFile::create(&f, false),
+            Err(OutputError::Exists(_))
+        ));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

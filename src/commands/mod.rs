@@ -24,6 +24,7 @@ pub mod program_placement;
 pub mod replay;
 pub mod run;
 pub mod run_fiveaxis;
+mod run_stream;
 pub mod select_sensors;
 pub mod select_shard;
 pub mod thermal;

@@ -8,8 +8,10 @@
 //! trace judged with this project's compensator). The thermal network keeps evolving during the
 //! replay under the logged motion and spindle speed (see [`vmc_machine::sim::replay`]).
 //!
-//! The log is read twice, line by line: once to check it whole before minutes of warm-up, once
-//! to play it; it is never held in memory.
+//! The log is read line by line: once to check it whole before minutes of warm-up (and once
+//! more with a recording, to see whether its measured positions lie on a line), once to play
+//! it; it is never held in memory, nor are its points: their rows are written as they come
+//! (see [`super::run_stream::Rows`]), only running sums are kept.
 
 pub mod log;
 
@@ -21,6 +23,7 @@ use anyhow::{Context, Result};
 
 use self::log::{LogColumns, LogFormat, LogReader};
 use super::run::{self, Delivery, RunController, Warmup, WarmupContext};
+use super::run_stream::Rows;
 use super::RrdOutput;
 use crate::progress::Progress;
 use crate::record;
@@ -73,8 +76,8 @@ struct LogScan {
     has_spindle: bool,
     /// The logged sensors and their readings at the first sample, °C.
     first_temps: Vec<(String, f64)>,
-    /// The line through the measured positions, if they lie on one (the recording's timeline).
-    diagonal: Option<record::Diagonal>,
+    /// The first and the last measured commanded positions, mm.
+    first_last_mm: [[f64; 3]; 2],
 }
 
 /// Replays the log and prints the report to `out`.
@@ -120,7 +123,23 @@ pub fn replay(cfg: &ReplayConfig, out: &mut dyn Write) -> Result<()> {
         }
         None => (None, false),
     };
-    let (log, recording) = simulate(cfg, &scan, &warmups, total_s, controller.as_mut())?;
+    let compensated = controller.is_some() || scan.has_corrections;
+    let diagonal = match cfg.rrd {
+        Some(_) => diagonal(cfg, &scan).with_context(|| name.clone())?,
+        None => None,
+    };
+    let mut rows = Rows::new(out_files, cfg.force)?;
+    let mut log = rows.log(compensated);
+    let recording = simulate(
+        cfg,
+        &scan,
+        diagonal,
+        &warmups,
+        total_s,
+        controller.as_mut(),
+        &mut log,
+    )?;
+    log.check().context("writing the replay's table")?;
     let warmup_names: Vec<String> = cfg
         .warmups
         .iter()
@@ -130,14 +149,15 @@ pub fn replay(cfg: &ReplayConfig, out: &mut dyn Write) -> Result<()> {
         .summary(&name, &cfg.machine.machine.name, cfg.seed, &warmup_names)
         .with_context(|| format!("{name}: no measurement points"))?;
     run::judge_extrapolation(&mut summary, controller.as_ref(), ranges_known, cfg.strict)?;
-    let text = report_text(cfg, &scan, &log, &summary)?;
+    let head = report_head(cfg, &scan, &log, &summary)?;
+    drop(log);
     run::deliver(
         Delivery {
-            log: &log,
             summary: &summary,
-            text,
+            head,
+            rows,
             recording: recording.zip(cfg.rrd.as_ref()),
-            out_files,
+            compensated,
             force: cfg.force,
         },
         out,
@@ -158,7 +178,7 @@ fn scan(cfg: &ReplayConfig) -> Result<LogScan> {
     let mut samples: usize = 0;
     let mut span_s = [0.0; 2];
     let mut first_temps = Vec::new();
-    let mut measured_mm = Vec::new();
+    let mut first_last_mm = [[0.0; 3]; 2];
     while let Some(s) = reader.next_sample()? {
         if samples == 0 {
             span_s[0] = s.time_s;
@@ -170,7 +190,10 @@ fn scan(cfg: &ReplayConfig) -> Result<LogScan> {
                 .collect();
         }
         if samples.is_multiple_of(cfg.every) {
-            measured_mm.push(s.commanded_mm);
+            if samples == 0 {
+                first_last_mm[0] = s.commanded_mm;
+            }
+            first_last_mm[1] = s.commanded_mm;
         }
         span_s[1] = s.time_s;
         samples += 1;
@@ -184,8 +207,25 @@ fn scan(cfg: &ReplayConfig) -> Result<LogScan> {
         has_corrections: columns.has_corrections(),
         has_spindle: columns.has_spindle(),
         first_temps,
-        diagonal: record::Diagonal::through(&measured_mm),
+        first_last_mm,
     })
+}
+
+/// The line through the measured positions, if they all lie on it (the recording's timeline):
+/// one more pass over the log, checking each against the line from the first to the last.
+fn diagonal(cfg: &ReplayConfig, scan: &LogScan) -> Result<Option<record::Diagonal>> {
+    let Some(diag) = record::Diagonal::between(scan.first_last_mm[0], scan.first_last_mm[1]) else {
+        return Ok(None);
+    };
+    let mut reader = open(cfg)?;
+    let mut n: usize = 0;
+    while let Some(s) = reader.next_sample()? {
+        if n.is_multiple_of(cfg.every) && !diag.holds(s.commanded_mm) {
+            return Ok(None);
+        }
+        n += 1;
+    }
+    Ok(Some(diag))
 }
 
 /// Refuses temperature columns of sensors the machine does not have.
@@ -208,10 +248,12 @@ fn check_sensor_columns(columns: &LogColumns, machine: &MachineSpec) -> Result<(
 fn simulate(
     cfg: &ReplayConfig,
     scan: &LogScan,
+    diagonal: Option<record::Diagonal>,
     warmups: &[Warmup],
     total_s: f64,
     mut controller: Option<&mut RunController>,
-) -> Result<(RunLog, Option<(record::Recorder, record::RrdFile)>)> {
+    log: &mut RunLog,
+) -> Result<Option<(record::Recorder, record::RrdFile)>> {
     let machine = &cfg.machine;
     let mut twin = Twin::new(machine, cfg.seed)?;
     twin.set_tool_table(cfg.tools.clone());
@@ -225,7 +267,7 @@ fn simulate(
             rrd,
             cfg.force,
             machine,
-            scan.diagonal,
+            diagonal,
         )?),
         None => None,
     };
@@ -248,8 +290,7 @@ fn simulate(
         controller.as_deref_mut(),
         &mut watch,
     )?;
-    let mut log = RunLog::default();
-    let mut obs = sim::Tee(&mut log, &mut watch);
+    let mut obs = sim::Tee(log, &mut watch);
     obs.on_run_start(&RunStart {
         label: cfg.log.display().to_string(),
         time_s: twin.time_s(),
@@ -284,7 +325,7 @@ fn simulate(
     }
     replay.finish(&mut twin)?;
     progress.finish();
-    Ok((log, recording))
+    Ok(recording)
 }
 
 /// A correction beyond the limit is the log's, not a model's, when the log has corrections.
@@ -320,9 +361,9 @@ fn recording_id(cfg: &ReplayConfig, compensated: bool) -> String {
     )
 }
 
-/// The printed report: the thermal state, what was replayed and how it was compensated, the
-/// first readings, the per-point table, the summary.
-fn report_text(
+/// The printed report's head: the thermal state, what was replayed and how it was compensated,
+/// the first readings (the per-point table and the summary follow).
+fn report_head(
     cfg: &ReplayConfig,
     scan: &LogScan,
     log: &RunLog,
@@ -355,7 +396,7 @@ fn report_text(
         scan.samples,
         scan.duration_s,
         cfg.every,
-        log.points.len()
+        summary.points
     )?;
     let compensation = match (&cfg.model, scan.has_corrections) {
         (_, true) => "after = with the corrections the controller logged".to_string(),
@@ -367,7 +408,7 @@ fn report_text(
     };
     writeln!(out, "{compensation}")?;
     if !scan.first_temps.is_empty() {
-        let twin: Vec<f64> = log.sensor_degc.first().cloned().unwrap_or_default();
+        let twin: Vec<f64> = log.first_degc.clone().unwrap_or_default();
         let list: Vec<String> = scan
             .first_temps
             .iter()
@@ -383,6 +424,6 @@ fn report_text(
             list.join(", ")
         )?;
     }
-    run::write_points(&mut out, log, summary)?;
+    run::write_first_readings(&mut out, log)?;
     Ok(String::from_utf8_lossy(&out).to_string())
 }

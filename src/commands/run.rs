@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
+use super::run_stream::{self, ProgramScan, Rows};
 use super::{wrote_recording, RrdOutput};
 use crate::files;
 use crate::predict::controller::Compensator;
@@ -16,7 +17,6 @@ use crate::progress::Progress;
 use crate::record;
 use crate::report::{self, RunLog, RunSummary};
 use vmc_machine::machine::MachineSpec;
-use vmc_machine::motion::{Plan, SegmentKind};
 use vmc_machine::program;
 use vmc_machine::setup::Placement;
 use vmc_machine::sim::{self, Observer, RunStart, SampleMode, SimConfig};
@@ -72,11 +72,7 @@ struct Sampling {
 /// At the program's dwells (G4) as in a diagonal test; during motion with `--every-cycle`;
 /// during motion every [`RunConfig::motion_sample_s`] for a program without dwells (it would
 /// have no measurement point at all).
-fn sampling(cfg: &RunConfig, plan: &Plan) -> Result<Sampling> {
-    let has_dwell = plan
-        .segments()
-        .iter()
-        .any(|s| matches!(s.kind, SegmentKind::Dwell));
+fn sampling(cfg: &RunConfig, has_dwell: bool) -> Result<Sampling> {
     let cycle_ms = cfg.sim.interp_cycle_s() * 1e3;
     Ok(if cfg.every_cycle {
         Sampling {
@@ -138,7 +134,7 @@ pub(super) type RunController = Guarded<Compensator<AnyPredictor>>;
 pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     let machine = &cfg.machine;
     // Check everything the user gave before minutes of simulation: programs and outputs.
-    let (warmups, plan, sampling) = load_plans(cfg)?;
+    let (warmups, scan, sampling) = load_plans(cfg)?;
     let out_files =
         super::prepare_run_outputs(cfg.out_dir.as_deref(), cfg.rrd.as_ref(), cfg.force)?;
     let (mut controller, ranges_known) = match &cfg.model {
@@ -155,7 +151,18 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         }
         None => (None, false),
     };
-    let (log, recorder) = simulate(cfg, &sampling, &warmups, &plan, controller.as_mut())?;
+    let compensated = controller.is_some();
+    let mut rows = Rows::new(out_files, cfg.force)?;
+    let mut log = rows.log(compensated);
+    let recorder = simulate(
+        cfg,
+        &sampling,
+        &warmups,
+        &scan,
+        controller.as_mut(),
+        &mut log,
+    )?;
+    log.check().context("writing the run's table")?;
 
     let warmup_names: Vec<String> = cfg
         .warmups
@@ -176,14 +183,15 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
             )
         })?;
     judge_extrapolation(&mut summary, controller.as_ref(), ranges_known, cfg.strict)?;
-    let text = report_text(cfg, &sampling, &log, &summary)?;
+    let head = report_head(cfg, &sampling, &log, &summary)?;
+    drop(log);
     deliver(
         Delivery {
-            log: &log,
             summary: &summary,
-            text,
+            head,
+            rows,
             recording: recorder.zip(cfg.rrd.as_ref()),
-            out_files,
+            compensated,
             force: cfg.force,
         },
         out,
@@ -192,16 +200,16 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
 
 /// What a measured run (or replay) hands to [`deliver`].
 pub(super) struct Delivery<'a> {
-    /// The measured points.
-    pub log: &'a RunLog,
-    /// Their summary.
+    /// The summary of the points.
     pub summary: &'a RunSummary,
-    /// The printed report.
-    pub text: String,
+    /// The printed report's head (the per-point table and the summary follow).
+    pub head: String,
+    /// The rows written as the points came.
+    pub rows: Rows,
     /// The recording and where it goes, if one is written.
     pub recording: Option<((record::Recorder, record::RrdFile), &'a RrdOutput)>,
-    /// `samples.csv` and `summary.json`, if written.
-    pub out_files: Option<(PathBuf, PathBuf)>,
+    /// Whether the points have an error after compensation.
+    pub compensated: bool,
     /// Overwrite existing files.
     pub force: bool,
 }
@@ -243,50 +251,78 @@ pub(super) fn judge_extrapolation(
     Ok(())
 }
 
-/// The end of a measured run: the report printed and put in the recording, `samples.csv` and
-/// `summary.json` written.
+/// The end of a measured run: the report printed (head, the rows, the summary) and put in the
+/// recording (its table cut short), `samples.csv` named and `summary.json` written.
 ///
 /// # Errors
 /// Files or the recording that cannot be written.
 pub(super) fn deliver(d: Delivery<'_>, out: &mut dyn Write) -> Result<()> {
-    // The report goes to `out` and, with --rrd, into the recording.
-    let compensated = d.log.points.iter().any(|p| p.error_after_um.is_some());
-    out.write_all(d.text.as_bytes())?;
+    let Rows {
+        mut table,
+        csv,
+        out_files,
+    } = d.rows;
+    let mut tail: Vec<u8> = Vec::new();
+    report::write_summary(d.summary, &mut tail)?;
+    let tail = String::from_utf8_lossy(&tail).to_string();
+    out.write_all(d.head.as_bytes())?;
+    table.copy_to(out)?;
+    out.write_all(tail.as_bytes())?;
     if let Some(((rec, file), rrd)) = d.recording {
-        let md = record::run_markdown(&d.text, rrd.settings.magnify, compensated);
+        let text = format!(
+            "{}{}{tail}",
+            d.head,
+            table.head(run_stream::RECORDED_TABLE_ROWS)?
+        );
+        let md = record::run_markdown(&text, rrd.settings.magnify, d.compensated);
         rec.finish(Some(&md))?;
         let path = file.path().to_path_buf();
         let bytes = file.finish()?;
         wrote_recording(out, &path, bytes, "")?;
     }
-    if let Some((csv, json)) = d.out_files {
-        files::write_atomic(&csv, d.log.samples_csv().as_bytes(), d.force)?;
+    if let (Some((csv_path, json)), Some(csv)) = (out_files, csv) {
+        csv.finish()?;
         let text = serde_json::to_string_pretty(d.summary)?;
         files::write_atomic(&json, text.as_bytes(), d.force)?;
-        writeln!(out, "wrote {} and {}", csv.display(), json.display())?;
+        writeln!(out, "wrote {} and {}", csv_path.display(), json.display())?;
     }
     Ok(())
 }
 
-/// A warm-up: its canonical moves, where it starts and how long it takes. Its timed plan is
-/// built piece by piece as it runs ([`program::ProgramMoves::pieces`]), so a week of duty
-/// never holds a week of plan.
+/// A warm-up: its file, where it starts and how long it takes. It is interpreted and planned
+/// piece by piece as it runs ([`program::PlanStream`]), so a week of duty never holds a week
+/// of moves or of plan.
 pub(super) struct Warmup {
-    moves: program::ProgramMoves,
+    path: PathBuf,
     start_mm: [f64; 3],
+    /// The text's hash when it was checked (see [`program::PlanStream::fingerprint`]).
+    fingerprint: Option<u64>,
     /// Its duration, s.
     pub duration_s: f64,
 }
 
 impl Warmup {
-    /// The warm-up's plans, piece by piece (each checked).
+    /// The warm-up's plans, piece by piece (each checked), in machine coordinates.
     fn pieces<'a>(
-        &'a self,
+        &self,
         machine: &'a MachineSpec,
         tools: &'a vmc_machine::tools::ToolTable,
-    ) -> program::PlanPieces<'a> {
-        self.moves
-            .pieces(machine, self.start_mm, tools, program::MOVES_PER_PIECE)
+    ) -> Result<program::PlanStream<'a>> {
+        let placement = Placement::of_machine(machine);
+        let stream = program::PlanStream::load(
+            &self.path,
+            machine,
+            self.start_mm,
+            tools,
+            &placement,
+            program::MOVES_PER_PIECE,
+        )?;
+        anyhow::ensure!(
+            self.fingerprint.is_none_or(|f| f == stream.fingerprint()),
+            "{}: the warm-up file changed while the run was starting; run again",
+            self.path.display()
+        );
+        Ok(stream)
     }
 }
 
@@ -303,46 +339,49 @@ pub(super) fn load_warmups(
     let mut start = machine.axes.home_mm;
     let mut warmups = Vec::new();
     for w in paths {
-        let moves = program::ProgramMoves::load(w, machine, start, tools)?;
         let mut warmup = Warmup {
-            moves,
+            path: w.clone(),
             start_mm: start,
+            fingerprint: None,
             duration_s: 0.0,
         };
-        let mut duration_s = 0.0;
-        for piece in warmup.pieces(machine, tools) {
+        let stream = warmup.pieces(machine, tools)?;
+        warmup.fingerprint = Some(stream.fingerprint());
+        for piece in stream {
             let piece = piece?;
-            duration_s += piece.duration_s();
+            warmup.duration_s += piece.duration_s();
             start = piece.end_mm();
         }
-        warmup.duration_s = duration_s;
         warmups.push(warmup);
     }
     Ok((warmups, start))
 }
 
-/// The warm-ups (every piece planned and checked once, then dropped) and the program's plan,
-/// each starting where the previous one ends; the run's size checked.
-fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, Plan, Sampling)> {
+/// The warm-ups and the measured program (every piece planned and checked once, then
+/// dropped), each starting where the previous one ends; the run's size checked.
+fn load_plans(cfg: &RunConfig) -> Result<(Vec<Warmup>, ProgramScan, Sampling)> {
     let (warmups, start) = load_warmups(&cfg.machine, &cfg.tools, &cfg.warmups)?;
-    let (plan, _) = program::load_plan_placed(
-        &cfg.program,
-        &cfg.machine,
-        start,
-        &cfg.tools,
-        &cfg.placement,
-        true,
-    )?;
-    let sampling = sampling(cfg, &plan)?;
-    let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + plan.duration_s();
+    let scan = run_stream::scan(&measured(cfg), start, cfg.rrd.is_some())?;
+    let sampling = sampling(cfg, scan.has_dwell)?;
+    let total_s = warmups.iter().map(|p| p.duration_s).sum::<f64>() + scan.duration_s;
     program::check_run_size(
         &cfg.program.display().to_string(),
         total_s,
         cfg.sim.thermal_step_s(),
-        plan.duration_s(),
+        scan.duration_s,
         matches!(sampling.mode, SampleMode::EveryCycle).then_some(sampling.sim.interp_cycle_s()),
     )?;
-    Ok((warmups, plan, sampling))
+    Ok((warmups, scan, sampling))
+}
+
+/// The measured program of `cfg` and what it runs on.
+fn measured(cfg: &RunConfig) -> run_stream::Measured<'_> {
+    run_stream::Measured {
+        program: &cfg.program,
+        machine: &cfg.machine,
+        tools: &cfg.tools,
+        placement: &cfg.placement,
+    }
 }
 
 /// The model of `path` as a compensator for the run's machine (see
@@ -382,9 +421,10 @@ fn simulate(
     cfg: &RunConfig,
     sampling: &Sampling,
     warmups: &[Warmup],
-    plan: &Plan,
+    scan: &ProgramScan,
     mut controller: Option<&mut RunController>,
-) -> Result<(RunLog, Option<(record::Recorder, record::RrdFile)>)> {
+    log: &mut RunLog,
+) -> Result<Option<(record::Recorder, record::RrdFile)>> {
     let machine = &cfg.machine;
     let mut twin = Twin::new(machine, cfg.seed)?;
     twin.set_tool_table(cfg.tools.clone());
@@ -394,10 +434,13 @@ fn simulate(
         // The run report splits each error into cold geometry and thermal part.
         .with_thermal_part(true);
     let warm_cfg = sim_cfg.sampling(SampleMode::Dwells);
-    let total_s: f64 = warmups.iter().map(|p| p.duration_s).sum::<f64>() + plan.duration_s();
+    let total_s: f64 = warmups.iter().map(|p| p.duration_s).sum::<f64>() + scan.duration_s;
     let mut progress = Progress::new(total_s.ceil() as u64, "s");
     let mut recording = match &cfg.rrd {
-        Some(rrd) => Some(open_recording(cfg, rrd, plan, controller.is_some())?),
+        Some(rrd) => {
+            let diagonal = record::Diagonal::through(&scan.dwell_points_mm);
+            Some(open_recording(cfg, rrd, diagonal, controller.is_some())?)
+        }
         None => None,
     };
     let mut null = sim::NullObserver;
@@ -421,26 +464,18 @@ fn simulate(
             &mut obs,
         )?;
     }
-    let mut log = RunLog::default();
     {
         let rec: &mut dyn Observer = match recording.as_mut() {
             Some((r, _)) => r,
             None => &mut null,
         };
         let mut watch = sim::Tee(rec, &mut progress);
-        let mut obs = sim::Tee(&mut log, &mut watch);
-        obs.on_run_start(&RunStart {
-            label: cfg.program.display().to_string(),
-            time_s: twin.time_s(),
-            duration_s: plan.duration_s(),
-            measured: true,
-        });
+        let mut obs = sim::Tee(log, &mut watch);
         let ctrl = controller.map(|c| c as &mut dyn sim::Controller);
-        sim::execute(&mut twin, plan, &sim_cfg, ctrl, &mut obs)
-            .with_context(|| cfg.program.display().to_string())?;
+        run_stream::run_measured(&measured(cfg), scan, &mut twin, &sim_cfg, ctrl, &mut obs)?;
     }
     progress.finish();
-    Ok((log, recording))
+    Ok(recording)
 }
 
 /// What the warm-ups run with.
@@ -473,7 +508,7 @@ pub(super) fn run_warmups(
             duration_s: p.duration_s,
             measured: false,
         });
-        for piece in p.pieces(ctx.machine, ctx.tools) {
+        for piece in p.pieces(ctx.machine, ctx.tools)? {
             // The controller follows the readings (and the commanded motion) through the
             // warm-up, as on the machine: a model with history features needs the thermal past.
             let ctrl = controller
@@ -489,7 +524,7 @@ pub(super) fn run_warmups(
 fn open_recording(
     cfg: &RunConfig,
     rrd: &RrdOutput,
-    plan: &Plan,
+    diagonal: Option<record::Diagonal>,
     compensated: bool,
 ) -> Result<(record::Recorder, record::RrdFile)> {
     let id = format!(
@@ -503,13 +538,7 @@ fn open_recording(
             .collect::<Vec<_>>()
             .join(", "),
     );
-    open_run_recording(
-        &id,
-        rrd,
-        cfg.force,
-        &cfg.machine,
-        record::Diagonal::of_plan(plan),
-    )
+    open_run_recording(&id, rrd, cfg.force, &cfg.machine, diagonal)
 }
 
 /// A recording with a run's layout, named `id`, its diagonal timeline along `diagonal`.
@@ -533,8 +562,9 @@ pub(super) fn open_run_recording(
     Ok((rec, file))
 }
 
-/// The printed report: the thermal state, the first readings, the per-point table, the summary.
-fn report_text(
+/// The printed report's head: the thermal state, the first readings (the per-point table and
+/// the summary follow).
+fn report_head(
     cfg: &RunConfig,
     sampling: &Sampling,
     log: &RunLog,
@@ -555,7 +585,7 @@ fn report_text(
         super::program_placement::placement_line(&cfg.placement)
     )?;
     writeln!(out, "measured {}", sampling.note)?;
-    write_points(&mut out, log, summary)?;
+    write_first_readings(&mut out, log)?;
     Ok(String::from_utf8_lossy(&out).to_string())
 }
 
@@ -578,13 +608,10 @@ pub(super) fn write_thermal_state(
     }
 }
 
-/// The report's measured part: the first readings, the per-point table, the summary.
-pub(super) fn write_points(
-    out: &mut dyn Write,
-    log: &RunLog,
-    summary: &RunSummary,
-) -> std::io::Result<()> {
-    if let Some(temps) = log.sensor_degc.first() {
+/// The report's line of the sensor readings at the first point, and the table's legend (the
+/// per-point table follows).
+pub(super) fn write_first_readings(out: &mut dyn Write, log: &RunLog) -> std::io::Result<()> {
+    if let Some(temps) = &log.first_degc {
         let list: Vec<String> = log
             .sensor_names
             .iter()
@@ -593,7 +620,5 @@ pub(super) fn write_points(
             .collect();
         writeln!(out, "sensors at the first point (°C): {}", list.join(", "))?;
     }
-    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")?;
-    log.write_table(out)?;
-    report::write_summary(summary, out)
+    writeln!(out, "errors E = actual − commanded tool tip, workpiece frame, µm; therm = |thermal part| (error minus the cold-geometry error at that point)")
 }

@@ -294,26 +294,30 @@ impl Diagonal {
     /// The line through `points` if there are at least two distinct points and every point lies
     /// within 0.01 mm of the line from the first to the last.
     pub fn through(points: &[[f64; 3]]) -> Option<Self> {
-        let (first, last) = (points.first()?, points.last()?);
-        let d = [0, 1, 2].map(|a| last[a] - first[a]);
+        let diag = Self::between(*points.first()?, *points.last()?)?;
+        points.iter().all(|p| diag.holds(*p)).then_some(diag)
+    }
+
+    /// The line from `first_mm` to `last_mm`, if they are distinct (a stream of points is
+    /// checked against it one by one with [`Self::holds`]).
+    pub fn between(first_mm: [f64; 3], last_mm: [f64; 3]) -> Option<Self> {
+        let d = [0, 1, 2].map(|a| last_mm[a] - first_mm[a]);
         let length_mm = norm(d);
         if length_mm < 1e-6 {
             return None;
         }
-        let dir = d.map(|c| c / length_mm);
-        let diag = Diagonal {
-            start_mm: *first,
-            dir,
+        Some(Diagonal {
+            start_mm: first_mm,
+            dir: d.map(|c| c / length_mm),
             length_mm,
-        };
-        points
-            .iter()
-            .all(|p| {
-                let s = diag.position_mm(*p);
-                let off = [0, 1, 2].map(|a| p[a] - first[a] - s * dir[a]);
-                norm(off) < 0.01
-            })
-            .then_some(diag)
+        })
+    }
+
+    /// Whether `p_mm` lies on the line (within 0.01 mm).
+    pub fn holds(&self, p_mm: [f64; 3]) -> bool {
+        let s = self.position_mm(p_mm);
+        let off = [0, 1, 2].map(|a| p_mm[a] - self.start_mm[a] - s * self.dir[a]);
+        norm(off) < 0.01
     }
 
     /// The line through a plan's dwell (measurement) points, if they are collinear.

@@ -187,3 +187,20 @@ fn run_markdown_states_the_magnification() {
     assert!(md.contains("40 mm"));
     assert!(md.contains("```text\ntable\n```"));
 }
+
+#[test]
+fn a_diagonal_checked_point_by_point_agrees_with_the_line_through_the_points() {
+    let on = [
+        [10.0, 60.0, -225.0],
+        [70.0, 90.0, -225.0],
+        [130.0, 120.0, -225.0],
+    ];
+    let streamed = Diagonal::between(on[0], on[2]).unwrap();
+    assert!(on.iter().all(|p| streamed.holds(*p)));
+    assert_eq!(Some(streamed), Diagonal::through(&on));
+    // 0.02 mm off the line: refused both ways.
+    let off = [on[0], [70.0, 90.02, -225.0], on[2]];
+    assert!(!streamed.holds(off[1]));
+    assert!(Diagonal::through(&off).is_none());
+    assert!(Diagonal::between(on[0], on[0]).is_none());
+}

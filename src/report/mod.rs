@@ -3,13 +3,13 @@
 //! Units are in every column and field name. Files are written through [`crate::files`].
 
 pub mod fiveaxis;
+mod run_log;
+
+pub use run_log::RunLog;
 
 use std::io::Write;
 
 use serde::Serialize;
-
-use vmc_machine::sensors::SensorReadings;
-use vmc_machine::sim::{Observer, PointRecord};
 
 /// Statistics of an error series, µm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -22,43 +22,43 @@ pub struct ErrorStats {
 
 /// Stats of `errors` (µm vectors). None if empty.
 pub fn error_stats(errors: &[[f64; 3]]) -> Option<ErrorStats> {
-    if errors.is_empty() {
-        return None;
-    }
-    let n = errors.len() as f64;
-    let mut max = [0.0f64; 4];
-    let mut sq = [0.0f64; 4];
+    let mut acc = StatsAcc::default();
     for e in errors {
+        acc.add(*e);
+    }
+    acc.stats()
+}
+
+/// [`ErrorStats`] gathered one error at a time (the same sums in the same order as
+/// [`error_stats`], so the same figures to the last bit).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct StatsAcc {
+    n: usize,
+    max: [f64; 4],
+    sq: [f64; 4],
+}
+
+impl StatsAcc {
+    /// Adds one error vector, µm.
+    pub fn add(&mut self, e: [f64; 3]) {
         let norm = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         for (k, v) in [e[0], e[1], e[2], norm].into_iter().enumerate() {
-            max[k] = max[k].max(v.abs());
-            sq[k] += v * v;
+            self.max[k] = self.max[k].max(v.abs());
+            self.sq[k] += v * v;
         }
+        self.n += 1;
     }
-    Some(ErrorStats {
-        max_abs_um: max,
-        rms_um: sq.map(|s| (s / n).sqrt()),
-    })
-}
 
-/// Points collected during a run, with the sensor readings held at each.
-#[derive(Debug, Default, Clone)]
-pub struct RunLog {
-    /// Sensor names (from the first point).
-    pub sensor_names: Vec<String>,
-    /// The points.
-    pub points: Vec<PointRecord>,
-    /// Sensor readings at each point, °C.
-    pub sensor_degc: Vec<Vec<f64>>,
-}
-
-impl Observer for RunLog {
-    fn on_point(&mut self, point: &PointRecord, readings: &SensorReadings) {
-        if self.sensor_names.is_empty() {
-            self.sensor_names = readings.names.iter().map(|s| s.to_string()).collect();
+    /// The statistics so far; None before the first error.
+    pub fn stats(&self) -> Option<ErrorStats> {
+        if self.n == 0 {
+            return None;
         }
-        self.points.push(point.clone());
-        self.sensor_degc.push(readings.values_degc.to_vec());
+        let n = self.n as f64;
+        Some(ErrorStats {
+            max_abs_um: self.max,
+            rms_um: self.sq.map(|s| (s / n).sqrt()),
+        })
     }
 }
 
@@ -90,150 +90,6 @@ pub struct RunSummary {
     pub reduction: Option<f64>,
     /// Readings and commands outside the model's trained ranges, if compensation ran.
     pub extrapolation: Option<crate::predict::provenance::Extrapolation>,
-}
-
-impl RunLog {
-    /// Summarises the run. None if it has no points.
-    pub fn summary(
-        &self,
-        program: &str,
-        machine: &str,
-        seed: u64,
-        warmup: &[String],
-    ) -> Option<RunSummary> {
-        let before: Vec<[f64; 3]> = self.points.iter().map(|p| p.error_before_um).collect();
-        let thermal: Vec<[f64; 3]> = self
-            .points
-            .iter()
-            .filter_map(|p| p.thermal_part_um)
-            .collect();
-        let after: Vec<[f64; 3]> = self
-            .points
-            .iter()
-            .filter_map(|p| p.error_after_um)
-            .collect();
-        let b = error_stats(&before)?;
-        let a = error_stats(&after);
-        let first = &self.sensor_degc[0];
-        Some(RunSummary {
-            program: program.to_string(),
-            machine: machine.to_string(),
-            seed,
-            warmup: warmup.to_vec(),
-            points: self.points.len(),
-            time_span_s: [
-                self.points[0].time_s,
-                self.points[self.points.len() - 1].time_s,
-            ],
-            mean_sensor_temp_degc: first.iter().sum::<f64>() / first.len().max(1) as f64,
-            before: b,
-            thermal_part: error_stats(&thermal),
-            after: a,
-            reduction: a.map(|a| 1.0 - a.rms_um[3] / b.rms_um[3]),
-            extrapolation: None,
-        })
-    }
-
-    /// Writes the terminal table: one row per point.
-    pub fn write_table(&self, out: &mut dyn Write) -> std::io::Result<()> {
-        let comp = self.points.iter().any(|p| p.error_after_um.is_some());
-        write!(
-            out,
-            "{:>4} {:>9} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
-            "pt",
-            "time_s",
-            "line",
-            "x_mm",
-            "y_mm",
-            "z_mm",
-            "ex_um",
-            "ey_um",
-            "ez_um",
-            "|e|_um",
-            "therm_um"
-        )?;
-        if comp {
-            write_compensated_header(out)?;
-        }
-        writeln!(out)?;
-        for p in &self.points {
-            let e = p.error_before_um;
-            let t = p.thermal_part_um.unwrap_or([f64::NAN; 3]);
-            write!(
-                out,
-                "{:>4} {:>9.1} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
-                p.index,
-                p.time_s,
-                p.line,
-                p.commanded_mm[0],
-                p.commanded_mm[1],
-                p.commanded_mm[2],
-                e[0],
-                e[1],
-                e[2],
-                norm(e),
-                norm(t),
-            )?;
-            if let Some(a) = p.error_after_um {
-                write_compensated_cells(out, a)?;
-            }
-            writeln!(out)?;
-        }
-        Ok(())
-    }
-
-    /// `samples.csv` content: one row per point, units in every column name.
-    pub fn samples_csv(&self) -> String {
-        let comp = self.points.iter().any(|p| p.error_after_um.is_some());
-        let mut s = String::from(
-            "time_s,line,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um,norm_um,thermal_ex_um,thermal_ey_um,thermal_ez_um",
-        );
-        if comp {
-            s.push_str(",qx_mm,qy_mm,qz_mm,ex_comp_um,ey_comp_um,ez_comp_um,norm_comp_um");
-        }
-        for n in &self.sensor_names {
-            s.push_str(&format!(",{n}_degc"));
-        }
-        s.push('\n');
-        for (p, temps) in self.points.iter().zip(&self.sensor_degc) {
-            let e = p.error_before_um;
-            let t = p.thermal_part_um.unwrap_or([f64::NAN; 3]);
-            s.push_str(&format!(
-                "{:.3},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-                p.time_s,
-                p.line,
-                p.commanded_mm[0],
-                p.commanded_mm[1],
-                p.commanded_mm[2],
-                e[0],
-                e[1],
-                e[2],
-                norm(e),
-                t[0],
-                t[1],
-                t[2]
-            ));
-            if comp {
-                let q = p.compensated_command_mm.unwrap_or(p.commanded_mm);
-                let a = p.error_after_um.unwrap_or([f64::NAN; 3]);
-                s.push_str(&format!(
-                    ",{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4}",
-                    q[0],
-                    q[1],
-                    q[2],
-                    a[0],
-                    a[1],
-                    a[2],
-                    norm(a)
-                ));
-            }
-            for v in temps {
-                s.push_str(&format!(",{v:.4}"));
-            }
-            s.push('\n');
-        }
-        s
-    }
 }
 
 /// |v| of a µm vector.

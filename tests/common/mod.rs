@@ -46,3 +46,30 @@ pub fn refused(out: &Output, what: &str) -> String {
     assert_eq!(err.lines().count(), 1, "{what}: one line: {err}");
     err
 }
+
+/// Runs `vmc-twin args` in `dir` and returns its peak resident set size, kB: the child's
+/// maximum resident set size as the kernel counts it (`getrusage(RUSAGE_CHILDREN)`, read
+/// through `python3`). Fails the test if the command fails.
+pub fn peak_rss_kb(dir: &Path, args: &[&str]) -> u64 {
+    let script = "import resource, subprocess, sys\n\
+                  r = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)\n\
+                  sys.stderr.write(r.stderr.decode())\n\
+                  print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n";
+    let out = Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .arg(BIN)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("python3 is needed to measure the peak memory of a child");
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let fields: Vec<&str> = text.split_whitespace().collect();
+    assert_eq!(
+        fields.first(),
+        Some(&"0"),
+        "vmc-twin {args:?} failed: {text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    fields[1].parse().expect("maxrss in kB")
+}

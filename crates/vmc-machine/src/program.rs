@@ -13,11 +13,13 @@ use crate::tools::ToolTable;
 use vmc_gcode::interp::{self, InterpConfig, LengthUnit};
 
 mod pieces;
+mod stream;
 pub use pieces::{PlanPieces, ProgramMoves, MOVES_PER_PIECE};
 mod probed;
 pub use probed::{
     end_probe_move, interpret_probed, load_plan_probed, ProbeRecord, ProbedMoves, ProbedPlan,
 };
+pub use stream::{PlanStream, Source};
 
 /// A program that cannot be run.
 #[derive(Debug, Error)]

@@ -118,6 +118,8 @@ pub struct ProgramRun {
     probe_index: usize,
     /// Where the length unit changed: (number of moves emitted before, the unit after).
     unit_changes: Vec<(usize, LengthUnit)>,
+    /// Moves emitted by the calls before the present one (over every output given).
+    emitted_before: usize,
 }
 
 impl ProgramRun {
@@ -137,6 +139,7 @@ impl ProgramRun {
             state: State::Running,
             probe_index: 0,
             unit_changes: vec![(0, LengthUnit::Mm)],
+            emitted_before: 0,
         })
     }
 
@@ -147,9 +150,37 @@ impl ProgramRun {
     /// The first error of the program (then every later call returns it again), or a probe
     /// move still without its result.
     pub fn resume(&mut self, out: &mut Vec<CanonMove>) -> Result<RunEvent, GcodeError> {
+        let event = self.resume_at_most(out, usize::MAX)?;
+        Ok(event.expect("an unbounded run pauses only at an event"))
+    }
+
+    /// [`Self::resume`] in bounded steps: runs blocks until the program ends, a probe move
+    /// waits (`Some` event), or at least `max_moves` moves were appended to `out` in this call
+    /// (`None`: call again for the rest). The caller may empty `out` between calls, so a long
+    /// program is interpreted without holding all its moves; move indices
+    /// ([`Self::length_unit_at`]) count every move emitted since the start.
+    ///
+    /// # Errors
+    /// As [`Self::resume`].
+    pub fn resume_at_most(
+        &mut self,
+        out: &mut Vec<CanonMove>,
+        max_moves: usize,
+    ) -> Result<Option<RunEvent>, GcodeError> {
+        let first = out.len();
+        let result = self.resume_inner(out, first.saturating_add(max_moves));
+        self.emitted_before += out.len() - first;
+        result
+    }
+
+    fn resume_inner(
+        &mut self,
+        out: &mut Vec<CanonMove>,
+        stop_at_len: usize,
+    ) -> Result<Option<RunEvent>, GcodeError> {
         match &self.state {
             State::Running => {}
-            State::Ended => return Ok(RunEvent::Ended),
+            State::Ended => return Ok(Some(RunEvent::Ended)),
             State::Failed(e) => return Err(e.clone()),
             State::Probing(r) => {
                 let msg = "the run was resumed before the probe move got its result \
@@ -157,12 +188,13 @@ impl ProgramRun {
                 return Err(GcodeError::invalid(r.line, 1, msg));
             }
         }
-        match self.run_until_event(out) {
+        match self.run_until_event(out, stop_at_len) {
             Ok(event) => {
-                self.state = match event {
-                    RunEvent::Ended => State::Ended,
-                    RunEvent::Probe(r) => State::Probing(r),
-                };
+                match event {
+                    Some(RunEvent::Ended) => self.state = State::Ended,
+                    Some(RunEvent::Probe(r)) => self.state = State::Probing(r),
+                    None => {}
+                }
                 Ok(event)
             }
             Err(e) => {
@@ -216,18 +248,27 @@ impl ProgramRun {
             .map_or(LengthUnit::Mm, |c| c.1)
     }
 
-    fn run_until_event(&mut self, out: &mut Vec<CanonMove>) -> Result<RunEvent, GcodeError> {
+    /// Runs blocks until an event, or (`None`) until `out` holds `stop_at_len` moves.
+    fn run_until_event(
+        &mut self,
+        out: &mut Vec<CanonMove>,
+        stop_at_len: usize,
+    ) -> Result<Option<RunEvent>, GcodeError> {
+        let first = out.len();
         loop {
+            if out.len() >= stop_at_len {
+                return Ok(None);
+            }
             if let Some(line) = self.runner.main_m99_end.take() {
                 self.runner.interp.flush(out);
                 out.push(CanonMove {
                     line,
                     kind: CanonKind::ProgramEnd,
                 });
-                return Ok(RunEvent::Ended);
+                return Ok(Some(RunEvent::Ended));
             }
             if self.runner.interp.is_ended() {
-                return Ok(RunEvent::Ended);
+                return Ok(Some(RunEvent::Ended));
             }
             if self.pc >= self.prog.lines.len() {
                 break;
@@ -245,11 +286,12 @@ impl ProgramRun {
             };
             let unit = self.runner.interp.length_unit();
             if self.unit_changes.last().map(|c| c.1) != Some(unit) {
-                self.unit_changes.push((emitted, unit));
+                self.unit_changes
+                    .push((self.emitted_before + emitted - first, unit));
             }
             if let Some(request) = self.runner.probe {
                 self.probe_index = pc;
-                return Ok(RunEvent::Probe(request));
+                return Ok(Some(RunEvent::Probe(request)));
             }
         }
         if let Some((_, index, e)) = self.structure_error.take() {
@@ -259,7 +301,7 @@ impl ProgramRun {
             return Err(e.clone());
         }
         self.runner.interp.flush(out);
-        Ok(RunEvent::Ended)
+        Ok(Some(RunEvent::Ended))
     }
 
     /// Places an error of line index `index` (`None`: the main program) in its file, with the
@@ -272,5 +314,38 @@ impl ProgramRun {
         e.file = index.and_then(|i| self.prog.file_of(i).cloned());
         e.calls = self.runner.call_sites(&self.prog);
         e
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_run_in_bounded_steps_emits_the_same_moves_and_units_as_a_whole_run() {
+        let src = "G21 F1000\no1 repeat [20]\nG1 X10\nG1 Y10\nG20\nG1 X1\nG21\nG1 X0 Y0\n\
+                   o1 endrepeat\nG38.3 Z-5\nG0 Z1\nM2\n";
+        let cfg = InterpConfig::default();
+        let (whole, units) = super::super::run_program_with_units(src, &cfg).unwrap();
+        let mut run = ProgramRun::new(src, &cfg).unwrap();
+        let (mut moves, mut chunk, mut bounded_units) = (Vec::new(), Vec::new(), Vec::new());
+        let mut pauses = 0;
+        loop {
+            let event = run.resume_at_most(&mut chunk, 3).unwrap();
+            // A pause comes between blocks: at most one block's moves beyond the bound.
+            assert!(chunk.len() <= 6, "{}", chunk.len());
+            for _ in &chunk {
+                bounded_units.push(run.length_unit_at(bounded_units.len()));
+            }
+            moves.append(&mut chunk);
+            match event {
+                None => pauses += 1,
+                Some(RunEvent::Probe(_)) => run.probe_result(ProbeOutcome::Standalone).unwrap(),
+                Some(RunEvent::Ended) => break,
+            }
+        }
+        assert!(pauses > 10, "{pauses}");
+        assert_eq!(moves, whole);
+        assert_eq!(bounded_units, units);
     }
 }

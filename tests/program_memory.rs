@@ -1,0 +1,88 @@
+//! The measured program of `vmc-twin run` is streamed: its peak resident memory must not grow
+//! with the program's length in moves (the moves and the timed plan are made piece by piece)
+//! nor with its number of measurement points (each point's row is written as it is taken).
+//! Peak memory is the child's maximum resident set size (see `common::peak_rss_kb`).
+//!
+//! The programs are generated here: the ten moves of a diagonal test (no dwells: measured
+//! during motion), back and forth, repeated in an O-word loop: a program of 100 000 moves
+//! against one of 10 000, and 10× the points of one program against its default sampling.
+//! The text of a program of many lines is still parsed whole (see `docs/results.md`).
+
+mod common;
+use common::*;
+
+/// A diagonal's ten moves repeated `repeats` times (10 × `repeats` moves, 0.6 s each).
+fn diagonals(repeats: usize) -> String {
+    let moves: Vec<String> = (0..10)
+        .map(|k| {
+            format!(
+                "  G1 X{:.3} Y{:.3} Z-225.000 F20000",
+                10 + 60 * k,
+                60 + 30 * k
+            )
+        })
+        .collect();
+    format!(
+        "%\n( {repeats} diagonals )\nG21 G17 G90 G54\nG0 X10 Y60 Z-225\no1 repeat [{repeats}]\n{}\n\
+         o1 endrepeat\nM30\n%\n",
+        moves.join("\n")
+    )
+}
+
+/// Peak RSS (kB) of `run` on `program` with the measurement period `period_ms` (a coarse
+/// thermal step: the thermal network's cost is not what is measured); checks the report.
+fn peak_kb(dir: &TempDir, name: &str, program: &str, period_ms: &str) -> u64 {
+    let file = dir.path().join(format!("{name}.ngc"));
+    std::fs::write(&file, program).unwrap();
+    let out = dir.path().join(name);
+    let kb = peak_rss_kb(
+        dir.path(),
+        &[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--interp-cycle-ms",
+            period_ms,
+            "--thermal-step-s",
+            "10",
+        ],
+    );
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let csv = std::fs::read_to_string(out.join("samples.csv")).unwrap();
+    let points: usize = summary
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("\"points\": "))
+        .and_then(|v| v.trim_end_matches(',').parse().ok())
+        .expect("points in summary.json");
+    // Every point's row was streamed to samples.csv (plus its header).
+    assert_eq!(csv.lines().count(), points + 1, "{name}");
+    kb
+}
+
+#[test]
+fn ten_times_the_moves_hold_no_more_memory() {
+    let dir = TempDir::new("program-memory-moves");
+    let short_kb = peak_kb(&dir, "short", &diagonals(1_000), "60000");
+    let long_kb = peak_kb(&dir, "long", &diagonals(10_000), "60000");
+    eprintln!("peak RSS: 10 000 moves {short_kb} kB, 100 000 moves {long_kb} kB");
+    // Held whole, 90 000 more moves and their plan are some 40 MB.
+    assert!(
+        long_kb as f64 <= 1.2 * short_kb as f64,
+        "peak RSS grew with the program's moves: {long_kb} kB against {short_kb} kB"
+    );
+}
+
+#[test]
+fn ten_times_the_points_hold_no_more_memory() {
+    let dir = TempDir::new("program-memory-points");
+    let program = diagonals(2_000);
+    let few_kb = peak_kb(&dir, "few", &program, "1000");
+    let many_kb = peak_kb(&dir, "many", &program, "100");
+    eprintln!("peak RSS: 12 000 points {few_kb} kB, 120 000 points {many_kb} kB");
+    // Held whole, 108 000 more points with their rows are some 60 MB.
+    assert!(
+        many_kb as f64 <= 1.2 * few_kb as f64,
+        "peak RSS grew with the points: {many_kb} kB against {few_kb} kB"
+    );
+}
