@@ -43,6 +43,8 @@ impl PlacementArgs {
             subroutine_dirs: Vec::new(),
             bodies: Vec::new(),
             setup_file: None,
+            probe: None,
+            artefacts: Vec::new(),
         };
         if let Some(path) = self.setup.clone().or_else(|| setup_beside(program)) {
             placement = placement.with_setup(SetupFile::load(&path)?, &path);

@@ -1,5 +1,7 @@
 //! `vmc-twin check`: would this program crash the machine? Travel limits and contact of tool,
-//! holder and spindle nose with the table, fixture and stock, move by move.
+//! holder and spindle nose with the table, fixture, stock and the setup's artefacts, move by move;
+//! probe moves end where the nominal machine's probe trips, and one that would reach nothing
+//! is reported.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -8,6 +10,7 @@ use anyhow::Result;
 
 use super::wrote_recording;
 use crate::record;
+use vmc_gcode::interp::ProbeRequest;
 use vmc_machine::collision::{self, FixtureSpec, Problem, Scene};
 use vmc_machine::machine::MachineSpec;
 use vmc_machine::program;
@@ -38,20 +41,31 @@ pub struct CheckConfig {
 pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
     let machine = &cfg.machine;
     let fixture_file = cfg.fixture.as_deref().map(FixtureSpec::load).transpose()?;
+    let file_bodies = fixture_file.as_ref().map(|f| f.bodies.clone());
     // The setup file's bodies and the fixture file's, as one fixture.
     let fixture = cfg.placement.fixture(fixture_file);
+    let artefacts = &cfg.placement.artefacts;
     let scene = match (&machine.collision, &fixture) {
-        (None, None) => None,
-        _ => Some(Scene::new(machine, fixture.as_ref())?.with_tools(cfg.tools.clone())),
+        (None, None) if artefacts.is_empty() => None,
+        _ => Some(
+            Scene::new(machine, fixture.as_ref())?
+                .with_tools(cfg.tools.clone())
+                .with_artefacts(artefacts),
+        ),
     };
-    let (plan, units) = program::load_plan_placed(
+    // Probe moves end where the nominal machine's probe would trip.
+    let extra = file_bodies.unwrap_or_default();
+    let station = cfg.placement.probe_station(machine, &extra, 0)?;
+    let mut answer = |r: &ProbeRequest| station.nominal(r).outcome;
+    let probed = program::load_plan_probed(
         &cfg.program,
         machine,
         machine.axes.home_mm,
         &cfg.tools,
         &cfg.placement,
-        false,
+        &mut answer,
     )?;
+    let (plan, units) = (&probed.plan, &probed.units);
     let file = cfg.program.display().to_string();
     let fixture_name = cfg
         .fixture
@@ -115,8 +129,8 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
             }
         }
     }
-    let mut printer = Print(out, &file, Ok(()), Vec::new(), &units);
-    let sum = collision::check_plan(&plan, machine, scene.as_ref(), &mut printer)?;
+    let mut printer = Print(out, &file, Ok(()), Vec::new(), units);
+    let sum = collision::check_plan(plan, machine, scene.as_ref(), &mut printer)?;
     printer.2?;
     let problems = std::mem::take(&mut printer.3);
     if let Some(path) = &cfg.rrd {
@@ -125,7 +139,7 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
             cfg.force,
             machine,
             fixture.as_ref(),
-            &plan,
+            plan,
             &file,
             &problems,
         )?;
@@ -136,9 +150,30 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
         "checked {} moves ({:.1} mm of path, {} poses): {} collision(s), {} travel violation(s)",
         sum.segments, sum.path_mm, sum.samples, sum.collisions, sum.travel_violations
     )?;
-    if sum.is_clean() {
+    if !probed.probes.is_empty() {
+        writeln!(
+            out,
+            "probe moves: {} (G38.x), each ending where the probe trips on the nominal machine (ball Ø{} mm, pre-travel {:.1} µm)",
+            probed.probes.len(),
+            2.0 * station.probe().ball_radius_mm,
+            station.probe().pretravel_mm() * 1e3
+        )?;
+    }
+    if let Some(stop) = &probed.stopped {
+        writeln!(
+            out,
+            "{stop} (on the nominal machine; the program stops here)"
+        )?;
+    }
+    if sum.is_clean() && probed.stopped.is_none() {
         writeln!(out, "no problem found")?;
         Ok(())
+    } else if probed.stopped.is_some() {
+        anyhow::bail!(
+            "{file}: would stop at a probe move that reaches nothing: {} collision(s), {} travel violation(s) before it",
+            sum.collisions,
+            sum.travel_violations
+        )
     } else {
         anyhow::bail!(
             "{file}: would crash or leave the travel: {} collision(s), {} travel violation(s)",

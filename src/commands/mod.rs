@@ -20,6 +20,7 @@ pub mod merge;
 pub mod modal_fit;
 pub(crate) mod model;
 pub mod probe_campaign;
+mod probe_log;
 pub mod program_placement;
 pub mod replay;
 pub mod run;

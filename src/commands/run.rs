@@ -154,7 +154,7 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
     let compensated = controller.is_some();
     let mut rows = Rows::new(out_files, cfg.force)?;
     let mut log = rows.log(compensated);
-    let recorder = simulate(
+    let (recorder, probes) = simulate(
         cfg,
         &sampling,
         &warmups,
@@ -195,7 +195,26 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
             force: cfg.force,
         },
         out,
-    )
+    )?;
+    write_probes(cfg, &probes, out)
+}
+
+/// The probe moves' table and, with `--out`, `probes.csv`.
+fn write_probes(
+    cfg: &RunConfig,
+    probes: &super::probe_log::ProbeLog,
+    out: &mut dyn Write,
+) -> Result<()> {
+    if probes.rows.is_empty() {
+        return Ok(());
+    }
+    out.write_all(probes.report().as_bytes())?;
+    if let Some(dir) = &cfg.out_dir {
+        let path = dir.join("probes.csv");
+        files::write_atomic(&path, probes.csv().as_bytes(), cfg.force)?;
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    Ok(())
 }
 
 /// What a measured run (or replay) hands to [`deliver`].
@@ -381,6 +400,7 @@ fn measured(cfg: &RunConfig) -> run_stream::Measured<'_> {
         machine: &cfg.machine,
         tools: &cfg.tools,
         placement: &cfg.placement,
+        seed: cfg.seed,
     }
 }
 
@@ -424,7 +444,10 @@ fn simulate(
     scan: &ProgramScan,
     mut controller: Option<&mut RunController>,
     log: &mut RunLog,
-) -> Result<Option<(record::Recorder, record::RrdFile)>> {
+) -> Result<(
+    Option<(record::Recorder, record::RrdFile)>,
+    super::probe_log::ProbeLog,
+)> {
     let machine = &cfg.machine;
     let mut twin = Twin::new(machine, cfg.seed)?;
     twin.set_tool_table(cfg.tools.clone());
@@ -444,6 +467,7 @@ fn simulate(
         None => None,
     };
     let mut null = sim::NullObserver;
+    let probes;
     {
         let rec: &mut dyn Observer = match recording.as_mut() {
             Some((r, _)) => r,
@@ -472,10 +496,11 @@ fn simulate(
         let mut watch = sim::Tee(rec, &mut progress);
         let mut obs = sim::Tee(log, &mut watch);
         let ctrl = controller.map(|c| c as &mut dyn sim::Controller);
-        run_stream::run_measured(&measured(cfg), scan, &mut twin, &sim_cfg, ctrl, &mut obs)?;
+        probes =
+            run_stream::run_measured(&measured(cfg), scan, &mut twin, &sim_cfg, ctrl, &mut obs)?;
     }
     progress.finish();
-    Ok(recording)
+    Ok((recording, probes))
 }
 
 /// What the warm-ups run with.

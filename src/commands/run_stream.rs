@@ -31,6 +31,13 @@ pub(super) struct Measured<'a> {
     pub tools: &'a vmc_machine::tools::ToolTable,
     /// Where the program sits.
     pub placement: &'a vmc_machine::setup::Placement,
+    /// Seed of the probe's trip scatter.
+    pub seed: u64,
+}
+
+/// The probe station of the program's G38 moves (the setup's probe and what it can touch).
+fn station(cfg: &Measured<'_>) -> Result<vmc_machine::touch_probe::ProbeStation> {
+    Ok(cfg.placement.probe_station(cfg.machine, &[], cfg.seed)?)
 }
 
 /// What the measured program is, from one pass over its pieces.
@@ -54,7 +61,9 @@ pub(super) fn scan(
     start_mm: [f64; 3],
     dwell_points: bool,
 ) -> Result<ProgramScan> {
-    let stream = stream(cfg, start_mm)?;
+    // Probe moves end where the nominal machine's probe trips.
+    let station = station(cfg)?;
+    let mut stream = stream(cfg, start_mm)?;
     let mut scan = ProgramScan {
         start_mm,
         duration_s: 0.0,
@@ -62,8 +71,11 @@ pub(super) fn scan(
         dwell_points_mm: Vec::new(),
         fingerprint: stream.fingerprint(),
     };
-    for piece in stream {
+    while let Some(piece) = stream.next() {
         let piece = piece?;
+        if let Some(request) = stream.pending_probe() {
+            stream.answer_probe(station.nominal(&request).outcome)?;
+        }
         scan.duration_s += piece.duration_s();
         for s in piece.segments() {
             if matches!(s.kind, SegmentKind::Dwell) {
@@ -85,7 +97,8 @@ fn stream<'a>(cfg: &Measured<'a>, start_mm: [f64; 3]) -> Result<PlanStream<'a>> 
         cfg.tools,
         cfg.placement,
         program::MOVES_PER_PIECE,
-    )?)
+    )?
+    .answering_probes())
 }
 
 /// Runs the measured program on `twin` piece by piece, telling `obs` (the run log, the
@@ -97,9 +110,11 @@ pub(super) fn run_measured(
     sim_cfg: &SimConfig,
     mut controller: Option<&mut dyn sim::Controller>,
     obs: &mut dyn Observer,
-) -> Result<()> {
+) -> Result<super::probe_log::ProbeLog> {
     let name = cfg.program.display().to_string();
-    let stream = stream(cfg, scan.start_mm)?;
+    let mut station = station(cfg)?;
+    let mut probes = super::probe_log::ProbeLog::default();
+    let mut stream = stream(cfg, scan.start_mm)?;
     anyhow::ensure!(
         stream.fingerprint() == scan.fingerprint,
         "{name}: the program file changed while the run was starting; run again"
@@ -115,13 +130,27 @@ pub(super) fn run_measured(
         offset: 0,
         seen: 0,
     };
-    for piece in stream {
+    while let Some(piece) = stream.next() {
         let piece = piece?;
         let ctrl = sim::reborrow(&mut controller);
         sim::execute(twin, &piece, sim_cfg, ctrl, &mut numbered).with_context(|| name.clone())?;
         numbered.offset = numbered.seen;
+        // A probe move: the twin moves the probe through its drifted geometry now.
+        if let Some(request) = stream.pending_probe() {
+            let answer = station.on_twin(twin, &request)?;
+            let (params, unit) = stream.answer_probe(answer.outcome)?;
+            let row = super::probe_log::ProbeRow::new(
+                &request,
+                &answer,
+                params,
+                unit,
+                &station,
+                twin.time_s(),
+            );
+            probes.rows.push(row);
+        }
     }
-    Ok(())
+    Ok(probes)
 }
 
 /// Numbers the points of successive pieces on from the previous pieces' (each piece's

@@ -145,7 +145,7 @@ pub struct FixtureSpec {
 /// A field error before the file name is attached: (dotted field, message).
 pub type FieldError = (String, String);
 
-fn check_coord(field: String, v: [f64; 3]) -> Result<(), FieldError> {
+pub(crate) fn check_coord(field: String, v: [f64; 3]) -> Result<(), FieldError> {
     for (i, c) in v.iter().enumerate() {
         if !(c.is_finite() && c.abs() <= MAX_COORD_MM) {
             return Err((
@@ -157,7 +157,7 @@ fn check_coord(field: String, v: [f64; 3]) -> Result<(), FieldError> {
     Ok(())
 }
 
-fn check_size(field: String, v: f64) -> Result<(), FieldError> {
+pub(crate) fn check_size(field: String, v: f64) -> Result<(), FieldError> {
     if v.is_finite() && v > 0.0 && v <= MAX_COORD_MM {
         Ok(())
     } else {

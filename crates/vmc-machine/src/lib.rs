@@ -25,6 +25,7 @@ pub mod machine;
 pub mod milling;
 pub mod motion;
 pub mod plausible;
+pub mod probe_setup;
 pub mod program;
 pub mod read;
 pub mod sensors;

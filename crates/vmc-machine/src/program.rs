@@ -15,6 +15,10 @@ use vmc_gcode::interp::{self, InterpConfig, LengthUnit};
 mod pieces;
 mod stream;
 pub use pieces::{PlanPieces, ProgramMoves, MOVES_PER_PIECE};
+mod probed;
+pub use probed::{
+    end_probe_move, interpret_probed, load_plan_probed, ProbeRecord, ProbedMoves, ProbedPlan,
+};
 pub use stream::{PlanStream, Source};
 
 /// A program that cannot be run.
@@ -303,6 +307,39 @@ pub fn plan_source_unchecked_with_tools(
     plan_text(text, file, machine, start_mm, tools, &placement, Vec::new()).map(|(plan, _)| plan)
 }
 
+/// The interpreter's configuration for a program placed by `placement`: work offsets, tool
+/// lengths and diameters relative to the machine's own tool, subroutine files from `dirs`.
+fn interp_config_in(
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+    placement: &Placement,
+    subroutine_dirs: Vec<PathBuf>,
+) -> InterpConfig {
+    let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
+    InterpConfig {
+        start_mm,
+        work_offsets_mm: placement.work_offsets_mm,
+        tool_lengths_mm,
+        tool_diameters_mm,
+        subroutine_dirs,
+        ..InterpConfig::default()
+    }
+}
+
+/// [`interp_config_in`] with the subroutine folders of `program` (see
+/// [`Placement::search_path`]).
+fn interp_config(
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+    placement: &Placement,
+    program: Option<&Path>,
+) -> InterpConfig {
+    let dirs = placement.search_path(program);
+    interp_config_in(machine, start_mm, tools, placement, dirs)
+}
+
 /// Interprets and plans program text placed by `placement`, subroutine files from `dirs`.
 fn plan_text(
     text: &str,
@@ -313,28 +350,33 @@ fn plan_text(
     placement: &Placement,
     subroutine_dirs: Vec<PathBuf>,
 ) -> Result<(Plan, LineUnits), ProgramError> {
-    let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
-    let cfg = InterpConfig {
-        start_mm,
-        work_offsets_mm: placement.work_offsets_mm,
-        tool_lengths_mm,
-        tool_diameters_mm,
-        subroutine_dirs,
-        ..InterpConfig::default()
-    };
+    let cfg = interp_config_in(machine, start_mm, tools, placement, subroutine_dirs);
     let (moves, units) =
         interp::run_program_with_units(text, &cfg).map_err(|err| ProgramError::Gcode {
             file: file.to_string(),
             err,
         })?;
-    let units = LineUnits::new(&moves, &units);
-    refuse_rotary(&moves, file, &machine.machine.name)?;
-    let plan = motion::plan(&moves, start_mm, &machine.motion).map_err(|err| {
+    plan_moves(&moves, &units, file, machine, start_mm, tools)
+}
+
+/// Plans interpreted moves (their units of length in `units`), refusing rotary words and
+/// unknown tools, without the travel check.
+fn plan_moves(
+    moves: &[interp::CanonMove],
+    units: &[LengthUnit],
+    file: &str,
+    machine: &MachineSpec,
+    start_mm: [f64; 3],
+    tools: &ToolTable,
+) -> Result<(Plan, LineUnits), ProgramError> {
+    let units = LineUnits::new(moves, units);
+    refuse_rotary(moves, file, &machine.machine.name)?;
+    let plan = motion::plan(moves, start_mm, &machine.motion).map_err(|err| {
         // A move far outside the travel (a wild work offset) takes days at a feed: the travel
         // is what is wrong, and is what the user is told.
         let err = match err {
             motion::MotionError::ProgramTooLong { line, .. } => {
-                first_end_beyond_travel(&moves, line, machine).unwrap_or(err)
+                first_end_beyond_travel(moves, line, machine).unwrap_or(err)
             }
             err => err,
         };

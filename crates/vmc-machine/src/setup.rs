@@ -4,7 +4,8 @@
 //!
 //! A program is written for its own part zero; the setup says where that zero sits on this
 //! machine. Sources, each overriding the one before: the machine file's work offsets (G54…G59),
-//! a setup file (TOML: `[work_offsets_mm]` and `bodies`, see [`SetupFile`]), and command-line
+//! a setup file (TOML: `[work_offsets_mm]` and `bodies`, and for probing `[probe]` and
+//! `[[artefacts]]`, see [`SetupFile`] and [`crate::probe_setup`]), and command-line
 //! offsets (`G54=X250,Y180,Z-320`, [`parse_work_offset`]); an axis not given keeps the value it
 //! had. Subroutine files are looked up in the program's folder first, then in the folders
 //! given, in order. All lengths in mm, machine coordinates (the commanded tool tip relative to
@@ -19,6 +20,8 @@ use vmc_gcode::interp::WORK_OFFSETS;
 
 use crate::collision_spec::{validate_bodies, BodySpec, FixtureSpec, MAX_COORD_MM};
 use crate::machine::MachineSpec;
+use crate::probe_setup::{validate_artefacts, ArtefactSpec, NamedSolid, ProbeSpec, Solid};
+use crate::touch_probe::{ProbeError, ProbeMotion, ProbeStation, TouchProbe};
 
 /// The names of the work coordinate systems, in the interpreter's order (index 0…8).
 pub const WORK_OFFSET_NAMES: [&str; WORK_OFFSETS] = [
@@ -74,6 +77,10 @@ struct SetupText {
     work_offsets_mm: BTreeMap<String, toml::Spanned<[f64; 3]>>,
     #[serde(default)]
     bodies: Vec<toml::Spanned<BodySpec>>,
+    #[serde(default)]
+    probe: Option<toml::Spanned<ProbeSpec>>,
+    #[serde(default)]
+    artefacts: Vec<toml::Spanned<ArtefactSpec>>,
 }
 
 /// A validated setup file: the work offsets it sets and the bodies on the table.
@@ -83,6 +90,10 @@ pub struct SetupFile {
     pub work_offsets_mm: [Option<[f64; 3]>; WORK_OFFSETS],
     /// Fixtures and stock, as in a fixture file.
     pub bodies: Vec<BodySpec>,
+    /// The touch probe of the G38 moves (`[probe]`), if the file describes one.
+    pub probe: Option<ProbeSpec>,
+    /// Artefacts on the table a probe may touch (`[[artefacts]]`).
+    pub artefacts: Vec<ArtefactSpec>,
 }
 
 /// 1-based line of byte `offset` in `text`.
@@ -153,9 +164,28 @@ impl SetupFile {
             let span = raw.bodies.get(k).map_or(0..0, |b| b.span());
             return Err(invalid(span, field, msg));
         }
+        let probe = raw.probe.as_ref().map(|p| *p.get_ref());
+        if let (Some(spec), Some(spanned)) = (&probe, &raw.probe) {
+            if let Err((field, msg)) = spec.validate() {
+                return Err(invalid(spanned.span(), field, msg));
+            }
+        }
+        let artefacts: Vec<ArtefactSpec> =
+            raw.artefacts.iter().map(|a| a.get_ref().clone()).collect();
+        if let Err((field, msg)) = validate_artefacts(&artefacts) {
+            let k = field
+                .strip_prefix("artefacts[")
+                .and_then(|r| r.split(']').next())
+                .and_then(|k| k.parse::<usize>().ok())
+                .unwrap_or(0);
+            let span = raw.artefacts.get(k).map_or(0..0, |a| a.span());
+            return Err(invalid(span, field, msg));
+        }
         Ok(Self {
             work_offsets_mm,
             bodies,
+            probe,
+            artefacts,
         })
     }
 }
@@ -231,6 +261,10 @@ pub struct Placement {
     pub bodies: Vec<BodySpec>,
     /// The setup file used, if any (reports name it).
     pub setup_file: Option<PathBuf>,
+    /// The setup file's touch probe (`None`: the typical probe, see [`Self::touch_probe`]).
+    pub probe: Option<ProbeSpec>,
+    /// The setup file's artefacts.
+    pub artefacts: Vec<ArtefactSpec>,
 }
 
 impl Placement {
@@ -245,6 +279,8 @@ impl Placement {
             subroutine_dirs: Vec::new(),
             bodies: Vec::new(),
             setup_file: None,
+            probe: None,
+            artefacts: Vec::new(),
         }
     }
 
@@ -256,6 +292,8 @@ impl Placement {
             }
         }
         self.bodies = setup.bodies;
+        self.probe = setup.probe;
+        self.artefacts = setup.artefacts;
         self.setup_file = Some(path.to_path_buf());
         self
     }
@@ -276,6 +314,67 @@ impl Placement {
         own.into_iter()
             .chain(self.subroutine_dirs.iter().cloned())
             .collect()
+    }
+
+    /// The touch probe of the program's G38 moves on `machine`: the setup's `[probe]`, fields
+    /// left out (or the whole section) from [`TouchProbe::typical`] with the machine's own tool
+    /// length as the stylus length.
+    pub fn touch_probe(&self, machine: &MachineSpec) -> TouchProbe {
+        let spec = self.probe.unwrap_or_default();
+        let d = TouchProbe::typical(
+            spec.stylus_length_mm
+                .unwrap_or(crate::tools::master_length_mm(machine)),
+        );
+        TouchProbe {
+            stylus_length_mm: d.stylus_length_mm,
+            ball_radius_mm: spec.ball_radius_mm.unwrap_or(d.ball_radius_mm),
+            trigger_force_n: spec.trigger_force_n.unwrap_or(d.trigger_force_n),
+            stylus_stiffness_n_per_um: spec
+                .stylus_stiffness_n_per_um
+                .unwrap_or(d.stylus_stiffness_n_per_um),
+            repeatability_2sigma_um: spec
+                .repeatability_2sigma_um
+                .unwrap_or(d.repeatability_2sigma_um),
+            servo_period_s: spec.servo_period_s.unwrap_or(d.servo_period_s),
+            feed_mm_per_min: d.feed_mm_per_min,
+        }
+    }
+
+    /// The probe station of the program's G38 moves on `machine` (see [`ProbeStation`]): the
+    /// [`Self::touch_probe`], what it can touch ([`Self::probe_solids`] with `extra`), its
+    /// trip scatter drawn from `seed`.
+    ///
+    /// # Errors
+    /// A probe setting that is not a usable number.
+    pub fn probe_station(
+        &self,
+        machine: &MachineSpec,
+        extra: &[BodySpec],
+        seed: u64,
+    ) -> Result<ProbeStation, ProbeError> {
+        let probe = self.touch_probe(machine);
+        let motion = ProbeMotion::of_machine(machine, probe.stylus_length_mm);
+        ProbeStation::new(probe, self.probe_solids(machine, extra), motion, seed)
+    }
+
+    /// What a probe's ball can touch: the artefacts, the setup's bodies (fixtures and stock),
+    /// `extra` bodies (a fixture file's) and the machine's own (its `[collision]` table).
+    pub fn probe_solids(&self, machine: &MachineSpec, extra: &[BodySpec]) -> Vec<NamedSolid> {
+        let artefacts = self.artefacts.iter().map(|a| NamedSolid {
+            name: a.name.clone(),
+            solid: a.solid(),
+        });
+        let machine_bodies = machine.collision.iter().flat_map(|c| c.bodies.iter());
+        let bodies = self
+            .bodies
+            .iter()
+            .chain(extra)
+            .chain(machine_bodies)
+            .map(|b| NamedSolid {
+                name: b.name.clone(),
+                solid: Solid::of_body(b),
+            });
+        artefacts.chain(bodies).collect()
     }
 
     /// The setup's bodies and those of a fixture file, as one fixture (`None` if neither has

@@ -107,3 +107,80 @@ fn the_setup_beside_a_program_is_named_after_it() {
     assert_eq!(placed.search_path(Some(&program)), vec![dir.clone()]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+const PROBING: &str = "\
+[probe]
+stylus_length_mm = 120.0
+ball_radius_mm = 2.0
+
+[[artefacts]]
+name = \"block\"
+kind = \"gauge_block\"
+top_mm = [280.0, 200.0, -300.0]
+size_mm = [30.0, 30.0, 50.0]
+
+[[artefacts]]
+name = \"sphere\"
+kind = \"sphere\"
+centre_mm = [100.0, 100.0, -350.0]
+radius_mm = 12.5
+";
+
+#[test]
+fn a_setup_file_describes_the_probe_and_the_artefacts_it_touches() {
+    let text = format!("{SETUP}\n{PROBING}");
+    let setup = SetupFile::from_toml_str(&text, "p.setup.toml").unwrap();
+    let machine = MachineSpec::reference();
+    let placed = Placement::of_machine(&machine).with_setup(setup, Path::new("p.setup.toml"));
+    let probe = placed.touch_probe(&machine);
+    assert_eq!((probe.stylus_length_mm, probe.ball_radius_mm), (120.0, 2.0));
+    let solids = placed.probe_solids(&machine, &[]);
+    let names: Vec<&str> = solids.iter().map(|s| s.name.as_str()).take(3).collect();
+    assert_eq!(names, ["block", "sphere", "stock"]);
+    // Then the machine's own bodies (its table).
+    let table = machine.collision.as_ref().map_or(0, |c| c.bodies.len());
+    assert_eq!(solids.len(), 3 + table);
+    // Fields left out are the typical probe's.
+    let typical = crate::touch_probe::TouchProbe::typical(1.0);
+    assert_eq!(probe.trigger_force_n, typical.trigger_force_n);
+    // Without a [probe] section: the typical probe, as long as the machine's own tool.
+    let bare = Placement::of_machine(&machine).touch_probe(&machine);
+    assert_eq!(
+        bare.stylus_length_mm,
+        crate::tools::master_length_mm(&machine)
+    );
+}
+
+#[test]
+fn a_bad_probe_or_artefact_is_refused_with_its_line_and_field() {
+    let cases = [
+        (
+            PROBING.replace("ball_radius_mm = 2.0", "ball_radius_mm = -2.0"),
+            1,
+            "probe.ball_radius_mm",
+        ),
+        (
+            PROBING.replace("radius_mm = 12.5", "top_mm = [0.0, 0.0, 0.0]"),
+            11,
+            "artefacts[1].radius_mm",
+        ),
+        (
+            PROBING.replace("\"sphere\"\nkind", "\"block\"\nkind"),
+            11,
+            "artefacts[1].name",
+        ),
+    ];
+    for (text, line, field) in cases {
+        let msg = SetupFile::from_toml_str(&text, "p.setup.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.starts_with(&format!("p.setup.toml: line {line}: field `{field}")),
+            "{msg}"
+        );
+    }
+    let e = SetupFile::from_toml_str("[probe]\nstylus_mm = 3.0\n", "p.setup.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("stylus_mm"), "{e}");
+}

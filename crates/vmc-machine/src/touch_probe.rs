@@ -19,6 +19,9 @@
 //! removes them by qualifying the probe on an artefact (they cancel in a difference against a
 //! reference touch). Only the scatter remains: repeatability and the latency's spread.
 //!
+//! [`ProbeOnTwin::straight_move`] (module `straight`) answers a program's straight probe move
+//! (G38.2 … G38.5) along any direction against the solids of a setup.
+//!
 //! Units: mm, µm where the name says so, N, s.
 
 use rand::rngs::StdRng;
@@ -294,7 +297,18 @@ impl ProbeOnTwin {
         let Some(contact_mm) = contact? else {
             return Ok(None);
         };
-        let sigma_mm = 0.5 * self.probe.repeatability_2sigma_um * 1e-3;
+        let probe = self.probe;
+        let travel_mm = contact_mm + probe.pretravel_mm() + self.scatter_mm(&probe);
+        Ok(Some(Trip {
+            axis_mm: at(travel_mm),
+            travel_mm,
+        }))
+    }
+
+    /// One trip's travel past the nominal trip point, mm: the repeatability scatter (Gaussian)
+    /// and the latency (uniform over one servo tick at `probe`'s feed).
+    fn scatter_mm(&mut self, probe: &TouchProbe) -> f64 {
+        let sigma_mm = 0.5 * probe.repeatability_2sigma_um * 1e-3;
         let scatter_mm = if sigma_mm > 0.0 {
             Normal::new(0.0, sigma_mm)
                 .map(|n| n.sample(&mut self.rng))
@@ -302,14 +316,14 @@ impl ProbeOnTwin {
         } else {
             0.0
         };
-        let latency_mm = self.rng.random::<f64>() * self.probe.latency_travel_mm();
-        let travel_mm = contact_mm + self.probe.pretravel_mm() + scatter_mm + latency_mm;
-        Ok(Some(Trip {
-            axis_mm: at(travel_mm),
-            travel_mm,
-        }))
+        scatter_mm + self.rng.random::<f64>() * probe.latency_travel_mm()
     }
 }
+
+mod station;
+mod straight;
+pub use station::ProbeStation;
+pub use straight::{nominal_move, ProbeMotion, ProbeMove};
 
 #[cfg(test)]
 mod tests;

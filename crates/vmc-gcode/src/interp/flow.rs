@@ -19,7 +19,7 @@
 use std::collections::HashMap;
 
 use super::expr::{Params, Target, CALL_PARAMS};
-use super::probe::{ProbeOutcome, ProbeRequest, PROBE_PARAM_FIRST};
+use super::probe::{ProbeOutcome, ProbeParams, ProbeRequest, PROBE_PARAM_FIRST};
 use super::sub_files::SubFile;
 use super::{CanonKind, CanonMove, InterpConfig, Interpreter};
 use crate::syntax::{Block, CallSite, GcodeError, Line, OKind, OName, OWord, Word};
@@ -245,6 +245,8 @@ pub(super) struct Runner {
     pub(super) main_m99_end: Option<usize>,
     /// The probe move of the last block executed, while its result is still to come.
     pub(super) probe: Option<ProbeRequest>,
+    /// #5061…#5070 as the last probe result set them.
+    pub(super) last_probe_params: Option<ProbeParams>,
 }
 
 impl Runner {
@@ -259,6 +261,7 @@ impl Runner {
             block_delete: cfg.block_delete,
             main_m99_end: None,
             probe: None,
+            last_probe_params: None,
         };
         runner.interp.sync_params_out(&mut runner.params);
         runner
@@ -280,6 +283,7 @@ impl Runner {
     pub(super) fn probe_result(&mut self, outcome: ProbeOutcome) -> Result<(), GcodeError> {
         let values = self.interp.probe_result(outcome)?;
         self.probe = None;
+        self.last_probe_params = Some(values);
         for (i, v) in values.into_iter().enumerate() {
             self.params.set(PROBE_PARAM_FIRST + i, v);
         }

@@ -235,6 +235,13 @@ impl ProgramRun {
         }
     }
 
+    /// The values of #5061…#5070 the last probe result set (see [`super::ProbeParams`]: the
+    /// probed point in the program's work coordinates and units, then the tripped flag), or
+    /// `None` before the first.
+    pub fn probe_params(&self) -> Option<super::probe::ProbeParams> {
+        self.runner.last_probe_params
+    }
+
     /// The program's length unit when it emitted move `index` (of the moves appended to one
     /// output by [`Self::resume`] from the start): the unit of the block it came from.
     pub fn length_unit_at(&self, index: usize) -> LengthUnit {

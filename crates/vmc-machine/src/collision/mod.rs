@@ -39,6 +39,10 @@
 //!   unchanged, Z rising), which is the tool leaving its own cut — or on a feed move with the
 //!   spindle stopped. The tool in the stock at feed (G1/G2/G3) with the spindle running is
 //!   cutting, and is not reported.
+//! - On a probe move (G38.2 … G38.5) the tool is the probe's stylus: its contact with anything
+//!   is what the move is for (the move is planned to where it trips), and only the holder and
+//!   the spindle nose can crash. The setup's artefacts (gauge blocks, spheres) are static
+//!   bodies checked as fixtures ([`Scene::with_artefacts`]).
 //! - Material removal: a stock box is cut by the program's feed moves and the head's bodies are
 //!   checked against what is left ([`stock`]): a rapid back into a drilled hole or a cleared
 //!   pocket is not a crash. A cylindrical stock stays whole.
@@ -48,6 +52,7 @@
 //! order, through a [`CheckObserver`] (the shape a recorder needs to draw them).
 
 pub use crate::collision_spec as spec;
+mod artefacts;
 pub mod stock;
 #[cfg(test)]
 mod tests;
@@ -104,6 +109,8 @@ pub enum MoveKind {
     Feed,
     /// G2/G3.
     Arc,
+    /// G38.2 … G38.5.
+    Probe,
 }
 
 impl MoveKind {
@@ -112,6 +119,7 @@ impl MoveKind {
             MoveKind::Rapid => "G0 rapid",
             MoveKind::Feed => "G1 feed",
             MoveKind::Arc => "G2/G3 arc",
+            MoveKind::Probe => "G38 probe move",
         }
     }
 }
@@ -525,6 +533,9 @@ fn overlap(alo: [f64; 3], ahi: [f64; 3], blo: [f64; 3], bhi: [f64; 3]) -> bool {
 /// Why a contact of `head` with a body of `role` on `seg` is a crash; `None` when it is allowed.
 fn crash_reason(head: HeadBody, role: BodyRole, seg: &Segment) -> Option<&'static str> {
     match (head, role) {
+        // On a probe move the tool is the probe's stylus: touching is its purpose, and the
+        // move ends where it trips.
+        (HeadBody::Tool, _) if seg.probe => None,
         (HeadBody::Tool, BodyRole::Stock) => match seg.kind {
             SegmentKind::Rapid => {
                 let retract = matches!(seg.geometry, Geometry::Line { dir, .. }
@@ -541,8 +552,9 @@ fn crash_reason(head: HeadBody, role: BodyRole, seg: &Segment) -> Option<&'stati
     }
 }
 
-fn move_kind(kind: SegmentKind) -> Option<MoveKind> {
-    match kind {
+fn move_kind(seg: &Segment) -> Option<MoveKind> {
+    match seg.kind {
+        SegmentKind::Feed if seg.probe => Some(MoveKind::Probe),
         SegmentKind::Rapid => Some(MoveKind::Rapid),
         SegmentKind::Feed => Some(MoveKind::Feed),
         SegmentKind::Arc => Some(MoveKind::Arc),
@@ -675,7 +687,7 @@ pub fn check_plan(
                 *h = sc.loaded_tool_body(tool, machine, h);
             }
         }
-        let Some(kind) = move_kind(seg.kind) else {
+        let Some(kind) = move_kind(seg) else {
             continue;
         };
         sum.segments += 1;

@@ -71,8 +71,9 @@ impl CutStock {
                 }
             }
         }
-        let cutting =
-            matches!(seg.kind, SegmentKind::Feed | SegmentKind::Arc) && seg.spindle_rpm > 0.0;
+        let cutting = matches!(seg.kind, SegmentKind::Feed | SegmentKind::Arc)
+            && seg.spindle_rpm > 0.0
+            && !seg.probe;
         let tool = heads.iter().find(|m| m.body == HeadBody::Tool);
         if pairs.is_empty() && !cutting {
             return Vec::new();

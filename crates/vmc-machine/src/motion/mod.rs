@@ -245,6 +245,8 @@ pub struct Segment {
     pub spindle_dir: SpindleDir,
     /// Spindle speed in effect during the segment (rpm); 0 when the spindle is off.
     pub spindle_rpm: f64,
+    /// A straight probe move (G38.2 … G38.5), planned as the feed move it is.
+    pub probe: bool,
 }
 
 impl Segment {
@@ -446,8 +448,9 @@ impl PlanBuilder<'_> {
                 let end = (end_mm, end_abc_deg);
                 self.push(line, SegmentKind::Rapid, end, geometry, speed, accel);
             }
-            // A probe move is planned as the feed it is; stand-alone, the interpreter takes the
-            // probe as tripped at the target (as LinuxCNC's `rs274` does).
+            // A probe move is planned as the feed it is, to where the machine's answer left the
+            // axes (stand-alone, the interpreter takes it to the target, as LinuxCNC's `rs274`
+            // does); the segment is marked as a probe move.
             CanonKind::Feed {
                 end_mm,
                 end_abc_deg,
@@ -478,6 +481,9 @@ impl PlanBuilder<'_> {
                 let (speed, accel) = self.line_caps(&geometry, feed_mm_per_s);
                 let end = (end_mm, end_abc_deg);
                 self.push(line, SegmentKind::Feed, end, geometry, speed, accel);
+                if let (CanonKind::Probe { .. }, Some(seg)) = (&mv.kind, self.segments.last_mut()) {
+                    seg.probe = true;
+                }
             }
             CanonKind::Arc {
                 end_mm,
@@ -687,6 +693,7 @@ impl PlanBuilder<'_> {
             profile,
             spindle_dir: self.spindle_dir,
             spindle_rpm: self.spindle_rpm,
+            probe: false,
         });
         self.pos_mm = end_mm;
         self.abc_deg = end_abc_deg;
@@ -707,6 +714,7 @@ impl PlanBuilder<'_> {
             profile: SpeedProfile::stationary(),
             spindle_dir: self.spindle_dir,
             spindle_rpm: self.spindle_rpm,
+            probe: false,
         });
         self.t_s += duration_s;
     }

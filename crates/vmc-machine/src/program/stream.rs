@@ -16,11 +16,14 @@ use crate::machine::MachineSpec;
 use crate::motion::{self, Plan, PlanStart, RotaryLimits};
 use crate::setup::Placement;
 use crate::tools::ToolTable;
-use interp::{CanonMove, ProbeOutcome, ProgramRun, RunEvent};
+use interp::{CanonKind, CanonMove, ProbeOutcome, ProbeParams, ProbeRequest, ProgramRun, RunEvent};
 
 /// The plans of a program's pieces, in order, interpreted as they are asked for; stops after
 /// the first error and after the piece that holds the program's end. Probe moves get the
-/// stand-alone outcome, as in [`super::load_plan_placed`].
+/// stand-alone outcome, as in [`super::load_plan_placed`], unless the stream is
+/// [`PlanStream::answering_probes`]: a piece then ends before each probe move, the caller
+/// simulates it, gives the machine's answer ([`PlanStream::answer_probe`]) and the probe move
+/// starts the next piece, planned to where the axes stopped.
 #[derive(Debug)]
 pub struct PlanStream<'a> {
     file: String,
@@ -35,6 +38,12 @@ pub struct PlanStream<'a> {
     emitted: usize,
     moves_per_piece: usize,
     ended: bool,
+    /// Probe moves wait for the caller's answer (else: the stand-alone outcome).
+    answering: bool,
+    /// The probe move waiting for its answer.
+    pending: Option<ProbeRequest>,
+    /// The probe move (and any stop of its block) held for the next piece.
+    held: Vec<CanonMove>,
 }
 
 impl<'a> PlanStream<'a> {
@@ -100,7 +109,48 @@ impl<'a> PlanStream<'a> {
             emitted: 0,
             moves_per_piece: moves_per_piece.max(1),
             ended: false,
+            answering: false,
+            pending: None,
+            held: Vec::new(),
         })
+    }
+
+    /// This stream with its probe moves answered by the caller (see [`PlanStream`]).
+    #[must_use]
+    pub fn answering_probes(mut self) -> Self {
+        self.answering = true;
+        self
+    }
+
+    /// The probe move the last piece stopped before, while it waits for its answer.
+    pub fn pending_probe(&self) -> Option<ProbeRequest> {
+        self.pending
+    }
+
+    /// Gives the pending probe move the machine's answer; returns #5061…#5070 as the program
+    /// reads them and its unit of length at the probe.
+    ///
+    /// # Errors
+    /// No probe move waits; a G38.2/G38.4 without contact (LinuxCNC's words, with the file and
+    /// line), as [`ProgramRun::probe_result`].
+    pub fn answer_probe(
+        &mut self,
+        outcome: ProbeOutcome,
+    ) -> Result<(ProbeParams, interp::LengthUnit), ProgramError> {
+        let gcode = |err| ProgramError::Gcode {
+            file: self.file.clone(),
+            err,
+        };
+        let Some(request) = self.pending.take() else {
+            let msg = "a probe answer was given, but no probe move awaits one";
+            return Err(gcode(interp::GcodeError::invalid(1, 1, msg)));
+        };
+        if let Some(mv) = self.held.first_mut() {
+            super::end_probe_move(mv, &request, &outcome);
+        }
+        self.run.probe_result(outcome).map_err(gcode)?;
+        let params = self.run.probe_params().unwrap_or_default();
+        Ok((params, self.run.length_unit_at(self.emitted)))
     }
 
     /// The program's name in errors.
@@ -117,6 +167,8 @@ impl<'a> PlanStream<'a> {
     /// Interprets up to the next piece's moves into `self.moves`; whether the program ended.
     fn interpret_piece(&mut self) -> Result<bool, ProgramError> {
         self.moves.clear();
+        // The answered probe move starts this piece.
+        self.moves.append(&mut self.held);
         let gcode = |err| ProgramError::Gcode {
             file: self.file.clone(),
             err,
@@ -127,6 +179,18 @@ impl<'a> PlanStream<'a> {
                 Err(err) => return Err(gcode(err)),
                 Ok(None) => return Ok(false),
                 Ok(Some(RunEvent::Ended)) => return Ok(true),
+                Ok(Some(RunEvent::Probe(request))) if self.answering => {
+                    // The piece ends before the probe move: the machine answers it after
+                    // simulating the moves before it.
+                    let at = self
+                        .moves
+                        .iter()
+                        .rposition(|m| matches!(m.kind, CanonKind::Probe { .. }))
+                        .unwrap_or(self.moves.len());
+                    self.held = self.moves.split_off(at);
+                    self.pending = Some(request);
+                    return Ok(false);
+                }
                 Ok(Some(RunEvent::Probe(_))) => self
                     .run
                     .probe_result(ProbeOutcome::Standalone)
