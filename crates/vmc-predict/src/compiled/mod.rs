@@ -274,6 +274,10 @@ impl CompiledHybrid {
     #[must_use]
     pub fn with_portable_code(mut self) -> Self {
         self.isa = Isa::Portable;
+        // The kept start of a solve came from the other code's bits.
+        for head in &mut self.heads {
+            head.start_valid = false;
+        }
         self
     }
 

@@ -27,11 +27,14 @@
 
 use crate::controller::SolveInfo;
 
-use super::kernel::{exp_clamped, exp_small, madd, small_steps, tanh_from_exp2s};
+use super::kernel::{exp_clamped, exp_small, madd, small_steps};
 use super::CompiledHybrid;
 
 /// Outputs of an axis part: δx, δy, δz (µm), εx, εy, εz (µrad).
 pub(super) const N_OUT: usize = 6;
+
+/// The outputs padded to two lanes of four.
+pub(super) const OUT_PAD: usize = 8;
 
 /// Which instantiation of the query code runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -82,6 +85,13 @@ pub(super) struct AxisHead {
     pub pos_norm: [f64; 2],
     /// Position of the last evaluation (mm).
     pub last_q_mm: f64,
+    /// Position of the fresh evaluation that started the last solve (mm), valid for the held
+    /// readings and code when `start_valid`: a solve starting at the same coordinate reuses it.
+    pub start_q_mm: f64,
+    /// Whether `start_q_mm`, `start_out` and the blocks' `e_start` hold an evaluation.
+    pub start_valid: bool,
+    /// The outputs of the fresh evaluation at `start_q_mm`.
+    pub start_out: [f64; N_OUT],
     /// Hidden units of the part's net (0: linear part only).
     pub hidden: usize,
     /// Its units are `units[start..start + blocks]` of the model's blocks.
@@ -90,7 +100,7 @@ pub(super) struct AxisHead {
     pub blocks: usize,
 }
 
-/// Four hidden units of an axis part and everything a query does with them (320 bytes).
+/// Four hidden units of an axis part and everything a query does with them (352 bytes).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 #[repr(C, align(32))]
 pub(super) struct UnitBlock {
@@ -100,16 +110,22 @@ pub(super) struct UnitBlock {
     pub c2: [f64; 4],
     /// `e^{x_j}` of the last evaluation.
     pub e: [f64; 4],
+    /// `e^{x_j}` of the fresh evaluation at the head's `start_q_mm`.
+    pub e_start: [f64; 4],
     /// Activations `tanh(s_j)` of the last evaluation.
     pub a: [f64; 4],
-    /// Output weights `V_oj`, output-major: `v[o][u]`.
-    pub v: [[f64; 4]; N_OUT],
+    /// Output weights `V_oj`, unit-major and padded to eight outputs (`v[u][o]`, zero for
+    /// `o ≥ 6`): a unit's contribution to the outputs is two 4-wide multiply–adds.
+    pub v: [[f64; OUT_PAD]; 4],
 }
+
+/// Most blocks whose `e^x + 1` share one division ([`activations`]).
+const SHARED_DIVISION_BLOCKS: usize = 1;
 
 /// The part's six outputs (signed mm and rad) for position `q_mm`; `MOVE`: every block whose
 /// steps are small moved from the last evaluation, the others afresh; else all afresh.
 ///
-/// The output layer sums per output in four partial sums (unit `j` into sum `j mod 4`) added
+/// The output layer sums per output in two partial sums (unit `j` into sum `j mod 2`) added
 /// at the end, then the bias: another order than the library's running sum from the bias, a
 /// difference of round-off (~1e-16 of the normalised output).
 #[inline(always)]
@@ -143,21 +159,56 @@ fn axis_eval<const FMA: bool, const MOVE: bool>(
             }
         }
         b.e = e_new;
+    }
+    activations(units);
+    output_sums::<FMA>(head, units, q_mm)
+}
+
+/// `a_j = tanh(s_j) = 1 − 2/(e_j + 1)` of every unit from its `e_j = e^{2s_j}`, with one
+/// division per [`SHARED_DIVISION_BLOCKS`] blocks instead of one per block (a 4-wide division
+/// costs as much as ~16 multiplies): with `d_i = e_i + 1` and the prefix products
+/// `P_i = d_0⋯d_{i−1}` (`P_0 = 1`), `r = 1/P_n`, then backwards `1/d_i = r·P_i`, `r ← r·d_i`.
+/// `1 ≤ d_i ≤ e^{40} + 1` (the kernel's clamp), so a product of four stays below `e^{161}`:
+/// no overflow, no underflow; each `1/d_i` carries ≤ 3n roundings (n blocks) instead of one,
+/// relative — ≤ 2.7e-15 absolute on `a`, round-off of the outputs (tested to 1e-12 µm).
+#[inline(always)]
+fn activations(units: &mut [UnitBlock]) {
+    for chunk in units.chunks_mut(SHARED_DIVISION_BLOCKS) {
+        let mut pre = [[1.0; 4]; SHARED_DIVISION_BLOCKS + 1];
+        for (i, b) in chunk.iter().enumerate() {
+            for u in 0..4 {
+                pre[i + 1][u] = pre[i][u] * (b.e[u] + 1.0);
+            }
+        }
+        let mut r = [0.0; 4];
         for u in 0..4 {
-            b.a[u] = tanh_from_exp2s(e_new[u]);
+            r[u] = 1.0 / pre[chunk.len()][u];
+        }
+        for (i, b) in chunk.iter_mut().enumerate().rev() {
+            for u in 0..4 {
+                let inv_d = r[u] * pre[i][u];
+                r[u] *= b.e[u] + 1.0;
+                b.a[u] = 1.0 - 2.0 * inv_d;
+            }
         }
     }
-    let mut acc = [[0.0; 4]; N_OUT];
+}
+
+/// The six outputs from the activations held in `units` (first pass done).
+#[inline(always)]
+fn output_sums<const FMA: bool>(head: &AxisHead, units: &[UnitBlock], q_mm: f64) -> [f64; N_OUT] {
+    // Two sets of sums (even and odd units) halve the chain of dependent multiply–adds.
+    let mut acc = [[0.0; OUT_PAD]; 2];
     for b in units.iter() {
-        for o in 0..N_OUT {
-            for u in 0..4 {
-                acc[o][u] = madd::<FMA>(b.v[o][u], b.a[u], acc[o][u]);
+        for u in 0..4 {
+            for o in 0..OUT_PAD {
+                acc[u % 2][o] = madd::<FMA>(b.v[u][o], b.a[u], acc[u % 2][o]);
             }
         }
     }
     let mut out = [0.0; N_OUT];
     for o in 0..N_OUT {
-        let sum = head.b2[o] + ((acc[o][0] + acc[o][1]) + (acc[o][2] + acc[o][3]));
+        let sum = head.b2[o] + (acc[0][o] + acc[1][o]);
         let y = madd::<FMA>(sum, head.out_std[o], head.out_mean[o]);
         out[o] = y + madd::<FMA>(head.lin_pos[o], q_mm, head.lin_const[o]);
     }
@@ -201,6 +252,36 @@ impl CompiledHybrid {
         self.synthesise_mm(q_mm, &v)
     }
 
+    /// `E(q)` (mm) for the first iterate of a solve, `q` the commanded position: fresh, but an
+    /// axis part whose coordinate is bit-for-bit the one its last solve started at (held
+    /// readings) takes that evaluation's outputs and exponentials, which a fresh evaluation
+    /// would repeat to the bit (an axis at rest: most servo periods of a contour leave one
+    /// or two axes still).
+    #[inline(always)]
+    fn error_start_mm<const FMA: bool>(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+        let mut v = [[0.0; N_OUT]; 3];
+        for (k, v) in v.iter_mut().enumerate() {
+            let head = &mut self.heads[k];
+            let units = &mut self.units[head.start..head.start + head.blocks];
+            if head.start_valid && q_mm[k].to_bits() == head.start_q_mm.to_bits() {
+                for b in units.iter_mut() {
+                    b.e = b.e_start;
+                }
+                head.last_q_mm = q_mm[k];
+                *v = head.start_out;
+            } else {
+                *v = axis_eval::<FMA, false>(head, units, q_mm[k]);
+                for b in units.iter_mut() {
+                    b.e_start = b.e;
+                }
+                head.start_q_mm = q_mm[k];
+                head.start_out = *v;
+                head.start_valid = true;
+            }
+        }
+        self.synthesise_mm(q_mm, &v)
+    }
+
     /// The fixed point (see [`Self::solve_mm`]): the first evaluation fresh, the later ones
     /// moved from the previous iterate.
     #[inline(always)]
@@ -215,7 +296,7 @@ impl CompiledHybrid {
         let mut info = SolveInfo::default();
         while info.iterations < max_iterations {
             let mut e = if info.iterations == 0 {
-                self.error_mm::<FMA, false>(q)
+                self.error_start_mm::<FMA>(q)
             } else {
                 self.error_mm::<FMA, true>(q)
             };
@@ -299,6 +380,7 @@ impl CompiledHybrid {
         for k in 0..3 {
             let temps = self.inputs.axis_inputs(k);
             let head = &mut self.heads[k];
+            head.start_valid = false;
             let c = &mut self.c_scratch[..head.hidden];
             let (mut l, mut l_pos) = ([0.0; N_OUT], [0.0; N_OUT]);
             self.axis_temps[k].set_temps(temps, &mut l, &mut l_pos, c);
