@@ -25,9 +25,9 @@
 // the AVX2 instantiation.
 #![allow(clippy::needless_range_loop)]
 
-use crate::controller::SolveInfo;
+use crate::controller::{fixed_point_mm, reversal_mm, SolveInfo};
 
-use super::kernel::{exp_clamped, exp_small, madd, small_steps};
+use super::kernel::{exp_clamped, exp_small, madd, small_steps, tanh_from_exp2s};
 use super::CompiledHybrid;
 
 /// Outputs of an axis part: δx, δy, δz (µm), εx, εy, εz (µrad).
@@ -119,9 +119,6 @@ pub(super) struct UnitBlock {
     pub v: [[f64; OUT_PAD]; 4],
 }
 
-/// Most blocks whose `e^x + 1` share one division ([`activations`]).
-const SHARED_DIVISION_BLOCKS: usize = 1;
-
 /// The part's six outputs (signed mm and rad) for position `q_mm`; `MOVE`: every block whose
 /// steps are small moved from the last evaluation, the others afresh; else all afresh.
 ///
@@ -164,32 +161,14 @@ fn axis_eval<const FMA: bool, const MOVE: bool>(
     output_sums::<FMA>(head, units, q_mm)
 }
 
-/// `a_j = tanh(s_j) = 1 − 2/(e_j + 1)` of every unit from its `e_j = e^{2s_j}`, with one
-/// division per [`SHARED_DIVISION_BLOCKS`] blocks instead of one per block (a 4-wide division
-/// costs as much as ~16 multiplies): with `d_i = e_i + 1` and the prefix products
-/// `P_i = d_0⋯d_{i−1}` (`P_0 = 1`), `r = 1/P_n`, then backwards `1/d_i = r·P_i`, `r ← r·d_i`.
-/// `1 ≤ d_i ≤ e^{40} + 1` (the kernel's clamp), so a product of four stays below `e^{161}`:
-/// no overflow, no underflow; each `1/d_i` carries ≤ 3n roundings (n blocks) instead of one,
-/// relative — ≤ 2.7e-15 absolute on `a`, round-off of the outputs (tested to 1e-12 µm).
+/// `a_j = tanh(s_j) = 1 − 2/(e_j + 1)` of every unit from its `e_j = e^{2s_j}` (one 4-wide
+/// division per block; sharing one division among several blocks by products of `e_j + 1`
+/// cost more instructions and time than it saved, see the decision record).
 #[inline(always)]
 fn activations(units: &mut [UnitBlock]) {
-    for chunk in units.chunks_mut(SHARED_DIVISION_BLOCKS) {
-        let mut pre = [[1.0; 4]; SHARED_DIVISION_BLOCKS + 1];
-        for (i, b) in chunk.iter().enumerate() {
-            for u in 0..4 {
-                pre[i + 1][u] = pre[i][u] * (b.e[u] + 1.0);
-            }
-        }
-        let mut r = [0.0; 4];
+    for b in units.iter_mut() {
         for u in 0..4 {
-            r[u] = 1.0 / pre[chunk.len()][u];
-        }
-        for (i, b) in chunk.iter_mut().enumerate().rev() {
-            for u in 0..4 {
-                let inv_d = r[u] * pre[i][u];
-                r[u] *= b.e[u] + 1.0;
-                b.a[u] = 1.0 - 2.0 * inv_d;
-            }
+            b.a[u] = tanh_from_exp2s(b.e[u]);
         }
     }
 }
@@ -282,8 +261,8 @@ impl CompiledHybrid {
         self.synthesise_mm(q_mm, &v)
     }
 
-    /// The fixed point (see [`Self::solve_mm`]): the first evaluation fresh, the later ones
-    /// moved from the previous iterate.
+    /// The fixed point (see [`Self::solve_mm`], the library's loop): the first evaluation fresh
+    /// (or kept, [`Self::error_start_mm`]), the later ones moved from the previous iterate.
     #[inline(always)]
     fn solve_with<const FMA: bool>(
         &mut self,
@@ -292,28 +271,13 @@ impl CompiledHybrid {
         tol_mm: f64,
         max_iterations: usize,
     ) -> ([f64; 3], SolveInfo) {
-        let mut q = p_mm;
-        let mut info = SolveInfo::default();
-        while info.iterations < max_iterations {
-            let mut e = if info.iterations == 0 {
+        fixed_point_mm(p_mm, reversal_mm, tol_mm, max_iterations, |i, q| {
+            if i == 0 {
                 self.error_start_mm::<FMA>(q)
             } else {
                 self.error_mm::<FMA, true>(q)
-            };
-            for k in 0..3 {
-                e[k] += reversal_mm[k];
             }
-            let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
-            let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
-            info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            info.iterations += 1;
-            q = next;
-            if info.last_step_mm < tol_mm {
-                info.converged = true;
-                break;
-            }
-        }
-        (q, info)
+        })
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -349,8 +313,8 @@ impl CompiledHybrid {
 
     /// The compensation's fixed point for the commanded position `p_mm` (mm), with the
     /// reversal of the axes flagged in `negative`: `q₀ = p`, `q_{i+1} = p − E(q_i) − R`, until
-    /// the step is below `tol_mm` or after `max_iterations` evaluations (as
-    /// `Compensator::axis_command_mm`, whose arithmetic it repeats). Allocation-free.
+    /// the step is below `tol_mm` or after `max_iterations` evaluations (the library's loop,
+    /// `controller::fixed_point_mm`). Allocation-free.
     pub(crate) fn solve_mm(
         &mut self,
         p_mm: [f64; 3],
@@ -361,9 +325,7 @@ impl CompiledHybrid {
         if self.stale {
             self.update_temps();
         }
-        let shift = self.neg_shift_mm;
-        let reversal_mm: [f64; 3] =
-            std::array::from_fn(|k| if negative[k] { shift[k] } else { 0.0 });
+        let reversal_mm = reversal_mm(negative, self.neg_shift_mm);
         match self.isa {
             // SAFETY: `Isa::Avx2Fma` is chosen only when the CPU reports AVX2 and FMA.
             #[cfg(target_arch = "x86_64")]
