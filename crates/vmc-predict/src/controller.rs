@@ -109,6 +109,45 @@ pub struct SolveInfo {
     pub converged: bool,
 }
 
+/// The reversal `R` (mm) of the axes flagged `negative`, from the predictor's shift.
+#[inline(always)]
+pub(crate) fn reversal_mm(negative: [bool; 3], shift_mm: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| if negative[k] { shift_mm[k] } else { 0.0 })
+}
+
+/// The compensation's fixed point (module doc), shared by this compensator and the compiled
+/// one: `q₀ = p`, `q_{i+1} = p − E(q_i) − R`, until the step `|q_{i+1} − q_i|` is below `tol_mm`
+/// or after `max_iterations` evaluations; `error_mm(i, q)` is the `i`-th evaluation `E(q)` (mm)
+/// (the compiled model starts afresh at `i = 0` and moves from the previous iterate after).
+/// Generic and inlined: no call, no allocation, the target features of the caller.
+#[inline(always)]
+pub(crate) fn fixed_point_mm(
+    p_mm: [f64; 3],
+    reversal_mm: [f64; 3],
+    tol_mm: f64,
+    max_iterations: usize,
+    mut error_mm: impl FnMut(usize, [f64; 3]) -> [f64; 3],
+) -> ([f64; 3], SolveInfo) {
+    let mut q = p_mm;
+    let mut info = SolveInfo::default();
+    while info.iterations < max_iterations {
+        let mut e = error_mm(info.iterations, q);
+        for k in 0..3 {
+            e[k] += reversal_mm[k];
+        }
+        let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
+        let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
+        info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        info.iterations += 1;
+        q = next;
+        if info.last_step_mm < tol_mm {
+            info.converged = true;
+            break;
+        }
+    }
+    (q, info)
+}
+
 /// Each axis's direction of commanded motion (module doc, "Approach direction"): what every
 /// compensator keys the reversal on (this one, the compiled one, and a controller's static
 /// tables choosing their forward or reverse column).
@@ -298,38 +337,32 @@ impl<P: ErrorPredictor> Controller for Compensator<P> {
     #[inline]
     fn axis_command_mm(&mut self, p_mm: [f64; 3]) -> [f64; 3] {
         self.note_commanded_mm(p_mm);
-        let shift = self.predictor.negative_approach_shift_mm();
-        let negative = self.directions.negative();
-        let reversal_mm: [f64; 3] =
-            std::array::from_fn(|k| if negative[k] { shift[k] } else { 0.0 });
-        let mut q = p_mm;
-        let mut info = SolveInfo::default();
-        while info.iterations < self.max_iterations {
-            let mut e = self.predictor.predict_error_mm(q);
-            for k in 0..3 {
-                e[k] += reversal_mm[k];
-            }
-            let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
-            let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
-            info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            info.iterations += 1;
-            q = next;
-            if info.last_step_mm < self.tol_mm {
-                info.converged = true;
-                break;
-            }
-        }
+        let reversal_mm = reversal_mm(
+            self.directions.negative(),
+            self.predictor.negative_approach_shift_mm(),
+        );
+        let predictor = &mut self.predictor;
+        let (q, info) = fixed_point_mm(
+            p_mm,
+            reversal_mm,
+            self.tol_mm,
+            self.max_iterations,
+            |_, q| predictor.predict_error_mm(q),
+        );
         self.last = info;
         q
     }
 }
 
+/// The integration tests' counting allocator (the one copy), for the no-allocation test.
+#[cfg(test)]
+#[path = "../tests/common/counting_alloc.rs"]
+mod counting_alloc;
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::predictor::{train_hybrid, train_linear, AnyPredictor, Settings};
-    use std::alloc::{GlobalAlloc, Layout, System};
-    use std::cell::Cell;
 
     /// A smooth analytic error field of tens of µm with a thermal scale factor.
     #[derive(Debug)]
@@ -520,25 +553,7 @@ mod tests {
     }
 
     // Allocation counting for the no-allocation test (per thread, so parallel tests don't mix).
-    struct Counting;
-    thread_local! {
-        static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-    }
-    unsafe impl GlobalAlloc for Counting {
-        unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-            ALLOCATIONS.with(|c| c.set(c.get() + 1));
-            unsafe { System.alloc(layout) }
-        }
-        unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-            unsafe { System.dealloc(ptr, layout) }
-        }
-        unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-            ALLOCATIONS.with(|c| c.set(c.get() + 1));
-            unsafe { System.realloc(ptr, layout, new_size) }
-        }
-    }
-    #[global_allocator]
-    static COUNTING: Counting = Counting;
+    use super::counting_alloc::allocations;
 
     #[test]
     fn compensation_queries_do_not_allocate() {
@@ -559,7 +574,7 @@ mod tests {
         ] {
             let mut c = Compensator::new(model);
             let temps = [td::temps_degc(5.0, 1000.0), td::temps_degc(5.0, 2000.0)];
-            let before = ALLOCATIONS.with(Cell::get);
+            let before = allocations();
             for i in 0..1000 {
                 if i % 500 == 0 {
                     c.on_readings(i as f64, &temps[i / 500]);
@@ -567,7 +582,7 @@ mod tests {
                 let p = [i as f64 * 0.5, 200.0 - i as f64 * 0.1, -100.0];
                 std::hint::black_box(c.axis_command_mm(p));
             }
-            let after = ALLOCATIONS.with(Cell::get);
+            let after = allocations();
             assert_eq!(after - before, 0, "{:?} allocated", c.predictor().kind());
         }
     }

@@ -3,44 +3,16 @@
 
 #[path = "../../vmc-predict/tests/common/mod.rs"]
 mod common;
+#[path = "../../vmc-predict/tests/common/counting_alloc.rs"]
+mod counting_alloc;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use counting_alloc::allocations;
 
 use vmc_rtcomp::ffi::{
     vmc_comp_free, vmc_comp_n_sensors, vmc_comp_new, vmc_comp_sensor_name,
     vmc_comp_set_tool_offset, vmc_comp_update,
 };
 use vmc_rtcomp::{Inputs, Outputs};
-
-/// Counts allocations and reallocations of the current thread.
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: every call is forwarded to the system allocator unchanged; the counter is a
-// thread-local `Cell` that does not allocate.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static COUNTING: Counting = Counting;
 
 #[test]
 fn the_servo_path_allocates_nothing() {
@@ -55,7 +27,7 @@ fn the_servo_path_allocates_nothing() {
     let mut broken = samples[0].clone();
     broken[0] = f64::NAN;
     let mut out = Outputs::default();
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = allocations();
     let mut sum = 0.0;
     for n in 0..30_000u32 {
         let t_s = f64::from(n) * 0.001;
@@ -86,7 +58,7 @@ fn the_servo_path_allocates_nothing() {
             }
         }
     }
-    let after = ALLOCATIONS.with(Cell::get);
+    let after = allocations();
     assert!(sum.is_finite());
     assert_eq!(after - before, 0, "the servo path allocated");
     // SAFETY: freed once.

@@ -4,7 +4,8 @@
 //!
 //! Same behaviour as [`crate::controller::Compensator`]: the same tolerance and iteration cap
 //! (defaults [`DEFAULT_TOL_MM`], [`DEFAULT_MAX_ITERATIONS`]) and the same tracking of each axis's
-//! direction of commanded motion for the reversal (the same code).
+//! direction of commanded motion for the reversal, the same fixed-point loop (the same code,
+//! `controller::fixed_point_mm`, with the compiled evaluations).
 
 use crate::controller::{
     ApproachDirections, Controller, SolveInfo, DEFAULT_MAX_ITERATIONS, DEFAULT_TOL_MM,

@@ -149,7 +149,7 @@ fn pack_axes(nets: &[QueryNet], sign: [f64; 3]) -> ([AxisHead; 3], Box<[UnitBloc
             let b = &mut blocks[j / 4];
             b.w2[j % 4] = 2.0 * net.w_pos[j] / net.pos_std;
             for o in 0..N_OUT {
-                b.v[o][j % 4] = net.w2[o * h + j];
+                b.v[j % 4][o] = net.w2[o * h + j];
             }
         }
         units.extend_from_slice(&blocks);

@@ -27,8 +27,9 @@
 //!   (output biases and de-normalisation, the cached linear terms, the position of the last
 //!   evaluation) held in the model itself, and one boxed slice of blocks of four hidden units,
 //!   each block holding what a query does with its units (`w₂`, `c₂`, the exponentials and
-//!   activations of the last evaluation, the output weights output-major so each output sums
-//!   four units at once). Hidden layers are padded to a multiple of 4 units with zero weights (a
+//!   activations of the last evaluation and of the last solve's start, the output weights
+//!   unit-major and padded to eight outputs so a unit adds to the six sums in two 4-wide
+//!   multiply–adds). Hidden layers are padded to a multiple of 4 units with zero weights (a
 //!   padded unit adds exactly 0). Built once; nothing is allocated afterwards.
 //! - **Two passes per axis and evaluation**, four units at a time, fixed-size loops only (no
 //!   length-dependent code, no calls): the activations, then the output sums.
@@ -42,7 +43,9 @@
 //!   (a polynomial: the iterates differ by the change of `E`, nanometres to micrometres, so the
 //!   step is ~1e-4 or less), afresh for a block of units whose step is too large for the
 //!   polynomial ([`kernel::SMALL_STEP_MAX`]). A solve therefore depends on its own inputs only,
-//!   never on earlier queries.
+//!   never on earlier queries. A solve whose axis coordinate is bit for bit the one the last
+//!   solve started at (same readings: an axis at rest) reuses that fresh evaluation of the
+//!   part, which is what a fresh evaluation would give to the bit.
 //!
 //! Equivalence: the readings stage is the library's arithmetic; the folds, the exponential, the
 //! order of the output sums and the fused multiply–adds each round differently from the
@@ -274,6 +277,10 @@ impl CompiledHybrid {
     #[must_use]
     pub fn with_portable_code(mut self) -> Self {
         self.isa = Isa::Portable;
+        // The kept start of a solve came from the other code's bits.
+        for head in &mut self.heads {
+            head.start_valid = false;
+        }
         self
     }
 

@@ -25,13 +25,16 @@
 // the AVX2 instantiation.
 #![allow(clippy::needless_range_loop)]
 
-use crate::controller::SolveInfo;
+use crate::controller::{fixed_point_mm, reversal_mm, SolveInfo};
 
 use super::kernel::{exp_clamped, exp_small, madd, small_steps, tanh_from_exp2s};
 use super::CompiledHybrid;
 
 /// Outputs of an axis part: δx, δy, δz (µm), εx, εy, εz (µrad).
 pub(super) const N_OUT: usize = 6;
+
+/// The outputs padded to two lanes of four.
+pub(super) const OUT_PAD: usize = 8;
 
 /// Which instantiation of the query code runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -82,6 +85,13 @@ pub(super) struct AxisHead {
     pub pos_norm: [f64; 2],
     /// Position of the last evaluation (mm).
     pub last_q_mm: f64,
+    /// Position of the fresh evaluation that started the last solve (mm), valid for the held
+    /// readings and code when `start_valid`: a solve starting at the same coordinate reuses it.
+    pub start_q_mm: f64,
+    /// Whether `start_q_mm`, `start_out` and the blocks' `e_start` hold an evaluation.
+    pub start_valid: bool,
+    /// The outputs of the fresh evaluation at `start_q_mm`.
+    pub start_out: [f64; N_OUT],
     /// Hidden units of the part's net (0: linear part only).
     pub hidden: usize,
     /// Its units are `units[start..start + blocks]` of the model's blocks.
@@ -90,7 +100,7 @@ pub(super) struct AxisHead {
     pub blocks: usize,
 }
 
-/// Four hidden units of an axis part and everything a query does with them (320 bytes).
+/// Four hidden units of an axis part and everything a query does with them (352 bytes).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 #[repr(C, align(32))]
 pub(super) struct UnitBlock {
@@ -100,16 +110,19 @@ pub(super) struct UnitBlock {
     pub c2: [f64; 4],
     /// `e^{x_j}` of the last evaluation.
     pub e: [f64; 4],
+    /// `e^{x_j}` of the fresh evaluation at the head's `start_q_mm`.
+    pub e_start: [f64; 4],
     /// Activations `tanh(s_j)` of the last evaluation.
     pub a: [f64; 4],
-    /// Output weights `V_oj`, output-major: `v[o][u]`.
-    pub v: [[f64; 4]; N_OUT],
+    /// Output weights `V_oj`, unit-major and padded to eight outputs (`v[u][o]`, zero for
+    /// `o ≥ 6`): a unit's contribution to the outputs is two 4-wide multiply–adds.
+    pub v: [[f64; OUT_PAD]; 4],
 }
 
 /// The part's six outputs (signed mm and rad) for position `q_mm`; `MOVE`: every block whose
 /// steps are small moved from the last evaluation, the others afresh; else all afresh.
 ///
-/// The output layer sums per output in four partial sums (unit `j` into sum `j mod 4`) added
+/// The output layer sums per output in two partial sums (unit `j` into sum `j mod 2`) added
 /// at the end, then the bias: another order than the library's running sum from the bias, a
 /// difference of round-off (~1e-16 of the normalised output).
 #[inline(always)]
@@ -143,21 +156,38 @@ fn axis_eval<const FMA: bool, const MOVE: bool>(
             }
         }
         b.e = e_new;
+    }
+    activations(units);
+    output_sums::<FMA>(head, units, q_mm)
+}
+
+/// `a_j = tanh(s_j) = 1 − 2/(e_j + 1)` of every unit from its `e_j = e^{2s_j}` (one 4-wide
+/// division per block; sharing one division among several blocks by products of `e_j + 1`
+/// cost more instructions and time than it saved, see the decision record).
+#[inline(always)]
+fn activations(units: &mut [UnitBlock]) {
+    for b in units.iter_mut() {
         for u in 0..4 {
-            b.a[u] = tanh_from_exp2s(e_new[u]);
+            b.a[u] = tanh_from_exp2s(b.e[u]);
         }
     }
-    let mut acc = [[0.0; 4]; N_OUT];
+}
+
+/// The six outputs from the activations held in `units` (first pass done).
+#[inline(always)]
+fn output_sums<const FMA: bool>(head: &AxisHead, units: &[UnitBlock], q_mm: f64) -> [f64; N_OUT] {
+    // Two sets of sums (even and odd units) halve the chain of dependent multiply–adds.
+    let mut acc = [[0.0; OUT_PAD]; 2];
     for b in units.iter() {
-        for o in 0..N_OUT {
-            for u in 0..4 {
-                acc[o][u] = madd::<FMA>(b.v[o][u], b.a[u], acc[o][u]);
+        for u in 0..4 {
+            for o in 0..OUT_PAD {
+                acc[u % 2][o] = madd::<FMA>(b.v[u][o], b.a[u], acc[u % 2][o]);
             }
         }
     }
     let mut out = [0.0; N_OUT];
     for o in 0..N_OUT {
-        let sum = head.b2[o] + ((acc[o][0] + acc[o][1]) + (acc[o][2] + acc[o][3]));
+        let sum = head.b2[o] + (acc[0][o] + acc[1][o]);
         let y = madd::<FMA>(sum, head.out_std[o], head.out_mean[o]);
         out[o] = y + madd::<FMA>(head.lin_pos[o], q_mm, head.lin_const[o]);
     }
@@ -201,8 +231,38 @@ impl CompiledHybrid {
         self.synthesise_mm(q_mm, &v)
     }
 
-    /// The fixed point (see [`Self::solve_mm`]): the first evaluation fresh, the later ones
-    /// moved from the previous iterate.
+    /// `E(q)` (mm) for the first iterate of a solve, `q` the commanded position: fresh, but an
+    /// axis part whose coordinate is bit-for-bit the one its last solve started at (held
+    /// readings) takes that evaluation's outputs and exponentials, which a fresh evaluation
+    /// would repeat to the bit (an axis at rest: most servo periods of a contour leave one
+    /// or two axes still).
+    #[inline(always)]
+    fn error_start_mm<const FMA: bool>(&mut self, q_mm: [f64; 3]) -> [f64; 3] {
+        let mut v = [[0.0; N_OUT]; 3];
+        for (k, v) in v.iter_mut().enumerate() {
+            let head = &mut self.heads[k];
+            let units = &mut self.units[head.start..head.start + head.blocks];
+            if head.start_valid && q_mm[k].to_bits() == head.start_q_mm.to_bits() {
+                for b in units.iter_mut() {
+                    b.e = b.e_start;
+                }
+                head.last_q_mm = q_mm[k];
+                *v = head.start_out;
+            } else {
+                *v = axis_eval::<FMA, false>(head, units, q_mm[k]);
+                for b in units.iter_mut() {
+                    b.e_start = b.e;
+                }
+                head.start_q_mm = q_mm[k];
+                head.start_out = *v;
+                head.start_valid = true;
+            }
+        }
+        self.synthesise_mm(q_mm, &v)
+    }
+
+    /// The fixed point (see [`Self::solve_mm`], the library's loop): the first evaluation fresh
+    /// (or kept, [`Self::error_start_mm`]), the later ones moved from the previous iterate.
     #[inline(always)]
     fn solve_with<const FMA: bool>(
         &mut self,
@@ -211,28 +271,13 @@ impl CompiledHybrid {
         tol_mm: f64,
         max_iterations: usize,
     ) -> ([f64; 3], SolveInfo) {
-        let mut q = p_mm;
-        let mut info = SolveInfo::default();
-        while info.iterations < max_iterations {
-            let mut e = if info.iterations == 0 {
-                self.error_mm::<FMA, false>(q)
+        fixed_point_mm(p_mm, reversal_mm, tol_mm, max_iterations, |i, q| {
+            if i == 0 {
+                self.error_start_mm::<FMA>(q)
             } else {
                 self.error_mm::<FMA, true>(q)
-            };
-            for k in 0..3 {
-                e[k] += reversal_mm[k];
             }
-            let next = [p_mm[0] - e[0], p_mm[1] - e[1], p_mm[2] - e[2]];
-            let d = [next[0] - q[0], next[1] - q[1], next[2] - q[2]];
-            info.last_step_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            info.iterations += 1;
-            q = next;
-            if info.last_step_mm < tol_mm {
-                info.converged = true;
-                break;
-            }
-        }
-        (q, info)
+        })
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -268,8 +313,8 @@ impl CompiledHybrid {
 
     /// The compensation's fixed point for the commanded position `p_mm` (mm), with the
     /// reversal of the axes flagged in `negative`: `q₀ = p`, `q_{i+1} = p − E(q_i) − R`, until
-    /// the step is below `tol_mm` or after `max_iterations` evaluations (as
-    /// `Compensator::axis_command_mm`, whose arithmetic it repeats). Allocation-free.
+    /// the step is below `tol_mm` or after `max_iterations` evaluations (the library's loop,
+    /// `controller::fixed_point_mm`). Allocation-free.
     pub(crate) fn solve_mm(
         &mut self,
         p_mm: [f64; 3],
@@ -280,9 +325,7 @@ impl CompiledHybrid {
         if self.stale {
             self.update_temps();
         }
-        let shift = self.neg_shift_mm;
-        let reversal_mm: [f64; 3] =
-            std::array::from_fn(|k| if negative[k] { shift[k] } else { 0.0 });
+        let reversal_mm = reversal_mm(negative, self.neg_shift_mm);
         match self.isa {
             // SAFETY: `Isa::Avx2Fma` is chosen only when the CPU reports AVX2 and FMA.
             #[cfg(target_arch = "x86_64")]
@@ -299,6 +342,7 @@ impl CompiledHybrid {
         for k in 0..3 {
             let temps = self.inputs.axis_inputs(k);
             let head = &mut self.heads[k];
+            head.start_valid = false;
             let c = &mut self.c_scratch[..head.hidden];
             let (mut l, mut l_pos) = ([0.0; N_OUT], [0.0; N_OUT]);
             self.axis_temps[k].set_temps(temps, &mut l, &mut l_pos, c);
