@@ -55,7 +55,8 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
     };
     // Probe moves end where the nominal machine's probe would trip.
     let extra = file_bodies.unwrap_or_default();
-    let station = cfg.placement.probe_station(machine, &extra, 0)?;
+    let station =
+        vmc_machine::touch_probe::ProbeStation::of_placement(&cfg.placement, machine, &extra, 0)?;
     let mut answer = |r: &ProbeRequest| station.nominal(r).outcome;
     let probed = program::load_plan_probed(
         &cfg.program,

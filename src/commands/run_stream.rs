@@ -37,7 +37,12 @@ pub(super) struct Measured<'a> {
 
 /// The probe station of the program's G38 moves (the setup's probe and what it can touch).
 fn station(cfg: &Measured<'_>) -> Result<vmc_machine::touch_probe::ProbeStation> {
-    Ok(cfg.placement.probe_station(cfg.machine, &[], cfg.seed)?)
+    Ok(vmc_machine::touch_probe::ProbeStation::of_placement(
+        cfg.placement,
+        cfg.machine,
+        &[],
+        cfg.seed,
+    )?)
 }
 
 /// What the measured program is, from one pass over its pieces.

@@ -21,7 +21,6 @@ use vmc_gcode::interp::WORK_OFFSETS;
 use crate::collision_spec::{validate_bodies, BodySpec, FixtureSpec, MAX_COORD_MM};
 use crate::machine::MachineSpec;
 use crate::probe_setup::{validate_artefacts, ArtefactSpec, NamedSolid, ProbeSpec, Solid};
-use crate::touch_probe::{ProbeError, ProbeMotion, ProbeStation, TouchProbe};
 
 /// The names of the work coordinate systems, in the interpreter's order (index 0…8).
 pub const WORK_OFFSET_NAMES: [&str; WORK_OFFSETS] = [
@@ -261,7 +260,7 @@ pub struct Placement {
     pub bodies: Vec<BodySpec>,
     /// The setup file used, if any (reports name it).
     pub setup_file: Option<PathBuf>,
-    /// The setup file's touch probe (`None`: the typical probe, see [`Self::touch_probe`]).
+    /// The setup file's touch probe (`None`: the typical probe, see [`TouchProbe::of_placement`](crate::touch_probe::TouchProbe::of_placement)).
     pub probe: Option<ProbeSpec>,
     /// The setup file's artefacts.
     pub artefacts: Vec<ArtefactSpec>,
@@ -314,47 +313,6 @@ impl Placement {
         own.into_iter()
             .chain(self.subroutine_dirs.iter().cloned())
             .collect()
-    }
-
-    /// The touch probe of the program's G38 moves on `machine`: the setup's `[probe]`, fields
-    /// left out (or the whole section) from [`TouchProbe::typical`] with the machine's own tool
-    /// length as the stylus length.
-    pub fn touch_probe(&self, machine: &MachineSpec) -> TouchProbe {
-        let spec = self.probe.unwrap_or_default();
-        let d = TouchProbe::typical(
-            spec.stylus_length_mm
-                .unwrap_or(crate::tools::master_length_mm(machine)),
-        );
-        TouchProbe {
-            stylus_length_mm: d.stylus_length_mm,
-            ball_radius_mm: spec.ball_radius_mm.unwrap_or(d.ball_radius_mm),
-            trigger_force_n: spec.trigger_force_n.unwrap_or(d.trigger_force_n),
-            stylus_stiffness_n_per_um: spec
-                .stylus_stiffness_n_per_um
-                .unwrap_or(d.stylus_stiffness_n_per_um),
-            repeatability_2sigma_um: spec
-                .repeatability_2sigma_um
-                .unwrap_or(d.repeatability_2sigma_um),
-            servo_period_s: spec.servo_period_s.unwrap_or(d.servo_period_s),
-            feed_mm_per_min: d.feed_mm_per_min,
-        }
-    }
-
-    /// The probe station of the program's G38 moves on `machine` (see [`ProbeStation`]): the
-    /// [`Self::touch_probe`], what it can touch ([`Self::probe_solids`] with `extra`), its
-    /// trip scatter drawn from `seed`.
-    ///
-    /// # Errors
-    /// A probe setting that is not a usable number.
-    pub fn probe_station(
-        &self,
-        machine: &MachineSpec,
-        extra: &[BodySpec],
-        seed: u64,
-    ) -> Result<ProbeStation, ProbeError> {
-        let probe = self.touch_probe(machine);
-        let motion = ProbeMotion::of_machine(machine, probe.stylus_length_mm);
-        ProbeStation::new(probe, self.probe_solids(machine, extra), motion, seed)
     }
 
     /// What a probe's ball can touch: the artefacts, the setup's bodies (fixtures and stock),

@@ -132,7 +132,7 @@ fn a_setup_file_describes_the_probe_and_the_artefacts_it_touches() {
     let setup = SetupFile::from_toml_str(&text, "p.setup.toml").unwrap();
     let machine = MachineSpec::reference();
     let placed = Placement::of_machine(&machine).with_setup(setup, Path::new("p.setup.toml"));
-    let probe = placed.touch_probe(&machine);
+    let probe = crate::touch_probe::TouchProbe::of_placement(&placed, &machine);
     assert_eq!((probe.stylus_length_mm, probe.ball_radius_mm), (120.0, 2.0));
     let solids = placed.probe_solids(&machine, &[]);
     let names: Vec<&str> = solids.iter().map(|s| s.name.as_str()).take(3).collect();
@@ -144,7 +144,8 @@ fn a_setup_file_describes_the_probe_and_the_artefacts_it_touches() {
     let typical = crate::touch_probe::TouchProbe::typical(1.0);
     assert_eq!(probe.trigger_force_n, typical.trigger_force_n);
     // Without a [probe] section: the typical probe, as long as the machine's own tool.
-    let bare = Placement::of_machine(&machine).touch_probe(&machine);
+    let bare =
+        crate::touch_probe::TouchProbe::of_placement(&Placement::of_machine(&machine), &machine);
     assert_eq!(
         bare.stylus_length_mm,
         crate::tools::master_length_mm(&machine)

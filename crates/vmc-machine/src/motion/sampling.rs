@@ -15,6 +15,59 @@ use std::f64::consts::PI;
 
 use super::{Geometry, MotionError, Plan, Segment, SegmentKind};
 
+/// Setpoints at one instant.
+impl Plan {
+    /// Index of the segment in effect at time `t_s`: the last one starting at or before `t_s`
+    /// (the last segment after the end); `None` before time 0 or for an empty plan. O(log n).
+    pub fn segment_index_at(&self, t_s: f64) -> Option<usize> {
+        let after = self.segments.partition_point(|s| s.t_start_s <= t_s);
+        after.checked_sub(1)
+    }
+
+    /// Commanded position at time `t_s` (mm); the start before 0, the end after the plan.
+    pub fn position_at(&self, t_s: f64) -> [f64; 3] {
+        match self.segment_index_at(t_s) {
+            Some(i) => {
+                let seg = &self.segments[i];
+                seg.position_at_local(t_s - seg.t_start_s)
+            }
+            None => self.start_mm,
+        }
+    }
+
+    /// Commanded rotary angles A, B, C at time `t_s` (degrees); those of the first segment's
+    /// start before 0 (0 for an empty plan), the end after the plan.
+    pub fn abc_at(&self, t_s: f64) -> [f64; 3] {
+        match self.segment_index_at(t_s) {
+            Some(i) => {
+                let seg = &self.segments[i];
+                seg.abc_at_local(t_s - seg.t_start_s)
+            }
+            None => self.segments.first().map_or([0.0; 3], |s| s.start_abc_deg),
+        }
+    }
+
+    /// Commanded velocity at time `t_s` (mm/s); zero outside the plan.
+    pub fn velocity_at(&self, t_s: f64) -> [f64; 3] {
+        match self.segment_index_at(t_s) {
+            Some(i) => {
+                let seg = &self.segments[i];
+                seg.velocity_at_local(t_s - seg.t_start_s)
+            }
+            None => [0.0; 3],
+        }
+    }
+
+    /// Spindle speed in effect at time `t_s` (rpm); 0 before the plan and after its end.
+    pub fn spindle_rpm_at(&self, t_s: f64) -> f64 {
+        if t_s >= self.duration_s() {
+            return 0.0;
+        }
+        self.segment_index_at(t_s)
+            .map_or(0.0, |i| self.segments[i].spindle_rpm)
+    }
+}
+
 /// Default interpolation cycle (s): 1 ms, a common CNC servo/interpolator period.
 pub const DEFAULT_INTERPOLATION_CYCLE_S: f64 = 1e-3;
 

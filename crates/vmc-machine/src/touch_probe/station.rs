@@ -5,7 +5,10 @@
 use vmc_gcode::interp::ProbeRequest;
 
 use super::{nominal_move, ProbeError, ProbeMotion, ProbeMove, ProbeOnTwin, TouchProbe};
+use crate::collision_spec::BodySpec;
+use crate::machine::MachineSpec;
 use crate::probe_setup::{NamedSolid, Solid};
+use crate::setup::Placement;
 use crate::twin::Twin;
 
 /// A probe with what it can touch (see the module documentation).
@@ -62,5 +65,50 @@ impl ProbeStation {
     ) -> Result<ProbeMove, ProbeError> {
         self.on_twin
             .straight_move(twin, &self.solids, &self.motion, request)
+    }
+}
+
+impl TouchProbe {
+    /// The touch probe of the program's G38 moves on `machine`: the setup's `[probe]`, fields
+    /// left out (or the whole section) from [`TouchProbe::typical`] with the machine's own tool
+    /// length as the stylus length.
+    pub fn of_placement(placement: &Placement, machine: &MachineSpec) -> TouchProbe {
+        let spec = placement.probe.unwrap_or_default();
+        let d = TouchProbe::typical(
+            spec.stylus_length_mm
+                .unwrap_or(crate::tools::master_length_mm(machine)),
+        );
+        TouchProbe {
+            stylus_length_mm: d.stylus_length_mm,
+            ball_radius_mm: spec.ball_radius_mm.unwrap_or(d.ball_radius_mm),
+            trigger_force_n: spec.trigger_force_n.unwrap_or(d.trigger_force_n),
+            stylus_stiffness_n_per_um: spec
+                .stylus_stiffness_n_per_um
+                .unwrap_or(d.stylus_stiffness_n_per_um),
+            repeatability_2sigma_um: spec
+                .repeatability_2sigma_um
+                .unwrap_or(d.repeatability_2sigma_um),
+            servo_period_s: spec.servo_period_s.unwrap_or(d.servo_period_s),
+            feed_mm_per_min: d.feed_mm_per_min,
+        }
+    }
+}
+
+impl ProbeStation {
+    /// The probe station of the program's G38 moves on `machine`: the
+    /// [`TouchProbe::of_placement`], what it can touch ([`Placement::probe_solids`] with `extra`), its
+    /// trip scatter drawn from `seed`.
+    ///
+    /// # Errors
+    /// A probe setting that is not a usable number.
+    pub fn of_placement(
+        placement: &Placement,
+        machine: &MachineSpec,
+        extra: &[BodySpec],
+        seed: u64,
+    ) -> Result<ProbeStation, ProbeError> {
+        let probe = TouchProbe::of_placement(placement, machine);
+        let motion = ProbeMotion::of_machine(machine, probe.stylus_length_mm);
+        ProbeStation::new(probe, placement.probe_solids(machine, extra), motion, seed)
     }
 }
