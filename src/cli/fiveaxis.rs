@@ -191,38 +191,42 @@ impl IdentifyArgs {
 /// An invalid machine file, an option this machine does not take, a non-positive cycle, a bad
 /// recording path or magnification.
 pub(super) fn run_config(args: super::RunArgs) -> Result<FiveAxisRunConfig> {
-    let path = args.machine.machine.clone().unwrap_or_default();
+    let path = args.run.machine.machine.clone().unwrap_or_default();
     let machine = FiveAxisSpec::load(&path)?;
     let name = &machine.machine.name;
     let refused: [(bool, &str, &str); 7] = [
         (
-            args.sensors.sensors.is_some(),
+            args.run.sensors.sensors.is_some(),
             "--sensors",
             "it has no thermal model, hence no sensors",
         ),
         (
-            !args.warmup.is_empty(),
+            !args.run.warmup.is_empty(),
             "--warmup",
             "it has no thermal model",
         ),
         (
-            args.thermal_step_s != 1.0,
+            args.run.thermal_step_s != 1.0,
             "--thermal-step-s",
             "it has no thermal model",
         ),
         (
-            args.tools.is_some(),
+            args.run.tools.is_some(),
             "--tools",
             "it carries one tool (the machine file's [tool])",
         ),
         (
-            args.model.is_some(),
+            args.run.model.is_some(),
             "--model",
             "compensate with the identified model of `identify` (--identified)",
         ),
-        (args.strict, "--strict", "it applies to a trained --model"),
         (
-            args.allow_other_machine,
+            args.run.strict,
+            "--strict",
+            "it applies to a trained --model",
+        ),
+        (
+            args.run.allow_other_machine,
             "--allow-other-machine",
             "it applies to a trained --model",
         ),
@@ -250,9 +254,9 @@ pub(super) fn run_config(args: super::RunArgs) -> Result<FiveAxisRunConfig> {
         program: args.program,
         machine,
         machine_file: path.display().to_string(),
-        seed: args.seed,
-        out_dir: args.out,
-        force: args.force.force,
+        seed: args.run.seed,
+        out_dir: args.run.out,
+        force: args.run.force.force,
         sampling,
         identified: args.identified,
         rotary_comp: args.rotary_comp != Some(RotaryComp::Off),

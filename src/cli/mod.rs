@@ -12,6 +12,7 @@ mod export;
 mod fiveaxis;
 mod identify_thermal;
 mod lobes;
+mod machine_run;
 mod modal_fit;
 mod placement;
 mod replay;
@@ -35,6 +36,7 @@ pub use export::{ExportArgs, FormatArg};
 pub use fiveaxis::{IdentifyArgs, ProbeCampaignArgs};
 pub use identify_thermal::IdentifyThermalArgs;
 pub use lobes::{LobesArgs, MethodArg};
+pub use machine_run::MachineRunArgs;
 pub use modal_fit::ModalFitArgs;
 pub use replay::{LogFormatArg, ReplayArgs};
 pub use thermal::{FitThermalArgs, PredictThermalArgs};
@@ -220,28 +222,20 @@ impl From<KindArg> for ModelKind {
 
 /// Arguments of `run`.
 #[derive(clap::Args)]
+// The shared `--strict` and `--allow-other-machine` need `--model` here (`replay` also takes the
+// model as the value of its `--compensate`).
+#[command(
+    mut_arg("strict", |a| a.requires("model")),
+    mut_arg("allow_other_machine", |a| a.requires("model"))
+)]
 pub struct RunArgs {
     /// G-code program to run (e.g. trajectories/diag_xy.ngc).
     pub program: PathBuf,
     #[command(flatten)]
-    pub machine: MachineArg,
-    #[command(flatten)]
-    pub sensors: SensorsArg,
-    /// Seed of the machine's random error parts and noise.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Thermal loading program(s) to run first (repeatable, run in order).
-    #[arg(long)]
-    pub warmup: Vec<PathBuf>,
-    /// Tool table (TOML, `[[tool]]` with `number`, `length_mm`, `diameter_mm`): `M6` loads
-    /// the twin's tool from it; default: the machine's own tool for every number.
-    #[arg(long)]
-    pub tools: Option<PathBuf>,
-    /// Folder for samples.csv and summary.json (created if missing).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    #[command(flatten)]
-    pub force: ForceArg,
+    pub run: MachineRunArgs,
+    /// Put the model in the control loop: each point is reported before and after compensation.
+    #[arg(long, requires = "model")]
+    pub compensate: bool,
     /// Also measure at every interpolation cycle during motion (not only at dwells).
     #[arg(long)]
     pub every_cycle: bool,
@@ -251,21 +245,6 @@ pub struct RunArgs {
     pub interp_cycle_ms: Option<f64>,
     #[command(flatten)]
     pub placement: placement::PlacementArgs,
-    /// Thermal integration and sensor sampling step, s.
-    #[arg(long, default_value_t = 1.0)]
-    pub thermal_step_s: f64,
-    /// Trained model (JSON, from `train` or `campaign --out`) for compensation.
-    #[arg(long)]
-    pub model: Option<PathBuf>,
-    /// Put the model in the control loop: each point is reported before and after compensation.
-    #[arg(long, requires = "model")]
-    pub compensate: bool,
-    /// Refuse the run when a reading or command leaves the range the model was trained on.
-    #[arg(long, requires = "model")]
-    pub strict: bool,
-    /// Use a model calibrated on another machine or realisation (a note says which).
-    #[arg(long, requires = "model")]
-    pub allow_other_machine: bool,
     /// Five-axis machine: the identified model (JSON from `identify`) to compensate with; each
     /// point is reported before and after.
     #[arg(long, conflicts_with = "model")]
@@ -286,7 +265,7 @@ impl RunArgs {
     /// without `--compensate`, a bad recording path or magnification, an option the machine's
     /// kind does not take.
     pub fn config(self) -> Result<commands::run::RunTarget> {
-        if let Some(path) = &self.machine.machine {
+        if let Some(path) = &self.run.machine.machine {
             if commands::is_five_axis_machine(path)? {
                 return fiveaxis::run_config(self).map(commands::run::RunTarget::FiveAxis);
             }
@@ -302,24 +281,24 @@ impl RunArgs {
     }
 
     fn three_axis_config(self) -> Result<commands::run::RunConfig> {
-        let machine = self.machine.load(Some(&self.sensors))?;
+        let machine = self.run.load_machine()?;
         let interp_cycle_ms = self.interp_cycle_ms.unwrap_or(1.0);
-        let sim =
-            SimConfig::new(self.thermal_step_s, interp_cycle_ms * 1e-3).map_err(|e| match e {
-                SimConfigError::ThermalStep(_) => {
-                    anyhow::anyhow!("--thermal-step-s must be > 0, got {}", self.thermal_step_s)
-                }
-                SimConfigError::InterpCycle(_) => {
-                    anyhow::anyhow!("--interp-cycle-ms must be > 0, got {interp_cycle_ms}")
-                }
-            })?;
-        if let (Some(path), false) = (&self.model, self.compensate) {
+        let thermal_step_s = self.run.thermal_step_s;
+        let sim = SimConfig::new(thermal_step_s, interp_cycle_ms * 1e-3).map_err(|e| match e {
+            SimConfigError::ThermalStep(_) => {
+                anyhow::anyhow!("--thermal-step-s must be > 0, got {thermal_step_s}")
+            }
+            SimConfigError::InterpCycle(_) => {
+                anyhow::anyhow!("--interp-cycle-ms must be > 0, got {interp_cycle_ms}")
+            }
+        })?;
+        if let (Some(path), false) = (&self.run.model, self.compensate) {
             anyhow::bail!(
                 "{}: a model was given without --compensate; add --compensate to put it in the loop",
                 path.display()
             );
         }
-        let force = self.force.force;
+        let force = self.run.force.force;
         let rrd = self.rrd.checked()?;
         let offsets = placement::nine_offsets(machine.axes.work_offsets_mm);
         let placement = self.placement.placement(&self.program, offsets)?;
@@ -330,17 +309,17 @@ impl RunArgs {
             placement,
             program: self.program,
             machine,
-            seed: self.seed,
-            warmups: self.warmup,
-            out_dir: self.out,
+            tools: self.run.tool_table()?,
+            seed: self.run.seed,
+            warmups: self.run.warmup,
+            out_dir: self.run.out,
             force,
             every_cycle: self.every_cycle,
             sim,
-            model: self.model,
+            model: self.run.model,
             rrd,
-            strict: self.strict,
-            allow_other_machine: self.allow_other_machine,
-            tools: load_tool_table(self.tools.as_deref())?,
+            strict: self.run.strict,
+            allow_other_machine: self.run.allow_other_machine,
         })
     }
 }

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use super::{load_tool_table, ForceArg, MachineArg, RrdArgs, SensorsArg};
+use super::{MachineRunArgs, RrdArgs};
 use crate::commands::replay::log::LogFormat;
 use crate::commands::replay::ReplayConfig;
 use vmc_machine::sim::SimConfig;
@@ -44,39 +44,11 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 0.0)]
     pub spindle_rpm: f64,
     #[command(flatten)]
-    pub machine: MachineArg,
-    #[command(flatten)]
-    pub sensors: SensorsArg,
-    /// Seed of the machine's random error parts and noise.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Thermal loading program(s) to run first (repeatable, run in order).
-    #[arg(long)]
-    pub warmup: Vec<PathBuf>,
-    /// Tool table (TOML) for the warm-ups' `M6`.
-    #[arg(long)]
-    pub tools: Option<PathBuf>,
-    /// Folder for samples.csv and summary.json (created if missing).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    #[command(flatten)]
-    pub force: ForceArg,
-    /// Thermal integration and sensor sampling step, s.
-    #[arg(long, default_value_t = 1.0)]
-    pub thermal_step_s: f64,
-    /// Trained model (JSON) for `--compensate` (or give it to `--compensate`).
-    #[arg(long)]
-    pub model: Option<PathBuf>,
+    pub run: MachineRunArgs,
     /// Compute the corrections with a model in the twin's loop (`--compensate MODEL`, or
     /// `--model MODEL --compensate` as in `run`); for a log without correction columns.
     #[arg(long, value_name = "MODEL", num_args = 0..=1)]
     pub compensate: Option<Option<PathBuf>>,
-    /// Refuse the replay when a reading or command leaves the range the model was trained on.
-    #[arg(long)]
-    pub strict: bool,
-    /// Use a model calibrated on another machine or realisation (a note says which).
-    #[arg(long)]
-    pub allow_other_machine: bool,
     #[command(flatten)]
     pub rrd: RrdArgs,
 }
@@ -96,7 +68,7 @@ impl ReplayArgs {
             "--spindle-rpm must be a number ≥ 0, got {}",
             self.spindle_rpm
         );
-        let model = match (self.compensate, self.model) {
+        let model = match (self.compensate, self.run.model.clone()) {
             (Some(Some(_)), Some(m)) => anyhow::bail!(
                 "{}: a model given twice (--model and --compensate MODEL): give one",
                 m.display()
@@ -111,31 +83,31 @@ impl ReplayArgs {
             ),
             (None, None) => None,
         };
-        if model.is_none() && (self.strict || self.allow_other_machine) {
+        if model.is_none() && (self.run.strict || self.run.allow_other_machine) {
             anyhow::bail!(
                 "--strict and --allow-other-machine apply to a model: add --compensate MODEL"
             );
         }
-        let sim = SimConfig::new(self.thermal_step_s, 1e-3).map_err(|_| {
-            anyhow::anyhow!("--thermal-step-s must be > 0, got {}", self.thermal_step_s)
-        })?;
-        let machine = self.machine.load(Some(&self.sensors))?;
+        let thermal_step_s = self.run.thermal_step_s;
+        let sim = SimConfig::new(thermal_step_s, 1e-3)
+            .map_err(|_| anyhow::anyhow!("--thermal-step-s must be > 0, got {thermal_step_s}"))?;
+        let machine = self.run.load_machine()?;
         Ok(ReplayConfig {
             rrd: self.rrd.checked()?,
             log: self.log,
             format,
             machine,
-            seed: self.seed,
-            warmups: self.warmup,
-            tools: load_tool_table(self.tools.as_deref())?,
-            out_dir: self.out,
-            force: self.force.force,
+            seed: self.run.seed,
+            tools: self.run.tool_table()?,
+            warmups: self.run.warmup,
+            out_dir: self.run.out,
+            force: self.run.force.force,
             sim,
             every: self.every,
             spindle_rpm: self.spindle_rpm,
             model,
-            strict: self.strict,
-            allow_other_machine: self.allow_other_machine,
+            strict: self.run.strict,
+            allow_other_machine: self.run.allow_other_machine,
         })
     }
 
