@@ -133,7 +133,7 @@ pub fn samples_csv(geom: &Geometry, points: &[FivePoint]) -> String {
     }
     s.push_str(",tip_x_w_mm,tip_y_w_mm,tip_z_w_mm,ex_um,ey_um,ez_um,norm_um,axis_err_urad");
     if comp {
-        s.push_str(",qx_mm,qy_mm,qz_mm,ex_comp_um,ey_comp_um,ez_comp_um,norm_comp_um");
+        s.push_str(super::COMPENSATED_CSV_HEADER);
         for (_, l) in &rot {
             let _ = write!(s, ",{l}_comp_deg");
         }
@@ -164,19 +164,11 @@ pub fn samples_csv(geom: &Geometry, points: &[FivePoint]) -> String {
             p.axis_error_before_urad
         );
         if comp {
-            let q = p.compensated_q_mm.unwrap_or(q);
-            let a = p.error_after_um.unwrap_or([f64::NAN; 3]);
-            let _ = write!(
-                s,
-                ",{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4}",
-                q[0],
-                q[1],
-                q[2],
-                a[0],
-                a[1],
-                a[2],
-                super::norm(a)
-            );
+            let cells = super::CompensatedCsvCells {
+                q_mm: p.compensated_q_mm.unwrap_or(q),
+                err_um: p.error_after_um.unwrap_or([f64::NAN; 3]),
+            };
+            let _ = write!(s, "{cells}");
             let abc = p.compensated_abc_deg.unwrap_or(c.abc_deg);
             for (i, _) in &rot {
                 let _ = write!(s, ",{:.8}", abc[*i]);

@@ -183,6 +183,37 @@ pub fn write_compensated_cells(out: &mut dyn Write, a: [f64; 3]) -> std::io::Res
     )
 }
 
+/// `samples.csv`'s compensated columns' header, after the uncompensated error's columns.
+pub const COMPENSATED_CSV_HEADER: &str =
+    ",qx_mm,qy_mm,qz_mm,ex_comp_um,ey_comp_um,ez_comp_um,norm_comp_um";
+
+/// The compensated cells of one row of `samples.csv` (see [`COMPENSATED_CSV_HEADER`]), each
+/// with its leading comma: one formatter for the `io::Write` rows of a three-axis run and the
+/// `String` of a five-axis run.
+pub struct CompensatedCsvCells {
+    /// The compensated command of the linear axes, mm.
+    pub q_mm: [f64; 3],
+    /// The error after compensation, µm (NaN where there is none).
+    pub err_um: [f64; 3],
+}
+
+impl std::fmt::Display for CompensatedCsvCells {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (q, a) = (self.q_mm, self.err_um);
+        write!(
+            f,
+            ",{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4}",
+            q[0],
+            q[1],
+            q[2],
+            a[0],
+            a[1],
+            a[2],
+            norm(a)
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

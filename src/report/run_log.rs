@@ -11,7 +11,10 @@ use std::io::Write;
 use vmc_machine::sensors::SensorReadings;
 use vmc_machine::sim::{Observer, PointRecord};
 
-use super::{norm, write_compensated_cells, write_compensated_header, RunSummary, StatsAcc};
+use super::{
+    norm, write_compensated_cells, write_compensated_header, CompensatedCsvCells, RunSummary,
+    StatsAcc, COMPENSATED_CSV_HEADER,
+};
 
 /// A run's points as they come: statistics kept, rows written (see the module doc).
 pub struct RunLog<'w> {
@@ -130,26 +133,108 @@ impl Observer for RunLog<'_> {
     }
 }
 
+/// One column of a point's row: in the terminal table, in `samples.csv` or in both. One list
+/// ([`COLUMNS`]) drives the headers and the rows of both, so the two cannot drift apart.
+struct Column {
+    /// Terminal table: header, width and decimals; `None`: not in the table.
+    table: Option<(&'static str, usize, usize)>,
+    /// `samples.csv`: header and decimals; `None`: not in the file.
+    csv: Option<(&'static str, usize)>,
+    /// The value at a point (point and line numbers are exact in an f64 and print as integers
+    /// with 0 decimals).
+    value: fn(&PointRecord) -> f64,
+}
+
+/// The thermal part of a point's error, µm (NaN where it was not computed).
+fn thermal_um(p: &PointRecord) -> [f64; 3] {
+    p.thermal_part_um.unwrap_or([f64::NAN; 3])
+}
+
+/// The columns before the compensated ones: the table's columns and the file's are each in
+/// this order.
+const COLUMNS: [Column; 14] = [
+    Column {
+        table: Some(("pt", 4, 0)),
+        csv: None,
+        value: |p| p.index as f64,
+    },
+    Column {
+        table: Some(("time_s", 9, 1)),
+        csv: Some(("time_s", 3)),
+        value: |p| p.time_s,
+    },
+    Column {
+        table: Some(("line", 5, 0)),
+        csv: Some(("line", 0)),
+        value: |p| p.line as f64,
+    },
+    Column {
+        table: Some(("x_mm", 9, 3)),
+        csv: Some(("x_mm", 4)),
+        value: |p| p.commanded_mm[0],
+    },
+    Column {
+        table: Some(("y_mm", 9, 3)),
+        csv: Some(("y_mm", 4)),
+        value: |p| p.commanded_mm[1],
+    },
+    Column {
+        table: Some(("z_mm", 9, 3)),
+        csv: Some(("z_mm", 4)),
+        value: |p| p.commanded_mm[2],
+    },
+    Column {
+        table: Some(("ex_um", 8, 2)),
+        csv: Some(("ex_um", 4)),
+        value: |p| p.error_before_um[0],
+    },
+    Column {
+        table: Some(("ey_um", 8, 2)),
+        csv: Some(("ey_um", 4)),
+        value: |p| p.error_before_um[1],
+    },
+    Column {
+        table: Some(("ez_um", 8, 2)),
+        csv: Some(("ez_um", 4)),
+        value: |p| p.error_before_um[2],
+    },
+    Column {
+        table: Some(("|e|_um", 8, 2)),
+        csv: Some(("norm_um", 4)),
+        value: |p| norm(p.error_before_um),
+    },
+    Column {
+        table: None,
+        csv: Some(("thermal_ex_um", 4)),
+        value: |p| thermal_um(p)[0],
+    },
+    Column {
+        table: None,
+        csv: Some(("thermal_ey_um", 4)),
+        value: |p| thermal_um(p)[1],
+    },
+    Column {
+        table: None,
+        csv: Some(("thermal_ez_um", 4)),
+        value: |p| thermal_um(p)[2],
+    },
+    Column {
+        table: Some(("therm_um", 8, 2)),
+        csv: None,
+        value: |p| norm(thermal_um(p)),
+    },
+];
+
 /// The terminal table's header line (with the compensated columns if `compensated`).
 ///
 /// # Errors
 /// The writer's.
-pub fn write_table_header(out: &mut dyn Write, compensated: bool) -> std::io::Result<()> {
-    write!(
-        out,
-        "{:>4} {:>9} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
-        "pt",
-        "time_s",
-        "line",
-        "x_mm",
-        "y_mm",
-        "z_mm",
-        "ex_um",
-        "ey_um",
-        "ez_um",
-        "|e|_um",
-        "therm_um"
-    )?;
+fn write_table_header(out: &mut dyn Write, compensated: bool) -> std::io::Result<()> {
+    let cells = COLUMNS.iter().filter_map(|c| c.table);
+    for (k, (header, width, _)) in cells.enumerate() {
+        let sep = if k == 0 { "" } else { " " };
+        write!(out, "{sep}{header:>width$}")?;
+    }
     if compensated {
         write_compensated_header(out)?;
     }
@@ -160,24 +245,12 @@ pub fn write_table_header(out: &mut dyn Write, compensated: bool) -> std::io::Re
 ///
 /// # Errors
 /// The writer's.
-pub fn write_table_row(out: &mut dyn Write, p: &PointRecord) -> std::io::Result<()> {
-    let e = p.error_before_um;
-    let t = p.thermal_part_um.unwrap_or([f64::NAN; 3]);
-    write!(
-        out,
-        "{:>4} {:>9.1} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
-        p.index,
-        p.time_s,
-        p.line,
-        p.commanded_mm[0],
-        p.commanded_mm[1],
-        p.commanded_mm[2],
-        e[0],
-        e[1],
-        e[2],
-        norm(e),
-        norm(t),
-    )?;
+fn write_table_row(out: &mut dyn Write, p: &PointRecord) -> std::io::Result<()> {
+    let cells = COLUMNS.iter().filter_map(|c| Some((c.table?, c.value)));
+    for (k, ((_, width, decimals), value)) in cells.enumerate() {
+        let sep = if k == 0 { "" } else { " " };
+        write!(out, "{sep}{:>width$.decimals$}", value(p))?;
+    }
     if let Some(a) = p.error_after_um {
         write_compensated_cells(out, a)?;
     }
@@ -188,20 +261,18 @@ pub fn write_table_row(out: &mut dyn Write, p: &PointRecord) -> std::io::Result<
 ///
 /// # Errors
 /// The writer's.
-pub fn write_csv_header(
+fn write_csv_header(
     out: &mut dyn Write,
     sensor_names: &[String],
     compensated: bool,
 ) -> std::io::Result<()> {
-    write!(
-        out,
-        "time_s,line,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um,norm_um,thermal_ex_um,thermal_ey_um,thermal_ez_um"
-    )?;
+    let cells = COLUMNS.iter().filter_map(|c| c.csv);
+    for (k, (header, _)) in cells.enumerate() {
+        let sep = if k == 0 { "" } else { "," };
+        write!(out, "{sep}{header}")?;
+    }
     if compensated {
-        write!(
-            out,
-            ",qx_mm,qy_mm,qz_mm,ex_comp_um,ey_comp_um,ez_comp_um,norm_comp_um"
-        )?;
+        write!(out, "{COMPENSATED_CSV_HEADER}")?;
     }
     for n in sensor_names {
         write!(out, ",{n}_degc")?;
@@ -213,47 +284,55 @@ pub fn write_csv_header(
 ///
 /// # Errors
 /// The writer's.
-pub fn write_csv_row(
+fn write_csv_row(
     out: &mut dyn Write,
     p: &PointRecord,
     temps_degc: &[f64],
     compensated: bool,
 ) -> std::io::Result<()> {
-    let e = p.error_before_um;
-    let t = p.thermal_part_um.unwrap_or([f64::NAN; 3]);
-    write!(
-        out,
-        "{:.3},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-        p.time_s,
-        p.line,
-        p.commanded_mm[0],
-        p.commanded_mm[1],
-        p.commanded_mm[2],
-        e[0],
-        e[1],
-        e[2],
-        norm(e),
-        t[0],
-        t[1],
-        t[2]
-    )?;
+    let cells = COLUMNS.iter().filter_map(|c| Some((c.csv?, c.value)));
+    for (k, ((_, decimals), value)) in cells.enumerate() {
+        let sep = if k == 0 { "" } else { "," };
+        write!(out, "{sep}{:.decimals$}", value(p))?;
+    }
     if compensated {
-        let q = p.compensated_command_mm.unwrap_or(p.commanded_mm);
-        let a = p.error_after_um.unwrap_or([f64::NAN; 3]);
-        write!(
-            out,
-            ",{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4}",
-            q[0],
-            q[1],
-            q[2],
-            a[0],
-            a[1],
-            a[2],
-            norm(a)
-        )?;
+        let cells = CompensatedCsvCells {
+            q_mm: p.compensated_command_mm.unwrap_or(p.commanded_mm),
+            err_um: p.error_after_um.unwrap_or([f64::NAN; 3]),
+        };
+        write!(out, "{cells}")?;
     }
     for v in temps_degc {
         write!(out, ",{v:.4}")?;
     }
     writeln!(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_header_has_every_column_in_its_width() {
+        let mut out = Vec::new();
+        write_table_header(&mut out, true).unwrap();
+        let expected = format!(
+            "{:>4} {:>9} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8} {:>8}\n",
+            "pt", "time_s", "line", "x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um", "|e|_um",
+            "therm_um", "ex'_um", "ey'_um", "ez'_um", "|e'|_um"
+        );
+        assert_eq!(String::from_utf8(out).unwrap(), expected);
+    }
+
+    #[test]
+    fn the_csv_header_names_every_column_with_its_unit() {
+        let mut out = Vec::new();
+        write_csv_header(&mut out, &["ZH".to_string()], true).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "time_s,line,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um,norm_um,thermal_ex_um,thermal_ey_um,\
+             thermal_ez_um,qx_mm,qy_mm,qz_mm,ex_comp_um,ey_comp_um,ez_comp_um,norm_comp_um,\
+             ZH_degc\n"
+        );
+    }
 }
