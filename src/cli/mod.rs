@@ -2,7 +2,8 @@
 //! [`crate::commands`]. Raw arguments are checked here once; the use cases take configs.
 //!
 //! Options that several commands share are one flattened group each ([`MachineArg`],
-//! [`SensorsArg`], [`ForceArg`], [`RrdArgs`]), so a flag means the same everywhere.
+//! [`SensorsArg`], [`ForceArg`], [`RrdArgs`], and [`MachineRunArgs`] of `run` and `replay`), so
+//! a flag means the same everywhere.
 
 mod campaign;
 mod chatter;
