@@ -3,63 +3,9 @@
 //! and the message docs/usage.md shows. Each guard added for a hang or a missing location
 //! found by the property tests (`tests/fuzz.rs`) has its regression case here.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
-
-struct Tmp(PathBuf);
-
-impl Tmp {
-    fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("vmc-twin-bad-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Tmp(d)
-    }
-}
-
-impl Drop for Tmp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-/// Runs `vmc-twin args` in `dir` and returns its one stderr line without the `vmc-twin: error: `
-/// prefix, after asserting exit code 1 and a single line.
-fn one_line_error(dir: &Path, args: &[&str]) -> String {
-    let o = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
-    err.trim_end()
-        .strip_prefix("vmc-twin: error: ")
-        .unwrap_or_else(|| panic!("prefix: {err}"))
-        .to_string()
-}
-
-/// Runs `vmc-twin args` in `dir`, asserting success; returns stdout.
-fn succeed(dir: &Path, args: &[&str]) -> String {
-    let o = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
+use common::{ok, one_line_error, repo_file as repo, succeed, vmc, TempDir};
 
 /// (program text, expected message after `bad.ngc: `), run with `vmc-twin run bad.ngc`.
 const PROGRAMS: &[(&str, &str)] = &[
@@ -119,18 +65,18 @@ const PROGRAMS: &[(&str, &str)] = &[
 
 #[test]
 fn every_bad_program_is_one_line_with_its_location() {
-    let t = Tmp::new("prog");
+    let t = TempDir::new("prog");
     for (text, want) in PROGRAMS {
-        std::fs::write(t.0.join("bad.ngc"), text).unwrap();
+        std::fs::write(t.path().join("bad.ngc"), text).unwrap();
         assert_eq!(
-            one_line_error(&t.0, &["run", "bad.ngc"]),
+            one_line_error(t.path(), &["run", "bad.ngc"]),
             format!("bad.ngc: {want}"),
             "{text:?}"
         );
         // `check` rejects the same way, except out of travel, which it reports as a problem.
         if !want.contains("outside travel") {
             assert_eq!(
-                one_line_error(&t.0, &["check", "bad.ngc"]),
+                one_line_error(t.path(), &["check", "bad.ngc"]),
                 format!("bad.ngc: {want}")
             );
         }
@@ -139,31 +85,29 @@ fn every_bad_program_is_one_line_with_its_location() {
 
 #[test]
 fn an_arc_within_linuxcncs_tolerance_is_accepted() {
-    let t = Tmp::new("arcok");
+    let t = TempDir::new("arcok");
     // |r1 − r2| = 0.02 mm < 0.02·√2 mm: accepted, as LinuxCNC does.
     std::fs::write(
-        t.0.join("ok.ngc"),
+        t.path().join("ok.ngc"),
         "G21 G90 F100\nG0 X0 Y0 Z-100\nG2 X50 Y0 I24.99 J0\nM30\n",
     )
     .unwrap();
-    let o = Command::new(BIN)
-        .args(["check", "ok.ngc"])
-        .current_dir(&t.0)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    ok(
+        &vmc(t.path(), &["check", "ok.ngc"]),
+        "an arc within tolerance",
+    );
 }
 
 #[test]
 fn bytes_that_are_not_utf8_are_located() {
-    let t = Tmp::new("utf8");
-    std::fs::write(t.0.join("bin.ngc"), b"G21\nG1 X1 (\xc3\xa9) \xff\n").unwrap();
+    let t = TempDir::new("utf8");
+    std::fs::write(t.path().join("bin.ngc"), b"G21\nG1 X1 (\xc3\xa9) \xff\n").unwrap();
     assert_eq!(
-        one_line_error(&t.0, &["run", "bin.ngc"]),
+        one_line_error(t.path(), &["run", "bin.ngc"]),
         "bin.ngc: cannot read program: not UTF-8 text: line 2, column 11: byte 0xFF"
     );
     assert_eq!(
-        one_line_error(&t.0, &["check", "bin.ngc", "--machine", "bin.ngc"]),
+        one_line_error(t.path(), &["check", "bin.ngc", "--machine", "bin.ngc"]),
         "bin.ngc: cannot read machine file: not UTF-8 text: line 2, column 11: byte 0xFF"
     );
 }
@@ -225,16 +169,16 @@ const MACHINES: &[(&str, &str, &str)] = &[
 
 #[test]
 fn every_bad_machine_value_names_its_field_or_line() {
-    let t = Tmp::new("machine");
+    let t = TempDir::new("machine");
     let reference = std::fs::read_to_string(repo("machines/vmc-reference.toml")).unwrap();
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     for (from, to, want) in MACHINES {
         // Each edit lands in one place of the file, the one the message names.
         assert_eq!(reference.matches(from).count(), 1, "{from}");
-        std::fs::write(t.0.join("m.toml"), reference.replacen(from, to, 1)).unwrap();
+        std::fs::write(t.path().join("m.toml"), reference.replacen(from, to, 1)).unwrap();
         for cmd in ["run", "check"] {
             assert_eq!(
-                one_line_error(&t.0, &[cmd, &prog, "--machine", "m.toml"]),
+                one_line_error(t.path(), &[cmd, &prog, "--machine", "m.toml"]),
                 format!("m.toml: {want}")
             );
         }
@@ -243,37 +187,37 @@ fn every_bad_machine_value_names_its_field_or_line() {
 
 #[test]
 fn absurd_steps_are_refused_before_any_simulation() {
-    let t = Tmp::new("steps");
+    let t = TempDir::new("steps");
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     assert_eq!(
-        one_line_error(&t.0, &["run", &prog, "--thermal-step-s", "1e-9"]),
+        one_line_error(t.path(), &["run", &prog, "--thermal-step-s", "1e-9"]),
         format!("{prog}: 59 s of machine time at thermal step 1e-9 s is 5.908e10 steps, above the limit of 2e7: use a larger --thermal-step-s")
     );
     assert_eq!(
-        one_line_error(&t.0, &["run", &prog, "--every-cycle", "--interp-cycle-ms", "1e-6"]),
+        one_line_error(t.path(), &["run", &prog, "--every-cycle", "--interp-cycle-ms", "1e-6"]),
         format!("{prog}: 59 s of machine time at interpolation cycle 1e-9 s is 5.908e10 steps, above the limit of 2e7: use a larger --interp-cycle-ms (or drop --every-cycle)")
     );
     assert_eq!(
         one_line_error(
-            &t.0,
+            t.path(),
             &["calibrate", "--measure-every-min", "1e-300", "-o", "c.csv"]
         ),
         "--measure-every-min must be at least 1 (minute), got 1e-300"
     );
-    assert!(!t.0.join("c.csv").exists());
+    assert!(!t.path().join("c.csv").exists());
 }
 
 #[test]
 fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
-    let t = Tmp::new("data");
+    let t = TempDir::new("data");
     succeed(
-        &t.0,
+        t.path(),
         &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
     );
-    let text = std::fs::read_to_string(t.0.join("cal.csv")).unwrap();
+    let text = std::fs::read_to_string(t.path().join("cal.csv")).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let write = |name: &str, lines: &[String]| {
-        std::fs::write(t.0.join(name), lines.join("\n") + "\n").unwrap();
+        std::fs::write(t.path().join(name), lines.join("\n") + "\n").unwrap();
     };
     // The header follows the comment lines (the machine's identity).
     let h = lines.iter().position(|l| !l.starts_with('#')).unwrap();
@@ -285,7 +229,7 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
     huge[h + 1] = cells.join(",");
     write("huge.csv", &huge);
     assert_eq!(
-        one_line_error(&t.0, &["train", "--data", "huge.csv", "-o", "m.json"]),
+        one_line_error(t.path(), &["train", "--data", "huge.csv", "-o", "m.json"]),
         format!(
             "huge.csv: line {}, column `dx_um`: implausible value 1e308: beyond ±1e6 (a corrupt \
              cell or a unit mistake?)",
@@ -304,40 +248,43 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
     }
     write("dup.csv", &lines);
     assert_eq!(
-        one_line_error(&t.0, &["train", "--data", "dup.csv", "-o", "m.json"]),
+        one_line_error(t.path(), &["train", "--data", "dup.csv", "-o", "m.json"]),
         format!(
             "dup.csv: column `{last}` appears twice in the header (columns {n} and {})",
             n + 1
         )
     );
-    assert!(!t.0.join("m.json").exists());
+    assert!(!t.path().join("m.json").exists());
     // A missing model file is named once; a file that is not a model says so.
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     let err = one_line_error(
-        &t.0,
+        t.path(),
         &["run", &prog, "--model", "nope.json", "--compensate"],
     );
     assert!(err.starts_with("nope.json: "), "{err}");
     assert_eq!(err.matches("nope.json").count(), 1, "{err}");
-    std::fs::write(t.0.join("x.json"), "{}").unwrap();
+    std::fs::write(t.path().join("x.json"), "{}").unwrap();
     assert_eq!(
-        one_line_error(&t.0, &["run", &prog, "--model", "x.json", "--compensate"]),
+        one_line_error(
+            t.path(),
+            &["run", &prog, "--model", "x.json", "--compensate"]
+        ),
         "x.json: not a vmc-twin model file: no `format` field"
     );
     // A well-formed model whose prediction is absurd (an intercept of 5 mm, in µm) is stopped at
     // the first compensated point, not run with the axes 5 mm off.
     succeed(
-        &t.0,
+        t.path(),
         &[
             "train", "--data", "cal.csv", "--kind", "linear", "-o", "lin.json",
         ],
     );
     let mut model: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(t.0.join("lin.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(t.path().join("lin.json")).unwrap()).unwrap();
     model["model"]["regression"]["intercept"][0] = serde_json::json!(5000.0);
-    std::fs::write(t.0.join("wild.json"), model.to_string()).unwrap();
+    std::fs::write(t.path().join("wild.json"), model.to_string()).unwrap();
     let err = one_line_error(
-        &t.0,
+        t.path(),
         &["run", &prog, "--model", "wild.json", "--compensate"],
     );
     assert!(err.starts_with(&format!("{prog}: line 7 (t = ")), "{err}");
@@ -349,7 +296,7 @@ fn bad_datasets_and_model_files_are_one_line_naming_what_is_wrong() {
 
 #[test]
 fn repeated_seeds_and_empty_options_are_refused_before_any_work() {
-    let t = Tmp::new("options");
+    let t = TempDir::new("options");
     let cases: [(&[&str], &str); 6] = [
         (
             &["select-sensors", "--candidates", "saddle,x_motor,saddle"],
@@ -374,23 +321,23 @@ fn repeated_seeds_and_empty_options_are_refused_before_any_work() {
         (&["bench", "--repeats", "0"], "--repeats must be at least 1"),
     ];
     for (args, want) in cases {
-        assert_eq!(one_line_error(&t.0, args), want);
+        assert_eq!(one_line_error(t.path(), args), want);
     }
     assert!(
-        std::fs::read_dir(&t.0).unwrap().next().is_none(),
+        std::fs::read_dir(t.path()).unwrap().next().is_none(),
         "nothing written"
     );
 }
 
 #[test]
 fn a_model_of_another_kinematics_is_refused_before_the_run() {
-    let t = Tmp::new("geometry");
+    let t = TempDir::new("geometry");
     let reference = std::fs::read_to_string(repo("machines/vmc-reference.toml")).unwrap();
     let gantry = reference.replacen("chain = \"w X Y b Z t\"", "chain = \"w Y b X Z t\"", 1);
     assert_ne!(gantry, reference);
-    std::fs::write(t.0.join("gantry.toml"), gantry).unwrap();
+    std::fs::write(t.path().join("gantry.toml"), gantry).unwrap();
     succeed(
-        &t.0,
+        t.path(),
         &[
             "calibrate",
             "--machine",
@@ -402,7 +349,7 @@ fn a_model_of_another_kinematics_is_refused_before_the_run() {
         ],
     );
     succeed(
-        &t.0,
+        t.path(),
         &[
             "train",
             "--data",
@@ -417,7 +364,10 @@ fn a_model_of_another_kinematics_is_refused_before_the_run() {
     );
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     assert_eq!(
-        one_line_error(&t.0, &["run", &prog, "--model", "g.json", "--compensate"]),
+        one_line_error(
+            t.path(),
+            &["run", &prog, "--model", "g.json", "--compensate"]
+        ),
         "g.json: model does not fit machine vmc-reference: geometry mismatch: the model was \
          trained for chain `w Y b X Z t` with tool offset [0.0, 0.0, -150.0] mm, the machine has \
          chain `w X Y b Z t` with tool offset [0.0, 0.0, -150.0] mm"
@@ -436,7 +386,7 @@ fn assert_reduction_at_least(out: &str, min_percent: f64) {
 
 #[test]
 fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
-    let t = Tmp::new("tool");
+    let t = TempDir::new("tool");
     let reference = std::fs::read_to_string(repo("machines/vmc-reference.toml")).unwrap();
     let long = reference.replacen(
         "offset_mm = [0.0, 0.0, -150.0]",
@@ -444,18 +394,18 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         1,
     );
     assert_ne!(long, reference);
-    std::fs::write(t.0.join("long.toml"), long).unwrap();
+    std::fs::write(t.path().join("long.toml"), long).unwrap();
     succeed(
-        &t.0,
+        t.path(),
         &["calibrate", "--measure-every-min", "120", "-o", "c.csv"],
     );
     succeed(
-        &t.0,
+        t.path(),
         &[
             "train", "--data", "c.csv", "--kind", "linear", "-o", "lin.json",
         ],
     );
-    succeed(&t.0, &["train", "--data", "c.csv", "-o", "hyb.json"]);
+    succeed(t.path(), &["train", "--data", "c.csv", "-o", "hyb.json"]);
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     let args = |model: &'static str| {
         [
@@ -469,7 +419,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         ]
     };
     let lin = args("lin.json");
-    let err = one_line_error(&t.0, &lin.each_ref().map(String::as_str));
+    let err = one_line_error(t.path(), &lin.each_ref().map(String::as_str));
     assert!(
         err.ends_with(
             "tool offset [0.0, 0.0, -250.0] mm (a hybrid model follows a tool change; a volumetric \
@@ -478,7 +428,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         "{err}"
     );
     let hyb = args("hyb.json");
-    let out = succeed(&t.0, &hyb.each_ref().map(String::as_str));
+    let out = succeed(t.path(), &hyb.each_ref().map(String::as_str));
     assert!(
         out.contains(
             "note: hyb.json was calibrated with tool offset [0.0, 0.0, -150.0] mm; its elementary \
@@ -490,7 +440,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
     // The same change by the program itself: M6 loads the 250 mm tool 2 of a tool table on the
     // reference machine. The hybrid follows it in the loop; the baseline stops at the M6.
     std::fs::write(
-        t.0.join("tools.toml"),
+        t.path().join("tools.toml"),
         "[[tool]]\nnumber = 1\nlength_mm = 150.0\ndiameter_mm = 12.0\n\
          [[tool]]\nnumber = 2\nlength_mm = 250.0\ndiameter_mm = 12.0\n",
     )
@@ -498,7 +448,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
     let diag = std::fs::read_to_string(repo("trajectories/diag_xy.ngc")).unwrap();
     // After the program's opening `%`.
     let body = diag.trim_start().trim_start_matches('%');
-    std::fs::write(t.0.join("t2.ngc"), format!("%\nT2 M6\nG43 H2{body}")).unwrap();
+    std::fs::write(t.path().join("t2.ngc"), format!("%\nT2 M6\nG43 H2{body}")).unwrap();
     let run = |model: &str| {
         vec![
             "run",
@@ -514,7 +464,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         .collect::<Vec<_>>()
     };
     let err = one_line_error(
-        &t.0,
+        t.path(),
         &run("lin.json")
             .iter()
             .map(String::as_str)
@@ -525,7 +475,7 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
         "{err}"
     );
     let out = succeed(
-        &t.0,
+        t.path(),
         &run("hyb.json")
             .iter()
             .map(String::as_str)
@@ -533,8 +483,8 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
     );
     assert_reduction_at_least(&out, 80.0);
     // A tool the table does not have is refused before the run, at its line.
-    std::fs::write(t.0.join("t5.ngc"), format!("%\nT5 M6{body}")).unwrap();
-    let err = one_line_error(&t.0, &["run", "t5.ngc", "--tools", "tools.toml"]);
+    std::fs::write(t.path().join("t5.ngc"), format!("%\nT5 M6{body}")).unwrap();
+    let err = one_line_error(t.path(), &["run", "t5.ngc", "--tools", "tools.toml"]);
     assert_eq!(
         err,
         "t5.ngc: line 2: M6 loads tool 5, which is not in the tool table"
@@ -543,19 +493,19 @@ fn after_a_tool_change_a_hybrid_model_follows_and_a_baseline_is_refused() {
 
 #[test]
 fn the_opt_in_spindle_speed_needs_a_hybrid_and_a_logged_speed() {
-    let t = Tmp::new("rpm");
+    let t = TempDir::new("rpm");
     succeed(
-        &t.0,
+        t.path(),
         &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
     );
-    let text = std::fs::read_to_string(t.0.join("cal.csv")).unwrap();
+    let text = std::fs::read_to_string(t.path().join("cal.csv")).unwrap();
     // The first line names the machine the data was measured on.
     assert!(text.starts_with("# machine: vmc-reference; realisation: 1; fingerprint: "));
     let header = text.lines().nth(1).unwrap();
     assert!(header.contains(",dir,spindle_rpm,"));
     assert_eq!(
         one_line_error(
-            &t.0,
+            t.path(),
             &[
                 "train",
                 "--data",
@@ -578,20 +528,23 @@ fn the_opt_in_spindle_speed_needs_a_hybrid_and_a_logged_speed() {
             c.join(",") + "\n"
         })
         .collect();
-    std::fs::write(t.0.join("no_rpm.csv"), stripped).unwrap();
+    std::fs::write(t.path().join("no_rpm.csv"), stripped).unwrap();
     assert_eq!(
-        one_line_error(&t.0, &["train", "--data", "no_rpm.csv", "--spindle-speed"]),
+        one_line_error(
+            t.path(),
+            &["train", "--data", "no_rpm.csv", "--spindle-speed"]
+        ),
         "the spindle-speed features need the `spindle_rpm` column on every record; record 0 \
          (cycle `cal_3000rpm`, t = 0 s) has none"
     );
-    assert!(!t.0.join("model.json").exists());
+    assert!(!t.path().join("model.json").exists());
     // Trained with it, the model compensates in the loop, fed the program's speed.
-    succeed(&t.0, &["train", "--data", "cal.csv", "--spindle-speed"]);
-    let model = std::fs::read_to_string(t.0.join("model.json")).unwrap();
+    succeed(t.path(), &["train", "--data", "cal.csv", "--spindle-speed"]);
+    let model = std::fs::read_to_string(t.path().join("model.json")).unwrap();
     assert!(model.contains("\"spindle_speed_exponents\""));
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();
     let out = succeed(
-        &t.0,
+        t.path(),
         &["run", &prog, "--model", "model.json", "--compensate"],
     );
     assert!(out.contains("compensated"), "{out}");

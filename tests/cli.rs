@@ -28,14 +28,6 @@ fn warmup_4h() -> String {
         .to_string()
 }
 
-fn stdout(o: &Output) -> String {
-    String::from_utf8(o.stdout.clone()).expect("stdout is UTF-8")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8(o.stderr.clone()).expect("stderr is UTF-8")
-}
-
 fn assert_success(o: &Output, what: &str) {
     assert!(
         o.status.success(),

@@ -1,30 +1,8 @@
 //! `vmc-twin control design`, `lobes --controller` and `cut --controller` as a user runs them:
 //! the real binary in a temporary folder, on the shipped blade (machines/benchmarks/blade.toml).
 
-use std::process::Output;
-
 mod common;
 use common::*;
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8(o.stdout.clone()).expect("stdout is UTF-8")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8(o.stderr.clone()).expect("stderr is UTF-8")
-}
-
-fn run_ok(dir: &std::path::Path, args: &[&str]) -> String {
-    let o = vmc(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {:?}\n{}\n{}",
-        o.status,
-        stdout(&o),
-        stderr(&o)
-    );
-    stdout(&o)
-}
 
 /// The first number after `prefix` on the first line containing it.
 fn number_after(out: &str, prefix: &str) -> f64 {
@@ -54,7 +32,7 @@ fn blade() -> String {
 fn lqg_design_lobes_and_cut_work_end_to_end() {
     let tmp = TempDir::new("control-lqg");
     let plant = blade();
-    let out = run_ok(
+    let out = succeed(
         tmp.path(),
         &[
             "control",
@@ -87,7 +65,7 @@ fn lqg_design_lobes_and_cut_work_end_to_end() {
         .unwrap();
     assert!(db1 > 20.0 && db2 > 6.0, "{out}");
 
-    let lobes = run_ok(
+    let lobes = succeed(
         tmp.path(),
         &[
             "lobes",
@@ -122,7 +100,7 @@ fn lqg_design_lobes_and_cut_work_end_to_end() {
     }
 
     let depth = format!("{:.4}", 2.0 * open);
-    let cut = run_ok(
+    let cut = succeed(
         tmp.path(),
         &[
             "cut",
@@ -155,7 +133,7 @@ fn lqg_design_lobes_and_cut_work_end_to_end() {
 fn hinf_design_prints_gamma_and_strategy_2_needs_its_table() {
     let tmp = TempDir::new("control-hinf");
     let plant = blade();
-    let out = run_ok(
+    let out = succeed(
         tmp.path(),
         &[
             "control",
@@ -255,10 +233,10 @@ fn controller_lobes_at_the_default_resolution_agree_with_finer_fixed_steps() {
         "--controller",
         "lqg",
     ];
-    run_ok(tmp.path(), &[&design[..], &["-o", "ctrl.json"]].concat());
+    succeed(tmp.path(), &[&design[..], &["-o", "ctrl.json"]].concat());
     let lobes = |extra: &[&str], csv: &str| -> Vec<Vec<String>> {
         let base = ["lobes", "--controller", "ctrl.json", "--rpm", "1700,4400"];
-        let out = run_ok(tmp.path(), &[&base[..], extra, &["--out", csv]].concat());
+        let out = succeed(tmp.path(), &[&base[..], extra, &["--out", csv]].concat());
         assert!(out.contains("resolution: "), "{out}");
         let text = std::fs::read_to_string(tmp.path().join(csv)).unwrap();
         text.lines()

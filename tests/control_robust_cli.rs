@@ -16,13 +16,6 @@ fn text(o: &Output) -> (String, String) {
     )
 }
 
-fn run_ok(dir: &Path, args: &[&str]) -> String {
-    let o = vmc(dir, args);
-    let (out, err) = text(&o);
-    assert!(o.status.success(), "{args:?}:\n{out}\n{err}");
-    out
-}
-
 fn refused(dir: &Path, args: &[&str]) -> String {
     let o = vmc(dir, args);
     let (out, err) = text(&o);
@@ -73,7 +66,7 @@ fn verdict(out: &str) -> &str {
 fn time_domain_cuts_confirm_the_lobes_of_the_robust_hinf_on_perturbed_blades() {
     let tmp = TempDir::new("robust-confirm");
     perturbed_plants(tmp.path());
-    let d = run_ok(
+    let d = succeed(
         tmp.path(),
         &[
             "control",
@@ -88,7 +81,7 @@ fn time_domain_cuts_confirm_the_lobes_of_the_robust_hinf_on_perturbed_blades() {
     );
     assert!(d.contains("gamma"), "{d}");
     for (plant, rpm) in [("f090.toml", "4300"), ("m120.toml", "3600")] {
-        let lobes = run_ok(
+        let lobes = succeed(
             tmp.path(),
             &[
                 "lobes",
@@ -104,7 +97,7 @@ fn time_domain_cuts_confirm_the_lobes_of_the_robust_hinf_on_perturbed_blades() {
         let a = closed_depth(&lobes);
         for (factor, expected) in [(0.95, "stable"), (1.05, "chatter")] {
             let depth = format!("{:.4}", factor * a);
-            let cut = run_ok(
+            let cut = succeed(
                 tmp.path(),
                 &[
                     "cut",
@@ -142,7 +135,7 @@ fn the_robustness_sweep_reports_each_perturbed_blade() {
             .filter(|l| l.starts_with("  ") && (l.contains(" yes ") || l.contains(" NO ")))
             .count()
     };
-    let h = run_ok(
+    let h = succeed(
         tmp.path(),
         &[
             "control",
@@ -158,7 +151,7 @@ fn the_robustness_sweep_reports_each_perturbed_blade() {
     );
     assert_eq!(rows(&h), 13, "{h}");
     assert!(h.contains("unstable without cutting: 11 of 13"), "{h}");
-    let l = run_ok(
+    let l = succeed(
         tmp.path(),
         &[
             "control",
@@ -184,7 +177,7 @@ fn the_robustness_sweep_reports_each_perturbed_blade() {
 fn an_edited_controller_file_and_an_unstable_judged_loop_are_refused() {
     let tmp = TempDir::new("robust-edited");
     perturbed_plants(tmp.path());
-    run_ok(
+    succeed(
         tmp.path(),
         &[
             "control",

@@ -1,29 +1,7 @@
 //! `vmc-twin cut` as a user runs it: the real binary in a temporary folder.
 
-use std::process::Output;
-
 mod common;
 use common::*;
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8(o.stdout.clone()).expect("stdout is UTF-8")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8(o.stderr.clone()).expect("stderr is UTF-8")
-}
-
-fn run_ok(dir: &std::path::Path, args: &[&str]) -> String {
-    let o = vmc(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {:?}\n{}\n{}",
-        o.status,
-        stdout(&o),
-        stderr(&o)
-    );
-    stdout(&o)
-}
 
 /// The number after `prefix` on the line that starts with it.
 fn number_after(out: &str, prefix: &str) -> f64 {
@@ -47,7 +25,7 @@ fn cut_agrees_with_the_sdm_depth_it_prints() {
     let tmp = TempDir::new("cut-sdm");
     for rpm in ["9000", "10000", "12000"] {
         let base = ["cut", "--rpm", rpm, "--immersion", "0.05"];
-        let probe = run_ok(tmp.path(), &[&base[..], &["--depth-mm", "1"]].concat());
+        let probe = succeed(tmp.path(), &[&base[..], &["--depth-mm", "1"]].concat());
         let prefix = format!("SDM critical depth at {rpm} rpm: ");
         let a = number_after(&probe, &prefix);
         let sdm_line = probe.lines().find(|l| l.starts_with(&prefix)).unwrap();
@@ -59,7 +37,7 @@ fn cut_agrees_with_the_sdm_depth_it_prints() {
             .unwrap_or_else(|| panic!("{sdm_line}"));
         for (factor, verdict) in [(0.95, "stable"), (1.05, "chatter")] {
             let depth = format!("{}", factor * a);
-            let out = run_ok(tmp.path(), &[&base[..], &["--depth-mm", &depth]].concat());
+            let out = succeed(tmp.path(), &[&base[..], &["--depth-mm", &depth]].concat());
             assert!(
                 out.contains(&format!("\nverdict: {verdict} (")),
                 "{rpm} rpm, {depth} mm:\n{out}"
@@ -92,7 +70,7 @@ fn cut_writes_its_time_series_and_overwrites_only_with_force() {
         "--out",
         "cut.csv",
     ];
-    let out = run_ok(tmp.path(), &args);
+    let out = succeed(tmp.path(), &args);
     assert!(
         out.contains("simulated 100 tooth periods (50.0 revolutions"),
         "{out}"
@@ -124,7 +102,7 @@ fn cut_writes_its_time_series_and_overwrites_only_with_force() {
         stderr(&again).trim(),
         "vmc-twin: error: cut.csv: already exists (pass --force to overwrite)"
     );
-    run_ok(tmp.path(), &[&args[..], &["--force"]].concat());
+    succeed(tmp.path(), &[&args[..], &["--force"]].concat());
 }
 
 #[test]

@@ -2,64 +2,21 @@
 //! its example program runs, an A/C program is refused, and the identified model (order chosen
 //! from the probing data) removes at least 90 % of the RMS error on the program, seeds 1–3.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
+use common::{repo_file, succeed, summary_json as summary, vmc, TempDir};
 
+/// A repository file as a command-line argument.
 fn repo(rel: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join(rel)
-        .display()
-        .to_string()
-}
-
-struct Tmp(PathBuf);
-
-impl Tmp {
-    fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("vmc-twin-bc-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Tmp(d)
-    }
-}
-
-impl Drop for Tmp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn run(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap()
-}
-
-fn succeed(dir: &Path, args: &[&str]) -> String {
-    let o = run(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn summary(dir: &Path, folder: &str) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join(folder).join("summary.json")).unwrap())
-        .unwrap()
+    repo_file(rel).display().to_string()
 }
 
 #[test]
 fn the_b_c_program_runs_on_the_b_c_machine_and_an_a_c_program_is_refused() {
-    let t = Tmp::new("run");
+    let t = TempDir::new("run");
     let m = repo("machines/trunnion-bc.toml");
     let out = succeed(
-        &t.0,
+        t.path(),
         &[
             "run",
             &repo("trajectories/trunnion_bc_5axis.ngc"),
@@ -72,7 +29,7 @@ fn the_b_c_program_runs_on_the_b_c_machine_and_an_a_c_program_is_refused() {
         ],
     );
     assert!(out.contains("b_deg    c_deg"), "{out}");
-    let csv = std::fs::read_to_string(t.0.join("o/samples.csv")).unwrap();
+    let csv = std::fs::read_to_string(t.path().join("o/samples.csv")).unwrap();
     assert!(
         csv.starts_with("time_s,line,x_mm,y_mm,z_mm,b_deg,c_deg,"),
         "{csv}"
@@ -82,13 +39,13 @@ fn the_b_c_program_runs_on_the_b_c_machine_and_an_a_c_program_is_refused() {
         .lines()
         .filter(|l| l.starts_with("G4"))
         .count();
-    let s = summary(&t.0, "o");
+    let s = summary(t.path(), "o");
     assert_eq!(s["points"].as_u64().unwrap() as usize, dwells);
     let rms = s["before"]["rms_um"][3].as_f64().unwrap();
     // The realisation's location errors: tens of µm.
     assert!(rms > 10.0 && rms < 200.0, "{rms}");
-    let o = run(
-        &t.0,
+    let o = vmc(
+        t.path(),
         &[
             "run",
             &repo("trajectories/trunnion_5axis.ngc"),
@@ -103,13 +60,13 @@ fn the_b_c_program_runs_on_the_b_c_machine_and_an_a_c_program_is_refused() {
 
 #[test]
 fn the_identified_model_removes_90_percent_of_the_rms_error_on_the_b_c_program() {
-    let t = Tmp::new("ident");
+    let t = TempDir::new("ident");
     let m = repo("machines/trunnion-bc.toml");
     let p = repo("trajectories/trunnion_bc_5axis.ngc");
     for seed in ["1", "2", "3"] {
         let (csv, json) = (format!("p{seed}.csv"), format!("id{seed}.json"));
         succeed(
-            &t.0,
+            t.path(),
             &[
                 "probe-campaign",
                 "--machine",
@@ -121,7 +78,7 @@ fn the_identified_model_removes_90_percent_of_the_rms_error_on_the_b_c_program()
             ],
         );
         let report = succeed(
-            &t.0,
+            t.path(),
             &[
                 "identify",
                 "--data",
@@ -136,13 +93,13 @@ fn the_identified_model_removes_90_percent_of_the_rms_error_on_the_b_c_program()
         );
         assert!(report.contains("model order from the data"), "{report}");
         let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(t.0.join(&json)).unwrap()).unwrap();
+            serde_json::from_str(&std::fs::read_to_string(t.path().join(&json)).unwrap()).unwrap();
         assert!(
             v["heldout_characterised_share"].as_f64().unwrap() >= 0.95,
             "seed {seed}: {report}"
         );
         succeed(
-            &t.0,
+            t.path(),
             &[
                 "run",
                 &p,
@@ -156,7 +113,7 @@ fn the_identified_model_removes_90_percent_of_the_rms_error_on_the_b_c_program()
                 seed,
             ],
         );
-        let reduction = summary(&t.0, seed)["reduction"].as_f64().unwrap();
+        let reduction = summary(t.path(), seed)["reduction"].as_f64().unwrap();
         assert!(reduction >= 0.9, "seed {seed}: {reduction}");
     }
 }

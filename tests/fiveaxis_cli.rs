@@ -1,60 +1,9 @@
 //! The five-axis commands on the real binary: a probing campaign and its identification, the
 //! D-optimal choice, determinism, and one clear line for each kind of bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_vmc-twin");
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
-
-struct Tmp(PathBuf);
-
-impl Tmp {
-    fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("vmc-twin-5ax-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Tmp(d)
-    }
-}
-
-impl Drop for Tmp {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn run(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap()
-}
-
-fn succeed(dir: &Path, args: &[&str]) -> String {
-    let o = run(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn one_line_error(dir: &Path, args: &[&str]) -> String {
-    let o = run(dir, args);
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
-    err.trim_end()
-        .strip_prefix("vmc-twin: error: ")
-        .unwrap()
-        .to_string()
-}
+use common::{one_line_error, repo_file as repo, succeed, summary_json as summary, TempDir};
 
 fn machine_text() -> String {
     std::fs::read_to_string(repo("machines/trunnion-ac.toml")).unwrap()
@@ -66,10 +15,10 @@ fn machine() -> String {
 
 #[test]
 fn a_campaign_is_identified_and_judged_on_held_out_poses() {
-    let t = Tmp::new("ok");
+    let t = TempDir::new("ok");
     let m = machine();
     let out = succeed(
-        &t.0,
+        t.path(),
         &[
             "probe-campaign",
             "--machine",
@@ -85,7 +34,7 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
     assert!(out.contains("40 configurations × 9 points"), "{out}");
     // The same seed gives the same file, bit for bit.
     succeed(
-        &t.0,
+        t.path(),
         &[
             "probe-campaign",
             "--machine",
@@ -98,8 +47,8 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
             "q.csv",
         ],
     );
-    let p = std::fs::read_to_string(t.0.join("p.csv")).unwrap();
-    assert_eq!(p, std::fs::read_to_string(t.0.join("q.csv")).unwrap());
+    let p = std::fs::read_to_string(t.path().join("p.csv")).unwrap();
+    assert_eq!(p, std::fs::read_to_string(t.path().join("q.csv")).unwrap());
     assert!(p.starts_with("# machine: trunnion-ac\n# seed: 2\n"));
     assert!(p.contains(
         "config,sphere,placement,target_x_mm,target_y_mm,target_z_mm,C_deg,A_deg,X_nominal_mm"
@@ -109,7 +58,7 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
         "{out}"
     );
     let report = succeed(
-        &t.0,
+        t.path(),
         &[
             "identify",
             "--data",
@@ -127,7 +76,7 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
         "{report}"
     );
     let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(t.0.join("id.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(t.path().join("id.json")).unwrap()).unwrap();
     let share = json["heldout_characterised_share"].as_f64().unwrap();
     let mean = json["heldout_mean_residual_um"].as_f64().unwrap();
     let max = json["heldout_max_residual_um"].as_f64().unwrap();
@@ -152,7 +101,7 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
     assert!(report.contains("E_ZP4"), "{report}");
     // The D-optimal choice of 20 of them.
     succeed(
-        &t.0,
+        t.path(),
         &[
             "identify",
             "--data",
@@ -168,20 +117,20 @@ fn a_campaign_is_identified_and_judged_on_held_out_poses() {
         ],
     );
     let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(t.0.join("d.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(t.path().join("d.json")).unwrap()).unwrap();
     assert_eq!(d["design_chosen_rows"].as_array().unwrap().len(), 20);
     assert_eq!(d["configurations_used"].as_u64(), Some(20));
 }
 
 #[test]
 fn an_unknown_axis_letter_in_the_chain_is_named() {
-    let t = Tmp::new("chain");
+    let t = TempDir::new("chain");
     std::fs::write(
-        t.0.join("m.toml"),
+        t.path().join("m.toml"),
         machine_text().replace("w C A Y X b Z t", "w C D Y X b Z t"),
     )
     .unwrap();
-    let e = one_line_error(&t.0, &["probe-campaign", "--machine", "m.toml"]);
+    let e = one_line_error(t.path(), &["probe-campaign", "--machine", "m.toml"]);
     assert!(
         e.starts_with("m.toml: field `machine.chain`: unknown axis letter 'D' at position 2"),
         "{e}"
@@ -190,13 +139,13 @@ fn an_unknown_axis_letter_in_the_chain_is_named() {
 
 #[test]
 fn a_rotary_axis_without_limits_is_refused() {
-    let t = Tmp::new("limits");
+    let t = TempDir::new("limits");
     std::fs::write(
-        t.0.join("m.toml"),
+        t.path().join("m.toml"),
         machine_text().replace("min_deg = -110.0\n", ""),
     )
     .unwrap();
-    let e = one_line_error(&t.0, &["probe-campaign", "--machine", "m.toml"]);
+    let e = one_line_error(t.path(), &["probe-campaign", "--machine", "m.toml"]);
     assert!(
         e.contains("rotary axis A has no travel limits: give min_deg and max_deg (degrees)"),
         "{e}"
@@ -205,10 +154,10 @@ fn a_rotary_axis_without_limits_is_refused() {
 
 #[test]
 fn a_probing_file_of_another_machine_is_refused() {
-    let t = Tmp::new("mismatch");
+    let t = TempDir::new("mismatch");
     let m = machine();
     succeed(
-        &t.0,
+        t.path(),
         &[
             "probe-campaign",
             "--machine",
@@ -221,7 +170,7 @@ fn a_probing_file_of_another_machine_is_refused() {
     );
     // Same name, the sphere elsewhere: the nominal centres do not match.
     std::fs::write(
-        t.0.join("m.toml"),
+        t.path().join("m.toml"),
         machine_text().replace(
             "centre_mm = [150.0, 0.0, -350.0]",
             "centre_mm = [160.0, 0.0, -350.0]",
@@ -229,7 +178,7 @@ fn a_probing_file_of_another_machine_is_refused() {
     )
     .unwrap();
     let e = one_line_error(
-        &t.0,
+        t.path(),
         &["identify", "--data", "p.csv", "--machine", "m.toml"],
     );
     assert!(e.starts_with("p.csv: line 6: the nominal centre"), "{e}");
@@ -238,20 +187,20 @@ fn a_probing_file_of_another_machine_is_refused() {
         "{e}"
     );
     // Another machine's name.
-    let other = std::fs::read_to_string(t.0.join("p.csv"))
+    let other = std::fs::read_to_string(t.path().join("p.csv"))
         .unwrap()
         .replace("# machine: trunnion-ac", "# machine: hermle");
-    std::fs::write(t.0.join("o.csv"), other).unwrap();
-    let e = one_line_error(&t.0, &["identify", "--data", "o.csv", "--machine", &m]);
+    std::fs::write(t.path().join("o.csv"), other).unwrap();
+    let e = one_line_error(t.path(), &["identify", "--data", "o.csv", "--machine", &m]);
     assert_eq!(e, "o.csv: probed on machine hermle, not trunnion-ac: its configurations do not match this machine");
 }
 
 #[test]
 fn too_few_configurations_for_the_parameters_are_refused() {
-    let t = Tmp::new("few");
+    let t = TempDir::new("few");
     let m = machine();
     succeed(
-        &t.0,
+        t.path(),
         &[
             "probe-campaign",
             "--machine",
@@ -264,10 +213,10 @@ fn too_few_configurations_for_the_parameters_are_refused() {
             "p.csv",
         ],
     );
-    let e = one_line_error(&t.0, &["identify", "--data", "p.csv", "--machine", &m]);
+    let e = one_line_error(t.path(), &["identify", "--data", "p.csv", "--machine", &m]);
     assert_eq!(e, "p.csv: too few configurations to choose the model order: 5 configurations in 5 folds leave too few readings to fit the 19 parameters of the smallest model (need at least 9 configurations, or a fixed order)");
     let e = one_line_error(
-        &t.0,
+        t.path(),
         &[
             "identify",
             "--data",
@@ -280,7 +229,7 @@ fn too_few_configurations_for_the_parameters_are_refused() {
     );
     assert_eq!(e, "p.csv: too few configurations: 5 configurations give 15 readings for 47 parameters (need at least 17 configurations)");
     let e = one_line_error(
-        &t.0,
+        t.path(),
         &[
             "identify",
             "--data",
@@ -302,13 +251,13 @@ fn too_few_configurations_for_the_parameters_are_refused() {
 /// 95 % (measured with the order chosen from the data: 95.2 / 97.6 / 95.6 %, 1.5–2.8 µm).
 #[test]
 fn fifty_configurations_characterise_about_95_percent_on_three_realisations() {
-    let t = Tmp::new("seeds");
+    let t = TempDir::new("seeds");
     let m = machine();
     for seed in ["1", "2", "3"] {
         let csv = format!("p{seed}.csv");
         let json = format!("i{seed}.json");
         succeed(
-            &t.0,
+            t.path(),
             &[
                 "probe-campaign",
                 "--machine",
@@ -320,11 +269,11 @@ fn fifty_configurations_characterise_about_95_percent_on_three_realisations() {
             ],
         );
         succeed(
-            &t.0,
+            t.path(),
             &["identify", "--data", &csv, "--machine", &m, "-o", &json],
         );
         let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(t.0.join(&json)).unwrap()).unwrap();
+            serde_json::from_str(&std::fs::read_to_string(t.path().join(&json)).unwrap()).unwrap();
         let share = v["heldout_characterised_share"].as_f64().unwrap();
         let mean = v["heldout_mean_residual_um"].as_f64().unwrap();
         assert!(share >= 0.95, "seed {seed}: {share}");
@@ -339,11 +288,6 @@ fn program() -> String {
         .to_string()
 }
 
-fn summary(dir: &Path, folder: &str) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join(folder).join("summary.json")).unwrap())
-        .unwrap()
-}
-
 /// |E| statistics of a summary section (`before` or `after`): (max, RMS), µm.
 fn norm_stats(s: &serde_json::Value, section: &str) -> (f64, f64) {
     (
@@ -354,10 +298,10 @@ fn norm_stats(s: &serde_json::Value, section: &str) -> (f64, f64) {
 
 #[test]
 fn a_program_with_a_and_c_words_runs_on_the_trunnion_machine() {
-    let t = Tmp::new("run");
+    let t = TempDir::new("run");
     let (m, p) = (machine(), program());
     let out = succeed(
-        &t.0,
+        t.path(),
         &["run", &p, "--machine", &m, "--seed", "1", "--out", "o"],
     );
     assert!(
@@ -365,7 +309,7 @@ fn a_program_with_a_and_c_words_runs_on_the_trunnion_machine() {
         "{out}"
     );
     assert!(out.contains("a_deg    c_deg"), "{out}");
-    let s = summary(&t.0, "o");
+    let s = summary(t.path(), "o");
     // One point per dwell of the program (counted in its text).
     let dwells = std::fs::read_to_string(repo("trajectories/trunnion_5axis.ngc"))
         .unwrap()
@@ -377,7 +321,7 @@ fn a_program_with_a_and_c_words_runs_on_the_trunnion_machine() {
     // The realisation's location errors: tens of µm (the held-out judge sees 60 µm mean).
     assert!(rms > 10.0 && rms <= max && max < 200.0, "{rms} {max}");
     assert!(s["after"].is_null());
-    let csv = std::fs::read_to_string(t.0.join("o/samples.csv")).unwrap();
+    let csv = std::fs::read_to_string(t.path().join("o/samples.csv")).unwrap();
     assert!(
         csv.starts_with("time_s,line,x_mm,y_mm,z_mm,a_deg,c_deg,tip_x_w_mm"),
         "{csv}"
@@ -385,24 +329,24 @@ fn a_program_with_a_and_c_words_runs_on_the_trunnion_machine() {
     assert_eq!(csv.lines().count(), dwells + 1);
     // Deterministic: the same seed gives the same file.
     succeed(
-        &t.0,
+        t.path(),
         &["run", &p, "--machine", &m, "--seed", "1", "--out", "o2"],
     );
     assert_eq!(
         csv,
-        std::fs::read_to_string(t.0.join("o2/samples.csv")).unwrap()
+        std::fs::read_to_string(t.path().join("o2/samples.csv")).unwrap()
     );
 }
 
 #[test]
 fn a_move_beyond_the_a_travel_is_refused_with_its_line() {
-    let t = Tmp::new("alimit");
+    let t = TempDir::new("alimit");
     std::fs::write(
-        t.0.join("p.ngc"),
+        t.path().join("p.ngc"),
         "G0 Z-100\nG0 A-30 C90\nG1 A-120 F3600\nG4 P1\nM2\n",
     )
     .unwrap();
-    let err = one_line_error(&t.0, &["run", "p.ngc", "--machine", &machine()]);
+    let err = one_line_error(t.path(), &["run", "p.ngc", "--machine", &machine()]);
     assert_eq!(
         err,
         "p.ngc: line 3: rotary axis A reaches -120°, outside its travel [-110, 30]°"
@@ -411,7 +355,7 @@ fn a_move_beyond_the_a_travel_is_refused_with_its_line() {
 
 #[test]
 fn with_every_error_off_the_tool_tip_error_is_zero() {
-    let t = Tmp::new("zero");
+    let t = TempDir::new("zero");
     // Every value, seeded σ, polynomial and harmonic of the machine's errors set to zero.
     let mut text = String::new();
     for line in machine_text().lines() {
@@ -423,9 +367,9 @@ fn with_every_error_off_the_tool_tip_error_is_zero() {
         });
         text.push('\n');
     }
-    std::fs::write(t.0.join("m.toml"), text).unwrap();
+    std::fs::write(t.path().join("m.toml"), text).unwrap();
     succeed(
-        &t.0,
+        t.path(),
         &[
             "run",
             &program(),
@@ -438,7 +382,7 @@ fn with_every_error_off_the_tool_tip_error_is_zero() {
             "o",
         ],
     );
-    let s = summary(&t.0, "o");
+    let s = summary(t.path(), "o");
     assert!(s["points"].as_u64().unwrap() > 1000);
     // 1e-6 µm: rounding of the exact transforms.
     assert!(norm_stats(&s, "before").0 < 1e-6, "{s}");
@@ -446,13 +390,13 @@ fn with_every_error_off_the_tool_tip_error_is_zero() {
 
 #[test]
 fn the_identified_model_removes_most_of_the_error_on_the_realisation_it_probed() {
-    let t = Tmp::new("ident");
+    let t = TempDir::new("ident");
     let (m, p) = (machine(), program());
     for seed in ["2", "3"] {
         let csv = format!("p{seed}.csv");
         let json = format!("id{seed}.json");
         succeed(
-            &t.0,
+            t.path(),
             &[
                 "probe-campaign",
                 "--machine",
@@ -464,7 +408,7 @@ fn the_identified_model_removes_most_of_the_error_on_the_realisation_it_probed()
             ],
         );
         succeed(
-            &t.0,
+            t.path(),
             &[
                 "identify",
                 "--data",
@@ -478,7 +422,7 @@ fn the_identified_model_removes_most_of_the_error_on_the_realisation_it_probed()
             ],
         );
         let out = succeed(
-            &t.0,
+            t.path(),
             &[
                 "run",
                 &p,
@@ -493,7 +437,7 @@ fn the_identified_model_removes_most_of_the_error_on_the_realisation_it_probed()
             ],
         );
         assert!(out.contains("compensation: identified model"), "{out}");
-        let s = summary(&t.0, seed);
+        let s = summary(t.path(), seed);
         let (before_max, before_rms) = norm_stats(&s, "before");
         let (after_max, after_rms) = norm_stats(&s, "after");
         let reduction = s["reduction"].as_f64().unwrap();
@@ -507,7 +451,7 @@ fn the_identified_model_removes_most_of_the_error_on_the_realisation_it_probed()
     }
     // Another realisation's model compensates the wrong machine: much less removed.
     succeed(
-        &t.0,
+        t.path(),
         &[
             "run",
             &p,
@@ -521,32 +465,32 @@ fn the_identified_model_removes_most_of_the_error_on_the_realisation_it_probed()
             "x",
         ],
     );
-    let cross = summary(&t.0, "x")["reduction"].as_f64().unwrap();
-    let own = summary(&t.0, "3")["reduction"].as_f64().unwrap();
+    let cross = summary(t.path(), "x")["reduction"].as_f64().unwrap();
+    let own = summary(t.path(), "3")["reduction"].as_f64().unwrap();
     assert!(cross < own - 0.2, "{cross} vs {own}");
 }
 
 #[test]
 fn options_of_the_other_kind_of_machine_are_refused() {
-    let t = Tmp::new("opts");
+    let t = TempDir::new("opts");
     let (m, p) = (machine(), program());
-    std::fs::write(t.0.join("id.json"), "{}").unwrap();
-    let err = one_line_error(&t.0, &["run", &p, "--identified", "id.json"]);
+    std::fs::write(t.path().join("id.json"), "{}").unwrap();
+    let err = one_line_error(t.path(), &["run", &p, "--identified", "id.json"]);
     assert!(
         err.contains("--identified takes the identified model of a five-axis machine"),
         "{err}"
     );
-    let err = one_line_error(&t.0, &["run", &p, "--machine", &m, "--warmup", &p]);
+    let err = one_line_error(t.path(), &["run", &p, "--machine", &m, "--warmup", &p]);
     assert_eq!(
         err,
         "--warmup does not apply to the five-axis machine trunnion-ac: it has no thermal model"
     );
     let err = one_line_error(
-        &t.0,
+        t.path(),
         &["run", &p, "--machine", &m, "--identified", "id.json"],
     );
     assert!(err.starts_with("id.json: not an identified model"), "{err}");
     // The three-axis machine still refuses rotary words.
-    let err = one_line_error(&t.0, &["run", &p]);
+    let err = one_line_error(t.path(), &["run", &p]);
     assert!(err.contains("has no rotary axes"), "{err}");
 }

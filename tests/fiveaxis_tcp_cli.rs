@@ -4,17 +4,10 @@
 
 mod common;
 
-use std::path::Path;
-
-use common::{ok, refused, repo_file, vmc, TempDir};
+use common::{ok, refused, repo_file, summary_json as summary, vmc, TempDir};
 
 fn path(rel: &str) -> String {
     repo_file(rel).display().to_string()
-}
-
-fn summary(dir: &Path, folder: &str) -> serde_json::Value {
-    let text = std::fs::read_to_string(dir.join(folder).join("summary.json")).unwrap();
-    serde_json::from_str(&text).unwrap()
 }
 
 fn f(v: &serde_json::Value) -> f64 {

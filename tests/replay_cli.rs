@@ -5,7 +5,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{ok, refused, repo_file, vmc, TempDir};
+use common::{ok, refused, repo_file, summary_json as summary, vmc, TempDir};
 use vmc_machine::machine::MachineSpec;
 use vmc_machine::motion::Plan;
 
@@ -63,11 +63,6 @@ fn hal_log(samples: &[(usize, [f64; 3], f64)]) -> String {
         .iter()
         .map(|(k, p, rpm)| format!("{k} {:.6} {:.6} {:.6} {rpm}\n", p[0], p[1], p[2]))
         .collect()
-}
-
-fn summary(dir: &Path, out: &str) -> serde_json::Value {
-    let text = std::fs::read_to_string(dir.join(out).join("summary.json")).unwrap();
-    serde_json::from_str(&text).unwrap()
 }
 
 /// `stats[field][i]` of a summary, µm.

@@ -47,6 +47,50 @@ pub fn refused(out: &Output, what: &str) -> String {
     err
 }
 
+/// A command's standard output (UTF-8).
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8(o.stdout.clone()).expect("stdout is UTF-8")
+}
+
+/// A command's standard error (UTF-8).
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8(o.stderr.clone()).expect("stderr is UTF-8")
+}
+
+/// Runs `vmc-twin <args>` in `dir`, asserting success (else showing the status and both
+/// streams); returns the standard output.
+pub fn succeed(dir: &Path, args: &[&str]) -> String {
+    let o = vmc(dir, args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {:?}\n{}\n{}",
+        o.status,
+        stdout(&o),
+        stderr(&o)
+    );
+    stdout(&o)
+}
+
+/// Runs `vmc-twin <args>` in `dir`, asserting a clean refusal: exit status 1 (not a panic's
+/// 101) and one line on stderr; returns that line without its `vmc-twin: error: ` prefix.
+pub fn one_line_error(dir: &Path, args: &[&str]) -> String {
+    let out = vmc(dir, args);
+    let what = format!("{args:?}");
+    let err = refused(&out, &what);
+    assert_eq!(out.status.code(), Some(1), "{what}: {err}");
+    err.trim_end()
+        .strip_prefix("vmc-twin: error: ")
+        .unwrap_or_else(|| panic!("{what}: prefix: {err}"))
+        .to_string()
+}
+
+/// The `summary.json` that a run or replay wrote into `dir/folder`.
+pub fn summary_json(dir: &Path, folder: &str) -> serde_json::Value {
+    let path = dir.join(folder).join("summary.json");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// Runs `vmc-twin args` in `dir` and returns its peak resident set size, kB: the child's
 /// maximum resident set size as the kernel counts it (`getrusage(RUSAGE_CHILDREN)`, read
 /// through `python3`). Fails the test if the command fails.
