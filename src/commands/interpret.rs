@@ -112,6 +112,16 @@ impl Calls<'_> {
         self.numbers(name, &[p[0], p[1], p[2], a[0], a[1], a[2]])
     }
 
+    /// `SET_FEED_RATE(f)` when `f` (mm/min) differs from the rate in force, `feed`, which it
+    /// becomes: LinuxCNC writes the call only on a change.
+    fn feed_rate(&mut self, feed: &mut Option<f64>, feed_mm_per_min: f64) -> std::io::Result<()> {
+        if *feed != Some(feed_mm_per_min) {
+            *feed = Some(feed_mm_per_min);
+            self.numbers("SET_FEED_RATE", &[feed_mm_per_min])?;
+        }
+        Ok(())
+    }
+
     /// Writes what is left.
     fn finish(self) -> std::io::Result<()> {
         self.out.write_all(&self.buf)?;
@@ -146,10 +156,7 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                 end_abc_deg,
                 feed_mm_per_min,
             } => {
-                if feed != Some(*feed_mm_per_min) {
-                    feed = Some(*feed_mm_per_min);
-                    c.numbers("SET_FEED_RATE", &[*feed_mm_per_min])?;
-                }
+                c.feed_rate(&mut feed, *feed_mm_per_min)?;
                 c.point("STRAIGHT_FEED", end_mm, end_abc_deg)?;
             }
             CanonKind::Probe {
@@ -158,10 +165,7 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                 feed_mm_per_min,
                 ..
             } => {
-                if feed != Some(*feed_mm_per_min) {
-                    feed = Some(*feed_mm_per_min);
-                    c.numbers("SET_FEED_RATE", &[*feed_mm_per_min])?;
-                }
+                c.feed_rate(&mut feed, *feed_mm_per_min)?;
                 c.text("TURN_PROBE_ON()")?;
                 c.text(&interp::straight_probe_call(*end_mm, *end_abc_deg))?;
                 c.text("TURN_PROBE_OFF()")?;
@@ -175,10 +179,7 @@ pub fn write_calls(moves: &[CanonMove], out: &mut dyn Write) -> std::io::Result<
                 extra_turns,
                 feed_mm_per_min,
             } => {
-                if feed != Some(*feed_mm_per_min) {
-                    feed = Some(*feed_mm_per_min);
-                    c.numbers("SET_FEED_RATE", &[*feed_mm_per_min])?;
-                }
+                c.feed_rate(&mut feed, *feed_mm_per_min)?;
                 if *p != plane {
                     plane = *p;
                     let name = match p {
