@@ -183,11 +183,7 @@ fn fit_report(model: &ThermalModel, table: &thermal_fit::Table, source: &str) ->
     let ratio = |e: Option<f64>, raw: f64| e.filter(|_| raw > 0.0).map(|e| e / raw);
     let mut head = format!("  {:<5} {:>17} {:>5} ", "fold", "held out (s)", "rows");
     for c in &model.outputs {
-        let stem = c
-            .name
-            .strip_suffix(&format!("_{}", c.unit))
-            .filter(|_| !c.unit.is_empty())
-            .unwrap_or(&c.name);
+        let stem = stem(c);
         let _ = write!(head, " {:>16}", format!("{stem} model|LS"));
     }
     let _ = writeln!(s, "{head}");
@@ -358,11 +354,7 @@ pub fn predict_thermal(cfg: &PredictThermalConfig, out: &mut dyn Write) -> Resul
         .collect();
     let mut csv = String::from("time_s");
     for c in &model.outputs {
-        let stem = c
-            .name
-            .strip_suffix(&format!("_{}", c.unit))
-            .filter(|_| !c.unit.is_empty())
-            .unwrap_or(&c.name);
+        let stem = stem(c);
         let _ = write!(csv, ",{stem}_pred_{}", c.unit);
     }
     for (name, _) in &measured {
@@ -470,4 +462,13 @@ fn history_check(
         anyhow::bail!("{what} (--strict): {how}");
     }
     Ok(Some(format!("warning: {what}; {how}")))
+}
+
+/// A channel's column name without its unit suffix (`ch1_um` → `ch1`; the whole name when it
+/// has no unit).
+fn stem(c: &thermal_fit::Channel) -> &str {
+    c.name
+        .strip_suffix(&format!("_{}", c.unit))
+        .filter(|_| !c.unit.is_empty())
+        .unwrap_or(&c.name)
 }
