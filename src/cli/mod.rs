@@ -276,6 +276,11 @@ pub struct RunArgs {
     pub rotary_comp: Option<fiveaxis::RotaryComp>,
     #[command(flatten)]
     pub rrd: RrdArgs,
+    /// With --compensate: `on` (default) updates the model's drift from the program's probe
+    /// moves touching a `reference = true` artefact of the setup, `off` only reports them.
+    #[arg(long, value_name = "on|off", default_value = "on", action = clap::ArgAction::Set,
+          value_parser = clap::builder::BoolishValueParser::new())]
+    pub probe_update: bool,
 }
 
 impl RunArgs {
@@ -341,6 +346,7 @@ impl RunArgs {
             strict: self.strict,
             allow_other_machine: self.allow_other_machine,
             tools: load_tool_table(self.tools.as_deref())?,
+            probe_update: self.probe_update,
         })
     }
 }
