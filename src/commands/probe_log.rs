@@ -244,16 +244,16 @@ fn csv_row(i: usize, r: &ProbeRow) -> String {
         s,
         "{},{},{},{},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},\"{}\",{:.3},{}",
         i,
-                r.line,
-                r.kind,
-                u8::from(r.tripped),
-                r.work[0],
-                r.work[1],
-                r.work[2],
-                r.unit.symbol(),
-                r.machine_mm[0],
-                r.machine_mm[1],
-                r.machine_mm[2],
+        r.line,
+        r.kind,
+        u8::from(r.tripped),
+        r.work[0],
+        r.work[1],
+        r.work[2],
+        r.unit.symbol(),
+        r.machine_mm[0],
+        r.machine_mm[1],
+        r.machine_mm[2],
         r.touched.replace('"', "\"\""),
         r.time_s,
         r.reference
@@ -328,7 +328,11 @@ impl ProbeLog {
             let _ = writeln!(
                 s,
                 "drift updates from reference touches: {}{}",
-                if self.updates { "on" } else { "off (--probe-update off, or no --compensate)" },
+                if self.updates {
+                    "on"
+                } else {
+                    "off (--probe-update off, or no --compensate)"
+                },
                 last_drift
                     .filter(|_| self.updates)
                     .map_or(String::new(), |d| format!(

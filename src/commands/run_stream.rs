@@ -139,11 +139,7 @@ pub(super) fn run_measured(
 ) -> Result<()> {
     let name = cfg.program.display().to_string();
     let mut station = station(cfg)?;
-    let updates = DriftUpdates::new(
-        &cfg.placement.artefacts,
-        *station.probe(),
-        cfg.probe_update,
-    );
+    let updates = DriftUpdates::new(&cfg.placement.artefacts, *station.probe(), cfg.probe_update);
     probes.set_updates(cfg.probe_update && controller.is_some() && updates.any_reference());
     let mut stream = stream(cfg, scan.start_mm)?;
     anyhow::ensure!(
@@ -219,7 +215,9 @@ fn other_path(name: &str, last_probe_line: Option<usize>) -> anyhow::Error {
         "{name}: the program took another path on the twin than in its first pass on the \
          nominal machine{} (it branches on probed values, which differ by the machine's µm); \
          such a program cannot be run: its sampling and size are decided by the first pass",
-        last_probe_line.map_or(String::new(), |l| format!(" after the probe move at line {l}"))
+        last_probe_line.map_or(String::new(), |l| format!(
+            " after the probe move at line {l}"
+        ))
     )
 }
 
