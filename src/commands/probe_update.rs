@@ -95,7 +95,7 @@ pub fn drift_of_touch<P: ErrorPredictor>(
 fn along_axis(request: &ProbeRequest) -> Option<(usize, f64)> {
     let d = [0, 1, 2].map(|a| request.end_mm[a] - request.start_mm[a]);
     let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return None;
     }
     (0..3)
@@ -235,6 +235,8 @@ mod tests {
             [0.0; 3]
         }
         fn observe_readings(&mut self, _time_s: f64, _temps_degc: &[f64]) {}
+        fn observe_spindle_speed(&mut self, _time_s: f64, _rpm: f64) {}
+        fn observe_axis_feeds(&mut self, _time_s: f64, _feeds: [f64; 3]) {}
     }
 
     #[test]
