@@ -24,6 +24,24 @@ fn example_folder(name: &str) -> TempDir {
     dir
 }
 
+/// The example's folder with a model trained on the twin's calibration campaign (seed 1),
+/// `train` run with `train_args` (the model file among them).
+fn trained_folder(name: &str, train_args: &[&str]) -> TempDir {
+    let dir = example_folder(name);
+    let d = dir.path();
+    ok(
+        &vmc(
+            d,
+            &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
+        ),
+        "calibrate",
+    );
+    let mut args = vec!["train", "--data", "cal.csv"];
+    args.extend_from_slice(train_args);
+    ok(&vmc(d, &args), "train");
+    dir
+}
+
 fn summary(dir: &std::path::Path, run: &str) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join(run).join("summary.json")).unwrap();
     serde_json::from_str(&text).unwrap()
@@ -35,19 +53,8 @@ fn f(v: &serde_json::Value) -> f64 {
 
 #[test]
 fn probing_a_reference_on_the_warm_machine_lowers_the_diagonals_residual() {
-    let dir = example_folder("probe-drift");
+    let dir = trained_folder("probe-drift", &["-o", "hyb.json"]);
     let d = dir.path();
-    ok(
-        &vmc(
-            d,
-            &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
-        ),
-        "calibrate",
-    );
-    ok(
-        &vmc(d, &["train", "--data", "cal.csv", "-o", "hyb.json"]),
-        "train",
-    );
     let run = |update: &str| {
         let args = [
             "run",
@@ -95,24 +102,11 @@ fn probing_a_reference_on_the_warm_machine_lowers_the_diagonals_residual() {
 
 #[test]
 fn a_reference_touch_is_measured_from_the_latched_position_and_the_setup_alone() {
-    let dir = example_folder("probe-drift-boundary");
+    let dir = trained_folder(
+        "probe-drift-boundary",
+        &["--kind", "linear", "-o", "lin.json"],
+    );
     let d = dir.path();
-    ok(
-        &vmc(
-            d,
-            &["calibrate", "--measure-every-min", "120", "-o", "cal.csv"],
-        ),
-        "calibrate",
-    );
-    ok(
-        &vmc(
-            d,
-            &[
-                "train", "--data", "cal.csv", "--kind", "linear", "-o", "lin.json",
-            ],
-        ),
-        "train",
-    );
     let args = [
         "run",
         "probe_drift_diag.ngc",
