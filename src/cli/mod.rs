@@ -256,6 +256,11 @@ pub struct RunArgs {
     pub rotary_comp: Option<fiveaxis::RotaryComp>,
     #[command(flatten)]
     pub rrd: RrdArgs,
+    /// With --compensate: `on` (default) updates the model's drift from the program's probe
+    /// moves touching a `reference = true` artefact of the setup, `off` only reports them.
+    #[arg(long, value_name = "on|off", default_value = "on", action = clap::ArgAction::Set,
+          value_parser = clap::builder::BoolishValueParser::new())]
+    pub probe_update: bool,
 }
 
 impl RunArgs {
@@ -321,6 +326,7 @@ impl RunArgs {
             rrd,
             strict: self.run.strict,
             allow_other_machine: self.run.allow_other_machine,
+            probe_update: self.probe_update,
         })
     }
 }

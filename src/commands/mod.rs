@@ -21,6 +21,7 @@ pub mod modal_fit;
 pub(crate) mod model;
 pub mod probe_campaign;
 mod probe_log;
+mod probe_update;
 pub mod program_placement;
 pub mod replay;
 pub mod run;

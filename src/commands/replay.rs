@@ -159,6 +159,7 @@ pub fn replay(cfg: &ReplayConfig, out: &mut dyn Write) -> Result<()> {
             recording: recording.zip(cfg.rrd.as_ref()),
             compensated,
             force: cfg.force,
+            probing: None,
         },
         out,
     )

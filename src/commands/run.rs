@@ -10,8 +10,8 @@ use super::run_stream::{self, ProgramScan, Rows};
 use super::{wrote_recording, RrdOutput};
 use crate::files;
 use crate::predict::controller::Compensator;
+use crate::predict::drift::WithDrift;
 use crate::predict::guard::Guarded;
-use crate::predict::predictor::AnyPredictor;
 use crate::predict::provenance::InputRanges;
 use crate::progress::Progress;
 use crate::record;
@@ -55,6 +55,9 @@ pub struct RunConfig {
     /// Measurement period during motion of a program without G4 dwells (without
     /// `--every-cycle`), s.
     pub motion_sample_s: f64,
+    /// With a model: update its drift from the program's touches of reference artefacts
+    /// (`--probe-update`, see [`super::probe_update`]).
+    pub probe_update: bool,
 }
 
 /// Default measurement period during motion of a program without G4 dwells, s: one point per
@@ -124,7 +127,8 @@ pub fn run_target(target: &RunTarget, out: &mut dyn Write) -> Result<()> {
 
 /// The compensating controller of a run: the model, its inputs checked against its trained
 /// ranges.
-pub(super) type RunController = Guarded<Compensator<AnyPredictor>>;
+/// Its drift is zero until a probe move of the program touches a reference artefact.
+pub(super) type RunController = super::probe_update::DriftCompensator;
 
 /// Runs the program and prints the report to `out`.
 ///
@@ -151,10 +155,15 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
         }
         None => (None, false),
     };
+    if let Some(c) = controller.as_mut() {
+        let probe = vmc_machine::touch_probe::TouchProbe::of_placement(&cfg.placement, machine);
+        *c.inner_mut().predictor_mut().filter_mut() =
+            super::probe_update::run_drift_field(&cfg.placement.artefacts, &probe)?;
+    }
     let compensated = controller.is_some();
     let mut rows = Rows::new(out_files, cfg.force)?;
     let mut log = rows.log(compensated);
-    let (recorder, probes) = simulate(
+    let (recorder, mut probes) = simulate(
         cfg,
         &sampling,
         &warmups,
@@ -193,25 +202,24 @@ pub fn run(cfg: &RunConfig, out: &mut dyn Write) -> Result<()> {
             recording: recorder.zip(cfg.rrd.as_ref()),
             compensated,
             force: cfg.force,
+            probing: probes.summary(scan.duration_s),
         },
         out,
     )?;
-    write_probes(cfg, &probes, out)
+    write_probes(&mut probes, scan.duration_s, out)
 }
 
-/// The probe moves' table and, with `--out`, `probes.csv`.
+/// The probe moves' table and the probing cost; `probes.csv` named (with `--out`).
 fn write_probes(
-    cfg: &RunConfig,
-    probes: &super::probe_log::ProbeLog,
+    probes: &mut super::probe_log::ProbeLog,
+    program_s: f64,
     out: &mut dyn Write,
 ) -> Result<()> {
     if probes.rows.is_empty() {
         return Ok(());
     }
-    out.write_all(probes.report().as_bytes())?;
-    if let Some(dir) = &cfg.out_dir {
-        let path = dir.join("probes.csv");
-        files::write_atomic(&path, probes.csv().as_bytes(), cfg.force)?;
+    out.write_all(probes.report(program_s).as_bytes())?;
+    if let Some(path) = probes.finish_csv()? {
         writeln!(out, "wrote {}", path.display())?;
     }
     Ok(())
@@ -231,6 +239,17 @@ pub(super) struct Delivery<'a> {
     pub compensated: bool,
     /// Overwrite existing files.
     pub force: bool,
+    /// The probe results and the probing cost (`summary.json`'s `probing`), if any.
+    pub probing: Option<super::probe_log::ProbingSummary<'a>>,
+}
+
+/// `summary.json`: the run's summary, and its probing when the program probes.
+#[derive(serde::Serialize)]
+struct SummaryJson<'a> {
+    #[serde(flatten)]
+    summary: &'a RunSummary,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    probing: Option<&'a super::probe_log::ProbingSummary<'a>>,
 }
 
 /// The extrapolation verdict of `controller` (if any) in `summary`.
@@ -301,7 +320,10 @@ pub(super) fn deliver(d: Delivery<'_>, out: &mut dyn Write) -> Result<()> {
     }
     if let (Some((csv_path, json)), Some(csv)) = (out_files, csv) {
         csv.finish()?;
-        let text = serde_json::to_string_pretty(d.summary)?;
+        let text = serde_json::to_string_pretty(&SummaryJson {
+            summary: d.summary,
+            probing: d.probing.as_ref(),
+        })?;
         files::write_atomic(&json, text.as_bytes(), d.force)?;
         writeln!(out, "wrote {} and {}", csv_path.display(), json.display())?;
     }
@@ -401,6 +423,7 @@ fn measured(cfg: &RunConfig) -> run_stream::Measured<'_> {
         tools: &cfg.tools,
         placement: &cfg.placement,
         seed: cfg.seed,
+        probe_update: cfg.probe_update,
     }
 }
 
@@ -418,7 +441,13 @@ pub(super) fn compensator(
     let (model, trained_on) =
         super::model::load_for_machine(machine, seed, path, allow_other_machine, out)?;
     let names: Vec<String> = machine.sensors.iter().map(|s| s.name.clone()).collect();
-    let ctrl = Compensator::for_machine(model, &names)
+    let field = super::probe_update::run_drift_field(
+        &[],
+        &vmc_machine::touch_probe::TouchProbe::typical(vmc_machine::tools::master_length_mm(
+            machine,
+        )),
+    )?;
+    let ctrl = Compensator::for_machine(WithDrift::new(model, field), &names)
         .with_context(|| super::model::does_not_fit(path, machine))?;
     let none = InputRanges {
         sensors: Vec::new(),
@@ -467,7 +496,10 @@ fn simulate(
         None => None,
     };
     let mut null = sim::NullObserver;
-    let probes;
+    let mut probes = super::probe_log::ProbeLog::new(
+        cfg.out_dir.as_ref().map(|d| d.join("probes.csv")),
+        cfg.force,
+    );
     {
         let rec: &mut dyn Observer = match recording.as_mut() {
             Some((r, _)) => r,
@@ -495,9 +527,15 @@ fn simulate(
         };
         let mut watch = sim::Tee(rec, &mut progress);
         let mut obs = sim::Tee(log, &mut watch);
-        let ctrl = controller.map(|c| c as &mut dyn sim::Controller);
-        probes =
-            run_stream::run_measured(&measured(cfg), scan, &mut twin, &sim_cfg, ctrl, &mut obs)?;
+        run_stream::run_measured(
+            &measured(cfg),
+            scan,
+            &mut twin,
+            &sim_cfg,
+            controller,
+            &mut obs,
+            &mut probes,
+        )?;
     }
     progress.finish();
     Ok((recording, probes))

@@ -21,6 +21,8 @@ use vmc_machine::sensors::SensorReadings;
 use vmc_machine::sim::{self, Observer, PointRecord, RunStart, SimConfig, SimEvent};
 use vmc_machine::twin::Twin;
 
+use super::probe_update::{DriftCompensator, DriftUpdates};
+
 /// The measured program and what it runs on.
 pub(super) struct Measured<'a> {
     /// The program file.
@@ -33,6 +35,8 @@ pub(super) struct Measured<'a> {
     pub placement: &'a vmc_machine::setup::Placement,
     /// Seed of the probe's trip scatter.
     pub seed: u64,
+    /// Update the compensator's drift from touches of reference artefacts.
+    pub probe_update: bool,
 }
 
 /// The probe station of the program's G38 moves (the setup's probe and what it can touch).
@@ -57,6 +61,20 @@ pub(super) struct ProgramScan {
     pub dwell_points_mm: Vec<[f64; 3]>,
     /// The text's hash, to notice a file changed between the scan and the run.
     fingerprint: u64,
+    /// Per piece, the hash of the lines and kinds of its moves: the run must take the path the
+    /// scan took (a program branching on probed values may not).
+    path: Vec<u64>,
+}
+
+/// The hash of the lines and kinds of `piece`'s moves (not their positions, which differ by
+/// the probes' µm between the scan and the run).
+fn path_hash(piece: &vmc_machine::motion::Plan) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for s in piece.segments() {
+        (s.line, std::mem::discriminant(&s.kind), s.probe).hash(&mut h);
+    }
+    h.finish()
 }
 
 /// The program's pieces, each planned and checked and then dropped; `dwell_points` keeps the
@@ -75,6 +93,7 @@ pub(super) fn scan(
         has_dwell: false,
         dwell_points_mm: Vec::new(),
         fingerprint: stream.fingerprint(),
+        path: Vec::new(),
     };
     while let Some(piece) = stream.next() {
         let piece = piece?;
@@ -82,6 +101,7 @@ pub(super) fn scan(
             stream.answer_probe(station.nominal(&request).outcome)?;
         }
         scan.duration_s += piece.duration_s();
+        scan.path.push(path_hash(&piece));
         for s in piece.segments() {
             if matches!(s.kind, SegmentKind::Dwell) {
                 scan.has_dwell = true;
@@ -113,12 +133,14 @@ pub(super) fn run_measured(
     scan: &ProgramScan,
     twin: &mut Twin,
     sim_cfg: &SimConfig,
-    mut controller: Option<&mut dyn sim::Controller>,
+    mut controller: Option<&mut DriftCompensator>,
     obs: &mut dyn Observer,
-) -> Result<super::probe_log::ProbeLog> {
+    probes: &mut super::probe_log::ProbeLog,
+) -> Result<()> {
     let name = cfg.program.display().to_string();
     let mut station = station(cfg)?;
-    let mut probes = super::probe_log::ProbeLog::default();
+    let updates = DriftUpdates::new(&cfg.placement.artefacts, *station.probe(), cfg.probe_update);
+    probes.set_updates(cfg.probe_update && controller.is_some() && updates.any_reference());
     let mut stream = stream(cfg, scan.start_mm)?;
     anyhow::ensure!(
         stream.fingerprint() == scan.fingerprint,
@@ -135,14 +157,39 @@ pub(super) fn run_measured(
         offset: 0,
         seen: 0,
     };
+    let mut last_probe_line = None;
+    let mut pieces = 0usize;
     while let Some(piece) = stream.next() {
         let piece = piece?;
-        let ctrl = sim::reborrow(&mut controller);
+        if scan.path.get(pieces) != Some(&path_hash(&piece)) {
+            return Err(other_path(&name, last_probe_line));
+        }
+        pieces += 1;
+        probes.add_probe_time_s(
+            piece
+                .segments()
+                .iter()
+                .filter(|s| s.probe)
+                .map(|s| s.duration_s)
+                .sum(),
+        );
+        let ctrl = controller
+            .as_deref_mut()
+            .map(|c| c as &mut dyn sim::Controller);
         sim::execute(twin, &piece, sim_cfg, ctrl, &mut numbered).with_context(|| name.clone())?;
         numbered.offset = numbered.seen;
         // A probe move: the twin moves the probe through its drifted geometry now.
         if let Some(request) = stream.pending_probe() {
             let answer = station.on_twin(twin, &request)?;
+            // The controller evaluates a reference touch when it latches, before the moves
+            // after it are planned and compensated.
+            let reference = updates.on_probe(
+                controller.as_deref_mut(),
+                &station,
+                &request,
+                &answer,
+                twin.time_s(),
+            );
             let (params, unit) = stream.answer_probe(answer.outcome)?;
             let row = super::probe_log::ProbeRow::new(
                 &request,
@@ -152,10 +199,26 @@ pub(super) fn run_measured(
                 &station,
                 twin.time_s(),
             );
-            probes.rows.push(row);
+            probes.push(row, reference)?;
+            last_probe_line = Some(request.line);
         }
     }
-    Ok(probes)
+    if pieces != scan.path.len() {
+        return Err(other_path(&name, last_probe_line));
+    }
+    Ok(())
+}
+
+/// The error of a run that left the path its first pass took.
+fn other_path(name: &str, last_probe_line: Option<usize>) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{name}: the program took another path on the twin than in its first pass on the \
+         nominal machine{} (it branches on probed values, which differ by the machine's µm); \
+         such a program cannot be run: its sampling and size are decided by the first pass",
+        last_probe_line.map_or(String::new(), |l| format!(
+            " after the probe move at line {l}"
+        ))
+    )
 }
 
 /// Numbers the points of successive pieces on from the previous pieces' (each piece's

@@ -29,7 +29,8 @@ use vmc_machine::touch_probe::{Artefact, ProbeOnTwin, Touch, TouchProbe};
 use vmc_machine::twin::{sub_seed, Twin, TwinError};
 use vmc_predict::controller::Compensator;
 use vmc_predict::drift::{
-    artefact_position_mm, ArtefactFix, DriftField, FieldSettings, LatchedTouch, WithDrift,
+    artefact_position_mm, ArtefactFix, DriftField, DriftSettingError, FieldSettings, LatchedTouch,
+    WithDrift,
 };
 use vmc_predict::predictor::ErrorPredictor;
 
@@ -116,17 +117,7 @@ impl Probing {
             repeats: 2,
             top_repeats: 9,
             top_passes: 1,
-            field: FieldSettings {
-                walk_offset_um_per_sqrt_h: 1.0,
-                walk_gradient_um_per_m_sqrt_h: 2.0,
-                measurement_sigma_um: 1.0,
-                initial_offset_um: 0.7,
-                initial_gradient_um_per_m: 2.0,
-                // No rate: touching the tops twice per cycle to see it did not pay on the
-                // development machines (the decision record).
-                rate_sigma_um_per_min: 1e-9,
-                rate_tau_s: RATE_TAU_S,
-            },
+            field: default_field_settings(),
             gradient: false,
         };
         p.field.measurement_sigma_um = p.measurement_sigma_um();
@@ -201,7 +192,7 @@ impl Probing {
     /// repeatability and latency, the machine's approach scatter) over the touches along it in
     /// one group; None for an axis not touched.
     pub fn axis_sigma_um(&self, axis: usize) -> Option<f64> {
-        let per_touch = (self.probe.sigma_mm() * 1e3).hypot(APPROACH_SIGMA_UM);
+        let per_touch = touch_sigma_um(&self.probe);
         let n = self.touches.iter().filter(|t| t.0 == axis).count() * self.repeats_of(axis);
         (n > 0).then(|| per_touch / (n as f64).sqrt())
     }
@@ -222,19 +213,13 @@ impl Probing {
 
     /// A fresh drift field with these assumptions. With `gradient` false the gradients' prior
     /// and walk are so small that they stay at 0.
-    fn filter(&self) -> Result<DriftField, vmc_predict::drift::DriftSettingError> {
-        let mut s = self.field;
-        if !self.gradient {
-            s.initial_gradient_um_per_m = 1e-9;
-            s.walk_gradient_um_per_m_sqrt_h = 1e-9;
-        }
-        let mut f = DriftField::new(self.centroid_mm(), &s)?;
-        for a in 0..3 {
-            if let Some(sigma) = self.axis_sigma_um(a) {
-                f.set_measurement_sigma_um(a, sigma)?;
-            }
-        }
-        Ok(f)
+    fn filter(&self) -> Result<DriftField, DriftSettingError> {
+        drift_field(
+            &self.field,
+            self.centroid_mm(),
+            self.gradient,
+            [0, 1, 2].map(|a| self.axis_sigma_um(a)),
+        )
     }
 
     fn artefact(&self, centre_mm: [f64; 3]) -> Artefact {
@@ -257,6 +242,56 @@ impl Probing {
             max_travel_mm: 2.0 * CLEARANCE_MM,
         }
     }
+}
+
+/// The drift filter's assumptions of the default probing: an offset per axis walking by
+/// 1 µm/√h from 0 with σ 0.7 µm (the model is trusted where it is good), no rate (touching the
+/// tops twice per cycle to see it did not pay on the development machines, the decision
+/// record); the gradient's settings apply only when one is estimated. The measurement σ is a
+/// placeholder: it follows from the probe and the touches ([`touch_sigma_um`]).
+pub fn default_field_settings() -> FieldSettings {
+    FieldSettings {
+        walk_offset_um_per_sqrt_h: 1.0,
+        walk_gradient_um_per_m_sqrt_h: 2.0,
+        measurement_sigma_um: 1.0,
+        initial_offset_um: 0.7,
+        initial_gradient_um_per_m: 2.0,
+        rate_sigma_um_per_min: 1e-9,
+        rate_tau_s: RATE_TAU_S,
+    }
+}
+
+/// σ of one touch's latched position along its axis, µm: the probe's repeatability and
+/// latency spread, and the machine's non-repeatability of one approach.
+pub fn touch_sigma_um(probe: &TouchProbe) -> f64 {
+    (probe.sigma_mm() * 1e3).hypot(APPROACH_SIGMA_UM)
+}
+
+/// The drift estimator of on-machine probing, as the campaign's cycles and a run's own probe
+/// moves use it: a [`DriftField`] with `settings` about `centre_mm`, its gradient held at 0
+/// unless `gradient` (prior and walk so small that it stays there), axis `a` measured with σ
+/// `axis_sigma_um[a]` µm where given.
+///
+/// # Errors
+/// A setting or σ that is not a finite number > 0.
+pub fn drift_field(
+    settings: &FieldSettings,
+    centre_mm: [f64; 3],
+    gradient: bool,
+    axis_sigma_um: [Option<f64>; 3],
+) -> Result<DriftField, DriftSettingError> {
+    let mut s = *settings;
+    if !gradient {
+        s.initial_gradient_um_per_m = 1e-9;
+        s.walk_gradient_um_per_m_sqrt_h = 1e-9;
+    }
+    let mut f = DriftField::new(centre_mm, &s)?;
+    for (a, sigma) in axis_sigma_um.iter().enumerate() {
+        if let Some(sigma) = sigma {
+            f.set_measurement_sigma_um(a, *sigma)?;
+        }
+    }
+    Ok(f)
 }
 
 /// Each sphere's reference position per axis, from the cycle on the cold machine.
@@ -523,7 +558,7 @@ pub fn drive_probed<P: ErrorPredictor>(
 pub enum ProbedCompensatorError {
     /// A drift setting that is not usable.
     #[error(transparent)]
-    Drift(#[from] vmc_predict::drift::DriftSettingError),
+    Drift(#[from] DriftSettingError),
     /// Sensors the model does not know.
     #[error(transparent)]
     Predict(#[from] crate::predict::predictor::PredictError),

@@ -99,6 +99,11 @@ pub struct ArtefactSpec {
     /// Sphere: radius, mm.
     #[serde(default)]
     pub radius_mm: Option<f64>,
+    /// A reference: thermally stable and standing where the setup says (its geometry
+    /// qualified), so that a probe move touching it measures the machine's drift (`run
+    /// --compensate` updates its drift estimate from it). Default false.
+    #[serde(default)]
+    pub reference: bool,
 }
 
 impl ArtefactSpec {
@@ -324,6 +329,7 @@ mod tests {
             size_mm: Some([30.0, 20.0, 50.0]),
             centre_mm: None,
             radius_mm: None,
+            reference: false,
         };
         assert_eq!(a.validate("artefacts[0]"), Ok(()));
         assert_eq!(

@@ -65,6 +65,12 @@ impl<C: Controller> Guarded<C> {
     pub fn inner(&self) -> &C {
         &self.inner
     }
+
+    /// The wrapped controller, to update what it knows between moves (a probed drift); what
+    /// it is fed through [`Controller`] stays guarded.
+    pub fn inner_mut(&mut self) -> &mut C {
+        &mut self.inner
+    }
 }
 
 impl<C: Controller> Controller for Guarded<C> {
