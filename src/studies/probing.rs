@@ -87,6 +87,23 @@ pub struct Probing {
     pub field: FieldSettings,
     /// Estimate gradients (false: the offset alone, every gradient held at 0).
     pub gradient: bool,
+    /// Single gradient terms estimated beside the offset when `gradient` is false, each with a
+    /// prior of its own (a regularised field: only the terms named here leave 0).
+    pub gradient_terms: Vec<GradientTerm>,
+}
+
+/// One gradient term of the drift field with its prior: component `component` (0 X, 1 Y, 2 Z)
+/// changing along axis `axis`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GradientTerm {
+    /// The error component.
+    pub component: usize,
+    /// The axis it changes along.
+    pub axis: usize,
+    /// σ before any probing, µm/m.
+    pub initial_um_per_m: f64,
+    /// Random walk, µm/m per √h.
+    pub walk_um_per_m_sqrt_h: f64,
 }
 
 impl Probing {
@@ -128,6 +145,7 @@ impl Probing {
                 rate_tau_s: RATE_TAU_S,
             },
             gradient: false,
+            gradient_terms: Vec::new(),
         };
         p.field.measurement_sigma_um = p.measurement_sigma_um();
         p
@@ -229,6 +247,16 @@ impl Probing {
             s.walk_gradient_um_per_m_sqrt_h = 1e-9;
         }
         let mut f = DriftField::new(self.centroid_mm(), &s)?;
+        if !self.gradient {
+            for t in &self.gradient_terms {
+                f.set_gradient_prior(
+                    t.component,
+                    t.axis,
+                    t.initial_um_per_m,
+                    t.walk_um_per_m_sqrt_h,
+                )?;
+            }
+        }
         for a in 0..3 {
             if let Some(sigma) = self.axis_sigma_um(a) {
                 f.set_measurement_sigma_um(a, sigma)?;
