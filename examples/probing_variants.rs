@@ -46,6 +46,8 @@ fn main() {
     let mut terms: Vec<(usize, usize)> = Vec::new();
     let mut tinit = 2.0;
     let mut twalk = 1.0;
+    // Cycles averaged into the spheres' references, `qual=`.
+    let mut qualify: Option<usize> = None;
     for a in std::env::args().skip(1) {
         let (k, v) = a.split_once('=').expect("key=value");
         match k {
@@ -76,6 +78,7 @@ fn main() {
                     .collect();
             }
             "tinit" => tinit = v.parse().unwrap(),
+            "qual" => qualify = Some(v.parse().unwrap()),
             "twalk" => twalk = v.parse().unwrap(),
             _ => panic!("unknown {k}"),
         }
@@ -117,6 +120,9 @@ fn main() {
             }
             if let Some(t) = tau {
                 p.field.rate_tau_s = t;
+            }
+            if let Some(n) = qualify {
+                p.qualify_cycles = n;
             }
             p.gradient = !nograd && !single && terms.is_empty();
             p.gradient_terms = terms
