@@ -6,6 +6,10 @@
 //! `states=dev` adds the selection-only stress
 //! states, `repeats=`/`toprep=` repeats of each touch along X, Y / of each top, `passes=` passes over the tops per cycle (1 or 2), `rate=` the drift rate's σ
 //! (µm/min; 1e-9: none), `tau=` its fading time (s). Models are trained once per seed and cached under `target/probing-models/`.
+//! `terms=zz,xx` opens single gradient terms (component then axis) with prior `tinit=` µm/m and
+//! walk `twalk=` µm/m/√h; `qual=` cycles averaged into the spheres' references. `PV_FIELD=1`
+//! prints which first-order field the residual follows (per-state fits on the twin's truth,
+//! `shared/residual_field.rs`), `PV_OFFSETS=1` the drift estimated before each diagonal.
 //! Prints the headline figures, the worst runs with their max per axis and the mean signed
 //! residual per axis of the run (an offset the probe could see) beside its spread (what an
 //! offset cannot correct).
