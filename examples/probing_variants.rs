@@ -6,6 +6,10 @@
 //! `states=dev` adds the selection-only stress
 //! states, `repeats=`/`toprep=` repeats of each touch along X, Y / of each top, `passes=` passes over the tops per cycle (1 or 2), `rate=` the drift rate's σ
 //! (µm/min; 1e-9: none), `tau=` its fading time (s). Models are trained once per seed and cached under `target/probing-models/`.
+//! `terms=zz,xx` opens single gradient terms (component then axis) with prior `tinit=` µm/m and
+//! walk `twalk=` µm/m/√h; `qual=` cycles averaged into the spheres' references. `PV_FIELD=1`
+//! prints which first-order field the residual follows (per-state fits on the twin's truth,
+//! `shared/residual_field.rs`), `PV_OFFSETS=1` the drift estimated before each diagonal.
 //! Prints the headline figures, the worst runs with their max per axis and the mean signed
 //! residual per axis of the run (an offset the probe could see) beside its spread (what an
 //! offset cannot correct).
@@ -19,6 +23,8 @@ use vmc_twin::studies::probing::{self, Probing};
 mod dev_model;
 #[path = "shared/dev_states.rs"]
 mod dev_states;
+#[path = "shared/residual_field.rs"]
+mod residual_field;
 use dev_model::model;
 
 fn main() {
@@ -39,6 +45,13 @@ fn main() {
     let mut top_repeats: Option<usize> = None;
     let mut rate: Option<f64> = None;
     let mut tau: Option<f64> = None;
+    // Gradient terms `terms=zz,xx` (component then axis) with prior `tinit=` µm/m and walk
+    // `twalk=` µm/m/√h.
+    let mut terms: Vec<(usize, usize)> = Vec::new();
+    let mut tinit = 2.0;
+    let mut twalk = 1.0;
+    // Cycles averaged into the spheres' references, `qual=`.
+    let mut qualify: Option<usize> = None;
     for a in std::env::args().skip(1) {
         let (k, v) = a.split_once('=').expect("key=value");
         match k {
@@ -58,6 +71,19 @@ fn main() {
             "toprep" => top_repeats = Some(v.parse().unwrap()),
             "rate" => rate = Some(v.parse().unwrap()),
             "tau" => tau = Some(v.parse().unwrap()),
+            "terms" => {
+                let ax = |c: char| "xyz".find(c).expect("x, y or z");
+                terms = v
+                    .split(',')
+                    .map(|t| {
+                        let c: Vec<char> = t.chars().collect();
+                        (ax(c[0]), ax(c[1]))
+                    })
+                    .collect();
+            }
+            "tinit" => tinit = v.parse().unwrap(),
+            "qual" => qualify = Some(v.parse().unwrap()),
+            "twalk" => twalk = v.parse().unwrap(),
             _ => panic!("unknown {k}"),
         }
     }
@@ -66,6 +92,9 @@ fn main() {
     let mut runs = Vec::new();
     let mut cost = 0.0;
     let mut floors = Vec::new();
+    // With PV_FIELD set: each state's four diagonals kept for the field fits at the end.
+    let keep_points = std::env::var("PV_FIELD").is_ok();
+    let mut kept: Vec<(u64, String, Vec<Vec<vmc_machine::sim::PointRecord>>)> = Vec::new();
     for &seed in &seeds {
         let h = model(&spec, seed);
         let mut states = calibration::evaluation_states(&spec, seed);
@@ -96,7 +125,19 @@ fn main() {
             if let Some(t) = tau {
                 p.field.rate_tau_s = t;
             }
-            p.gradient = !nograd && !single;
+            if let Some(n) = qualify {
+                p.qualify_cycles = n;
+            }
+            p.gradient = !nograd && !single && terms.is_empty();
+            p.gradient_terms = terms
+                .iter()
+                .map(|&(component, axis)| probing::GradientTerm {
+                    component,
+                    axis,
+                    initial_um_per_m: tinit,
+                    walk_um_per_m_sqrt_h: twalk,
+                })
+                .collect();
             if ideal {
                 p.probe.repeatability_2sigma_um = 0.0;
                 p.probe.servo_period_s = 1e-7;
@@ -195,6 +236,14 @@ fn main() {
                         })
                         .fold(0.0, f64::max)
                 };
+                if keep_points {
+                    if di == 0 {
+                        kept.push((seed, state.name.clone(), Vec::new()));
+                    }
+                    if let Some(k) = kept.last_mut() {
+                        k.2.push(points.clone());
+                    }
+                }
                 let r = campaign::run_report(ModelKind::Hybrid, diag, &state.name, seed, &points);
                 if let Some(r) = r {
                     floors.push((floor(false), floor(true)));
@@ -239,8 +288,21 @@ fn main() {
             .iter()
             .map(|r| r.1[0].abs().max(r.1[1].abs()))
             .fold(0.0, f64::max);
-        println!("  state {s:<24} max {mx:.2}  |mean z| ≤ {mz:.2}  |mean xy| ≤ {mxy:.2}");
+        let bz = rs.iter().map(|r| r.1[2]).sum::<f64>() / rs.len() as f64;
+        println!(
+            "  state {s:<24} max {mx:.2}  |mean z| ≤ {mz:.2} (average {bz:+.2})  |mean xy| ≤ {mxy:.2}"
+        );
     }
+    if keep_points {
+        print_field_fits(&kept);
+    }
+    // The run means over all runs: a bias common to the runs (the offset estimate behind or
+    // ahead of the residual) against their scatter.
+    let nr = runs.len().max(1) as f64;
+    let bias = [0, 1, 2].map(|a| runs.iter().map(|r| r.1[a]).sum::<f64>() / nr);
+    let sd = [0, 1, 2]
+        .map(|a| (runs.iter().map(|r| (r.1[a] - bias[a]).powi(2)).sum::<f64>() / nr).sqrt());
+    println!("run means µm: bias {bias:+.2?} sd {sd:.2?}");
     let f0 = floors.iter().map(|f| f.0).fold(0.0, f64::max);
     let f1 = floors.iter().map(|f| f.1).fold(0.0, f64::max);
     let n0 = floors.iter().filter(|f| f.0 > 2.0).count();
@@ -255,4 +317,35 @@ fn main() {
         reports.len(),
         cost
     );
+}
+
+/// Per gradient choice, the max |E| left and the runs above 2 µm over all kept states; the
+/// states whose offset floor is above 2 µm with the fitted gradients.
+fn print_field_fits(kept: &[(u64, String, Vec<Vec<vmc_machine::sim::PointRecord>>)]) {
+    for terms in &residual_field::VARIANTS {
+        let mut worst = 0.0f64;
+        let mut over = 0;
+        for (_, _, runs) in kept {
+            let refs: Vec<&[vmc_machine::sim::PointRecord]> =
+                runs.iter().map(|r| r.as_slice()).collect();
+            let (max, _) = residual_field::fit(&refs, terms);
+            worst = max.iter().copied().fold(worst, f64::max);
+            over += max.iter().filter(|m| **m > 2.0).count();
+        }
+        println!(
+            "field fit {:<12} max {worst:.2} µm, {over} runs > 2",
+            terms.name
+        );
+    }
+    for (seed, state, runs) in kept {
+        let refs: Vec<&[vmc_machine::sim::PointRecord]> =
+            runs.iter().map(|r| r.as_slice()).collect();
+        let (max0, _) = residual_field::fit(&refs, &residual_field::VARIANTS[0]);
+        let (_, g) = residual_field::fit(&refs, &residual_field::VARIANTS[11]);
+        let m0 = max0.iter().copied().fold(0.0, f64::max);
+        println!(
+            "  seed {seed:>2} {state:<24} offset floor {m0:.2}  gradients µm/m Ex {:+.1?} Ey {:+.1?} Ez {:+.1?}",
+            g[0], g[1], g[2]
+        );
+    }
 }

@@ -52,7 +52,7 @@ const TOUCH_TIME_S: f64 = 5.0;
 pub const FIELD_TOUCHES: [(usize, f64); 3] = [(0, 1.0), (1, 1.0), (2, -1.0)];
 /// Touches of the single sphere: ±X, ±Y at the equator, the top.
 pub const SPHERE_TOUCHES: [(usize, f64); 5] = [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0), (2, -1.0)];
-/// Cycles averaged into the artefacts' reference positions.
+/// Cycles averaged into the artefacts' reference positions by default.
 const QUALIFY_CYCLES: usize = 8;
 /// Time in which the drift's rate fades, s (when a rate is estimated: `top_passes` 2 and
 /// [`FieldSettings::rate_sigma_um_per_min`] set).
@@ -88,6 +88,25 @@ pub struct Probing {
     pub field: FieldSettings,
     /// Estimate gradients (false: the offset alone, every gradient held at 0).
     pub gradient: bool,
+    /// Single gradient terms estimated beside the offset when `gradient` is false, each with a
+    /// prior of its own (a regularised field: only the terms named here leave 0).
+    pub gradient_terms: Vec<GradientTerm>,
+    /// Cycles on the cold machine averaged into the artefacts' reference positions.
+    pub qualify_cycles: usize,
+}
+
+/// One gradient term of the drift field with its prior: component `component` (0 X, 1 Y, 2 Z)
+/// changing along axis `axis`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GradientTerm {
+    /// The error component.
+    pub component: usize,
+    /// The axis it changes along.
+    pub axis: usize,
+    /// σ before any probing, µm/m.
+    pub initial_um_per_m: f64,
+    /// Random walk, µm/m per √h.
+    pub walk_um_per_m_sqrt_h: f64,
 }
 
 impl Probing {
@@ -119,6 +138,8 @@ impl Probing {
             top_passes: 1,
             field: default_field_settings(),
             gradient: false,
+            gradient_terms: Vec::new(),
+            qualify_cycles: QUALIFY_CYCLES,
         };
         p.field.measurement_sigma_um = p.measurement_sigma_um();
         p
@@ -214,12 +235,23 @@ impl Probing {
     /// A fresh drift field with these assumptions. With `gradient` false the gradients' prior
     /// and walk are so small that they stay at 0.
     fn filter(&self) -> Result<DriftField, DriftSettingError> {
-        drift_field(
+        let mut f = drift_field(
             &self.field,
             self.centroid_mm(),
             self.gradient,
             [0, 1, 2].map(|a| self.axis_sigma_um(a)),
-        )
+        )?;
+        if !self.gradient {
+            for t in &self.gradient_terms {
+                f.set_gradient_prior(
+                    t.component,
+                    t.axis,
+                    t.initial_um_per_m,
+                    t.walk_um_per_m_sqrt_h,
+                )?;
+            }
+        }
+        Ok(f)
     }
 
     fn artefact(&self, centre_mm: [f64; 3]) -> Artefact {
@@ -450,12 +482,12 @@ pub fn qualify<P: ErrorPredictor + Clone>(
     sim::hand_over(&twin, Some(&mut ctrl));
     let mut on_twin = ProbeOnTwin::new(p.probe, sub_seed(noise, 1))
         .map_err(|e| TwinError::Sensors(format!("probing: {e}")))?;
-    // Qualification is done once and with care: the mean of QUALIFY_CYCLES cycles, so that
-    // its scatter does not become an offset of every later correction.
+    // Qualification is done once and with care: the mean of several cycles, so that its
+    // scatter does not become an offset of every later correction.
     let n_spheres = p.sphere_centres_mm.len();
     let mut sum = vec![[0.0; 3]; n_spheres];
     let mut n = vec![[0usize; 3]; n_spheres];
-    for _ in 0..QUALIFY_CYCLES {
+    for _ in 0..p.qualify_cycles.max(1) {
         let readings = run_cycle(
             &mut twin,
             p,
