@@ -15,33 +15,14 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 use super::source::{next_line, LineSource, Next, ProgramSource, Reading};
+pub(super) use super::source::{OEntry, Pos};
 use super::sub_files::SubFile;
 use super::InterpConfig;
 use crate::syntax::{GcodeError, Line, OKind, OName};
 
-/// A line's place: its file (0: the main program, k: the k-th subroutine file), the byte
-/// offset where it starts, its 1-based physical line number. Ordered as the lines follow one
-/// another: the main program, then the subroutine files' definitions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub(super) struct Pos {
-    pub file: usize,
-    pub offset: u64,
-    pub line: usize,
-}
-
-/// One O-word line: where it is, where the line after it is, its keyword, name and column.
-#[derive(Debug, Clone)]
-pub(super) struct OEntry {
-    pub pos: Pos,
-    pub next: Pos,
-    pub kind: OKind,
-    pub name: OName,
-    pub col: usize,
-}
-
 /// An O-word structure error: (the place from which execution meets it, the place of the
 /// offending line — `None` for the main program's syntax error that cut it short — the error).
-pub(super) type StructureError = (Pos, Option<Pos>, GcodeError);
+pub(super) type StructureError = Box<(Pos, Option<Pos>, GcodeError)>;
 
 /// A program being read: its source, its O-word table, its subroutine files.
 #[derive(Debug)]
@@ -296,17 +277,14 @@ fn pair(prog: &mut Program) -> Result<(), StructureError> {
         // An open structure: the syntax error that cut the program short explains it best.
         let o = &prog.owords[stack[stack.len() - 1]];
         let first = prog.owords[j].pos;
-        return Err(match prog.tail_error.clone() {
-            Some(e) => (first, None, e),
+        let (index, e) = match prog.tail_error.clone() {
+            Some(e) => (None, e),
             None => {
                 let msg = format!("{} {} is never closed", o.name, kw(o.kind));
-                (
-                    first,
-                    Some(o.pos),
-                    GcodeError::invalid(o.pos.line, o.col, msg),
-                )
+                (Some(o.pos), GcodeError::invalid(o.pos.line, o.col, msg))
             }
-        });
+        };
+        return Err(Box::new((first, index, e)));
     }
     Ok(())
 }
@@ -321,7 +299,7 @@ fn pair_entries(
         let first_open = ow[stack.first().copied().unwrap_or(i).min(i)].pos;
         let fail = |msg: String| {
             let e = GcodeError::invalid(o.pos.line, o.col, msg);
-            Err((first_open, Some(o.pos), e))
+            Err(Box::new((first_open, Some(o.pos), e)))
         };
         let open = stack.last().map(|&j| (j, &ow[j]));
         let same = |j: usize| ow[j].name == o.name;
@@ -421,5 +399,57 @@ pub(super) fn kw(k: OKind) -> &'static str {
         OKind::EndRepeat => "endrepeat",
         OKind::Break => "break",
         OKind::Continue => "continue",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{run_program, InterpConfig, ProgramRun, RunEvent};
+
+    /// With a subroutine folder the whole text is scanned before the run; without, as it runs
+    /// until the first O-word or `M98`. Both must give the same moves and errors.
+    #[test]
+    fn a_program_scanned_as_it_runs_behaves_as_one_scanned_first() {
+        let eager = InterpConfig {
+            subroutine_dirs: vec![std::path::PathBuf::from("/no/such/folder")],
+            ..InterpConfig::default()
+        };
+        let programs = [
+            "G1 X1 F100\nM98 P100 L2\nM30\nO100\nG1 Y1\nM99\n",
+            "G1 X1 F100\nG1 X[1\no1 repeat [2]\nG1 Y1\no1 endrepeat\n",
+            "G1 X1 F100\n\no1 while [1]\nG1 X2\n",
+            "G0 X1\no<s> call [3]\nM2\no<s> sub\nG1 X#1 F100\no<s> endsub\n",
+            "\n%\nG0 X1\n%\nG0 X2\n",
+            "G0 X1\nG0 X2\no1 endwhile\n",
+            "G0 X1\nM2\nG1 X[\n",
+            "G0 X1\no1 if [1]\nG0 X3\no1 elseif [1]\nG0 X4\no1 else\nG0 X5\no1 endif\nG0 X6\nM2\n",
+        ];
+        for p in programs {
+            let lazy = run_program(p, &InterpConfig::default()).map_err(|e| e.to_string());
+            let first = run_program(p, &eager).map_err(|e| e.to_string());
+            assert_eq!(lazy, first, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn a_source_is_read_from_its_position_with_line_numbers_from_there() {
+        let bytes = b"\xEF\xBB\xBFG0 X1\nG0 X[\n".to_vec();
+        let mut cursor = std::io::Cursor::new(bytes);
+        cursor.set_position(3);
+        let mut run = ProgramRun::from_source(Box::new(cursor), &InterpConfig::default()).unwrap();
+        let mut moves = Vec::new();
+        let err = run.resume(&mut moves).unwrap_err();
+        assert_eq!(moves.len(), 1);
+        assert_eq!((moves[0].line, err.line), (1, 2));
+        assert!(matches!(run.resume(&mut moves), Err(e) if e == err));
+        let mut loop_run = ProgramRun::new(
+            "o1 repeat [3]\nG1 X1 F100\nG1 X0\no1 endrepeat\nM2",
+            &InterpConfig::default(),
+        )
+        .unwrap();
+        let mut looped = Vec::new();
+        assert_eq!(loop_run.resume(&mut looped).unwrap(), RunEvent::Ended);
+        let lines: Vec<usize> = looped.iter().map(|m| m.line).collect();
+        assert_eq!(lines, [2, 3, 2, 3, 2, 3, 5]);
     }
 }

@@ -307,7 +307,7 @@ impl ProgramRun {
             let Some((at, line, next)) = fetched.map_err(|e| self.locate(e, Some(self.pc)))? else {
                 break;
             };
-            if let Some((first, index, e)) = &self.prog.structure_error {
+            if let Some((first, index, e)) = self.prog.structure_error.as_deref() {
                 if at >= *first {
                     return Err(self.locate(e.clone(), *index));
                 }
@@ -332,7 +332,7 @@ impl ProgramRun {
                 return Ok(Some(RunEvent::Probe(request)));
             }
         }
-        if let Some((_, index, e)) = self.prog.structure_error.take() {
+        if let Some((_, index, e)) = self.prog.structure_error.take().map(|b| *b) {
             return Err(self.locate(e, index));
         }
         if let Some(e) = &self.prog.tail_error {

@@ -6,16 +6,37 @@
 //! position: blank lines, comment-only lines and the opening `%` are skipped, the closing `%`
 //! ends the text. Lines are split at `\n` with one trailing `\r` dropped (as `str::lines`);
 //! bytes that are not UTF-8 become U+FFFD, line by line (a line break never falls inside a
-//! character, so this equals decoding the whole text).
+//! character, so this equals decoding the whole text). A line's place is a [`Pos`]; an
+//! O-word line's, with its keyword and name, an [`OEntry`] (what `program` holds of the text).
 
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 
-use crate::syntax::{parse_line, GcodeError, Line};
+use crate::syntax::{parse_line, GcodeError, Line, OKind, OName};
 
 /// A program's bytes: a file, or an in-memory text (`std::io::Cursor`).
 pub trait ProgramSource: Read + Seek + Send {}
 
 impl<T: Read + Seek + Send> ProgramSource for T {}
+
+/// A line's place: its file (0: the main program, k: the k-th subroutine file), the byte
+/// offset where it starts, its 1-based physical line number. Ordered as the lines follow one
+/// another: the main program, then the subroutine files' definitions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) struct Pos {
+    pub file: usize,
+    pub offset: u64,
+    pub line: usize,
+}
+
+/// One O-word line: where it is, where the line after it is, its keyword, name and column.
+#[derive(Debug, Clone)]
+pub(super) struct OEntry {
+    pub pos: Pos,
+    pub next: Pos,
+    pub kind: OKind,
+    pub name: OName,
+    pub col: usize,
+}
 
 /// Buffered line reader over a [`ProgramSource`], positioned by byte offsets.
 pub(super) struct LineSource {

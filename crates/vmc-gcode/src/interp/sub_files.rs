@@ -4,14 +4,13 @@
 //! (LinuxCNC's subroutine path). Files are scanned before the program runs, for the calls of
 //! the program and of the files read: every line is parsed (a syntax error anywhere in the
 //! file is an error), only the O-word lines of the definition are kept, after the program's
-//! (see [`super::program`]); the file stays open and execution reads the definition's lines
+//! (see `program`); the file stays open and execution reads the definition's lines
 //! from it. An error inside a file names that file and the line in it ([`GcodeError::file`]).
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use super::program::{OEntry, Pos};
-use super::source::{next_line, LineSource, Next, Reading};
+use super::source::{next_line, LineSource, Next, OEntry, Pos, Reading};
 use crate::syntax::{CallSite, GcodeError, OKind, OName};
 
 /// A subroutine file: where its definition is (`start` its `sub` line, `end` the offset
