@@ -113,16 +113,7 @@ impl Program {
             if pc.file == 0 && pc.offset == at.offset && pc.line == at.line {
                 // At the scan's front: this read is the scan's too.
                 if let Ok(Next::Line(offset, l)) = next_line(&mut self.main, &mut at, u64::MAX) {
-                    let pos = Pos {
-                        file: 0,
-                        offset,
-                        line: l.line,
-                    };
-                    let next = Pos {
-                        file: 0,
-                        offset: at.offset,
-                        line: at.line,
-                    };
+                    let (pos, next) = at.places(0, offset, l.line);
                     self.scan = Some(at);
                     if let Some(o) = &l.oword {
                         self.owords.push(OEntry {
@@ -155,16 +146,7 @@ impl Program {
             };
             match next_line(src, &mut at, end)? {
                 Next::Line(offset, l) => {
-                    let pos = Pos {
-                        file: pc.file,
-                        offset,
-                        line: l.line,
-                    };
-                    let next = Pos {
-                        file: pc.file,
-                        offset: at.offset,
-                        line: at.line,
-                    };
+                    let (pos, next) = at.places(pc.file, offset, l.line);
                     return Ok(Some((pos, l, next)));
                 }
                 Next::End if pc.file < self.files.len() => pc = self.files[pc.file].start,
@@ -218,16 +200,7 @@ impl Program {
             match next_line(&mut self.main, &mut at, u64::MAX) {
                 Ok(Next::Line(offset, l)) => {
                     if let Some(o) = l.oword {
-                        let pos = Pos {
-                            file: 0,
-                            offset,
-                            line: l.line,
-                        };
-                        let next = Pos {
-                            file: 0,
-                            offset: at.offset,
-                            line: at.line,
-                        };
+                        let (pos, next) = at.places(0, offset, l.line);
                         self.owords.push(OEntry {
                             pos,
                             next,

@@ -38,6 +38,20 @@ pub(super) struct OEntry {
     pub col: usize,
 }
 
+impl Reading {
+    /// The places, in file `file`, of the line just read (at `offset`, numbered `line`) and
+    /// of where this reading now is (the line after it).
+    pub(super) fn places(&self, file: usize, offset: u64, line: usize) -> (Pos, Pos) {
+        let here = Pos { file, offset, line };
+        let next = Pos {
+            file,
+            offset: self.offset,
+            line: self.line,
+        };
+        (here, next)
+    }
+}
+
 /// Buffered line reader over a [`ProgramSource`], positioned by byte offsets.
 pub(super) struct LineSource {
     reader: BufReader<Box<dyn ProgramSource>>,

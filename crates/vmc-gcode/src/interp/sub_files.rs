@@ -132,16 +132,7 @@ fn read_file(
             break;
         };
         if let Some(o) = l.oword {
-            let pos = Pos {
-                file: k,
-                offset,
-                line: l.line,
-            };
-            let after = Pos {
-                file: k,
-                offset: at.offset,
-                line: at.line,
-            };
+            let (pos, after) = at.places(k, offset, l.line);
             found.push(OEntry {
                 pos,
                 next: after,

@@ -12,7 +12,8 @@
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 
-use super::{check_tools, interp, refuse_rotary, InterpConfig, LineUnits, ProgramError};
+use super::{check_tools, interp, interp_config, interp_config_in, refuse_rotary};
+use super::{LineUnits, ProgramError};
 use crate::machine::MachineSpec;
 use crate::motion::{self, Plan, PlanStart, RotaryLimits};
 use crate::setup::Placement;
@@ -95,8 +96,8 @@ impl<'a> PlanStream<'a> {
         tools: &'a ToolTable,
         moves_per_piece: usize,
     ) -> Result<Self, ProgramError> {
-        let mut cfg = interp_config(machine, start_mm, tools, source.placement, None);
-        cfg.subroutine_dirs = source.subroutine_dirs;
+        let dirs = source.subroutine_dirs;
+        let cfg = interp_config_in(machine, start_mm, tools, source.placement, dirs);
         let run = ProgramRun::new(source.text, &cfg).map_err(|err| ProgramError::Gcode {
             file: source.file.to_string(),
             err,
@@ -262,26 +263,6 @@ impl<'a> PlanStream<'a> {
         .map_err(motion_err)?;
         let ended = program_ended || plan.program_end_line().is_some();
         Ok((plan, ended))
-    }
-}
-
-/// The interpreter's settings for a program placed by `placement` on `machine` with `tools`
-/// (subroutine files from the folder of `program`, if given, then the placement's).
-fn interp_config(
-    machine: &MachineSpec,
-    start_mm: [f64; 3],
-    tools: &ToolTable,
-    placement: &Placement,
-    program: Option<&Path>,
-) -> InterpConfig {
-    let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
-    InterpConfig {
-        start_mm,
-        work_offsets_mm: placement.work_offsets_mm,
-        tool_lengths_mm,
-        tool_diameters_mm,
-        subroutine_dirs: placement.search_path(program),
-        ..InterpConfig::default()
     }
 }
 
