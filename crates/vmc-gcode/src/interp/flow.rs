@@ -47,7 +47,7 @@ pub(super) struct Runner {
     pub(super) interp: Interpreter,
     params: Params,
     frames: Vec<Frame>,
-    /// Remaining iterations of active `repeat` loops, by the index of their `repeat` line.
+    /// Remaining iterations of active `repeat` loops, by the O-word index of their `repeat` line.
     repeats: HashMap<usize, i64>,
     iterations: u64,
     block_delete: bool,
