@@ -28,18 +28,49 @@ pub fn read_text(path: &Path) -> std::io::Result<String> {
             .iter()
             .rposition(|&b| b == b'\n')
             .map_or(0, |i| i + 1);
-        // Characters (not bytes) before the bad byte on its line; the prefix is valid UTF-8.
-        let col = 1 + String::from_utf8_lossy(&before[line_start..])
-            .chars()
-            .count();
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "not UTF-8 text: line {line}, column {col}: byte 0x{:02X}",
-                bytes[bad_at]
-            ),
-        )
+        not_utf8(line, &before[line_start..], bytes[bad_at])
     })
+}
+
+/// The error of a byte `bad` that is not UTF-8, on line `line` after the valid bytes
+/// `line_before` of that line.
+fn not_utf8(line: usize, line_before: &[u8], bad: u8) -> std::io::Error {
+    // Characters (not bytes) before the bad byte on its line; the prefix is valid UTF-8.
+    let col = 1 + String::from_utf8_lossy(line_before).chars().count();
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!("not UTF-8 text: line {line}, column {col}: byte 0x{bad:02X}"),
+    )
+}
+
+/// [`read_text`] without holding the text: checks the file line by line (the same errors)
+/// and returns it open at its text (after a byte-order mark), with a hash of its bytes (to
+/// tell whether it changed between two openings).
+pub fn open_text(path: &Path) -> std::io::Result<(std::fs::File, u64)> {
+    use std::hash::Hasher;
+    use std::io::{BufRead, Seek, SeekFrom};
+    let mut reader = std::io::BufReader::new(std::fs::File::open(path)?);
+    note_input(path);
+    let bom = reader.fill_buf()?.starts_with(&[0xEF, 0xBB, 0xBF]);
+    let start = if bom { 3 } else { 0 };
+    reader.consume(start);
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    let (mut line, mut number) = (Vec::new(), 0);
+    loop {
+        line.clear();
+        if reader.read_until(b'\n', &mut line)? == 0 {
+            break;
+        }
+        number += 1;
+        if let Err(e) = std::str::from_utf8(&line) {
+            let bad_at = e.valid_up_to();
+            return Err(not_utf8(number, &line[..bad_at], line[bad_at]));
+        }
+        hasher.write(&line);
+    }
+    let mut file = reader.into_inner();
+    file.seek(SeekFrom::Start(start as u64))?;
+    Ok((file, hasher.finish()))
 }
 
 /// The identity of a file: device and inode where the platform has them (so that two names of
@@ -139,6 +170,26 @@ mod tests {
             e.ends_with("cannot read program: not UTF-8 text: line 2, column 5: byte 0xE9"),
             "{e}"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_opened_text_has_the_errors_of_a_read_one_and_starts_after_its_byte_order_mark() {
+        use std::io::Read;
+        let dir = std::env::temp_dir().join(format!("vmc-open-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (bad, good) = (dir.join("bad.ngc"), dir.join("good.ngc"));
+        std::fs::write(&bad, b"G0 X1\nG1 \xC3\xA9 X\xE92\n").unwrap();
+        let read = read_text(&bad).unwrap_err().to_string();
+        assert_eq!(open_text(&bad).unwrap_err().to_string(), read);
+        assert!(read.ends_with("line 2, column 7: byte 0xE9"), "{read}");
+        std::fs::write(&good, b"\xEF\xBB\xBFG0 X1\n").unwrap();
+        let (mut file, hash) = open_text(&good).unwrap();
+        let mut text = String::new();
+        file.read_to_string(&mut text).unwrap();
+        assert_eq!(text, read_text(&good).unwrap());
+        std::fs::write(&good, b"G0 X2\n").unwrap();
+        assert_ne!(open_text(&good).unwrap().1, hash);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -20,7 +20,7 @@ use std::collections::HashMap;
 
 use super::expr::{Params, Target, CALL_PARAMS};
 use super::probe::{ProbeOutcome, ProbeParams, ProbeRequest, PROBE_PARAM_FIRST};
-use super::sub_files::SubFile;
+use super::program::{kw, sub_key, Pos, Program};
 use super::{CanonKind, CanonMove, InterpConfig, Interpreter};
 use crate::syntax::{Block, CallSite, GcodeError, Line, OKind, OName, OWord, Word};
 
@@ -29,206 +29,16 @@ pub const MAX_ITERATIONS: u64 = 1_000_000;
 /// Deepest subroutine call nesting.
 pub const MAX_CALL_DEPTH: usize = 64;
 
-/// A parsed program: its lines and the syntax error that ended parsing, if any.
-#[derive(Debug)]
-pub(super) struct Program {
-    pub(super) lines: Vec<Line>,
-    pub(super) tail_error: Option<GcodeError>,
-    /// For each line index: the index of its partner (see [`pair`]).
-    partner: Vec<Option<usize>>,
-    /// Subroutine name → index of its `sub` line.
-    subs: HashMap<String, usize>,
-    /// The subroutine files whose definitions follow the program's own lines.
-    pub(super) files: Vec<SubFile>,
-    /// The folders searched for subroutine files (named in the error of a call not found).
-    searched: Vec<std::path::PathBuf>,
-}
-
-/// An O-word structure error: (the index from which execution meets it, the index of the
-/// offending line — `None` for the main program's syntax error that cut it short — the error).
-pub(super) type StructureError = (usize, Option<usize>, GcodeError);
-
-impl Program {
-    /// Parses `src`, reads the subroutine files it needs and pairs its O-words. The structure
-    /// error, if any, is returned for the caller to report when execution reaches it.
-    pub(super) fn new(
-        src: &str,
-        cfg: &InterpConfig,
-    ) -> Result<(Self, Option<StructureError>), GcodeError> {
-        let mut lines = Vec::new();
-        let mut tail_error = None;
-        for line in crate::syntax::parse_program(src) {
-            match line {
-                Ok(l) => lines.push(l),
-                Err(e) => tail_error = Some(e),
-            }
-        }
-        let files = super::sub_files::load(&mut lines, cfg)?;
-        let mut prog = Program {
-            partner: vec![None; lines.len()],
-            lines,
-            tail_error,
-            subs: HashMap::new(),
-            files,
-            searched: cfg.subroutine_dirs.clone(),
-        };
-        let structure_error = pair(&mut prog).err();
-        Ok((prog, structure_error))
-    }
-
-    /// The subroutine file of line index `i` (`None`: the main program).
-    pub(super) fn file_of(&self, i: usize) -> Option<&std::path::PathBuf> {
-        super::sub_files::file_of(&self.files, i)
-    }
-}
-
 /// One active call.
 #[derive(Debug)]
 pub(super) struct Frame {
-    return_to: usize,
+    /// The call's line.
+    called_from: Pos,
+    return_to: Pos,
     /// `#1…#30` of the caller (O-word calls; Fanuc-style calls share all parameters).
     saved: Option<[f64; CALL_PARAMS]>,
-    /// Fanuc-style call: (index of the `O` line, repetitions left).
+    /// Fanuc-style call: (O-word index of the `O` line, repetitions left).
     fanuc: Option<(usize, i64)>,
-}
-
-fn key(name: &OName) -> String {
-    name.to_string()
-}
-
-/// Pairs O-word statements by name and nesting: `if`/`elseif`/`else` → next branch,
-/// `while`/`do`/`repeat` → their end, ends → their head, `break`/`continue` → their loop's
-/// head, `sub` → `endsub`. On error see [`StructureError`].
-fn pair(prog: &mut Program) -> Result<(), StructureError> {
-    let mut stack: Vec<usize> = Vec::new();
-    for i in 0..prog.lines.len() {
-        let l = &prog.lines[i];
-        let Some(o) = &l.oword else {
-            continue;
-        };
-        let first_open = stack.first().copied().unwrap_or(i).min(i);
-        let fail =
-            |msg: String| Err((first_open, Some(i), GcodeError::invalid(l.line, o.col, msg)));
-        let open = stack
-            .last()
-            .map(|&j| (j, prog.lines[j].oword.as_ref().expect("stacked O-word")));
-        let same = |j: usize| prog.lines[j].oword.as_ref().map(|p| &p.name) == Some(&o.name);
-        match o.kind {
-            OKind::Sub => {
-                if stack
-                    .iter()
-                    .any(|&j| prog.lines[j].oword.as_ref().map(|p| p.kind) == Some(OKind::Sub))
-                {
-                    return fail(format!(
-                        "{} sub: subroutine definitions cannot be nested",
-                        o.name
-                    ));
-                }
-                prog.subs.entry(key(&o.name)).or_insert(i);
-                stack.push(i);
-            }
-            OKind::If | OKind::Do | OKind::Repeat => stack.push(i),
-            OKind::While => match open {
-                Some((j, p)) if p.kind == OKind::Do && same(j) => {
-                    prog.partner[j] = Some(i);
-                    prog.partner[i] = Some(j);
-                    stack.pop();
-                }
-                _ => stack.push(i),
-            },
-            OKind::ElseIf | OKind::Else | OKind::EndIf => match open {
-                Some((j, p))
-                    if matches!(p.kind, OKind::If | OKind::ElseIf | OKind::Else) && same(j) =>
-                {
-                    if p.kind == OKind::Else && o.kind != OKind::EndIf {
-                        return fail(format!("{} {:?} after else", o.name, o.kind).to_lowercase());
-                    }
-                    prog.partner[j] = Some(i);
-                    stack.pop();
-                    if o.kind != OKind::EndIf {
-                        stack.push(i);
-                    }
-                }
-                _ => return fail(format!("{} without a matching {} if", kw(o.kind), o.name)),
-            },
-            OKind::EndWhile | OKind::EndRepeat | OKind::EndSub => {
-                let head = match o.kind {
-                    OKind::EndWhile => OKind::While,
-                    OKind::EndRepeat => OKind::Repeat,
-                    _ => OKind::Sub,
-                };
-                match open {
-                    Some((j, p)) if p.kind == head && same(j) => {
-                        prog.partner[j] = Some(i);
-                        prog.partner[i] = Some(j);
-                        stack.pop();
-                    }
-                    _ => {
-                        return fail(format!(
-                            "{} without a matching {} {}",
-                            kw(o.kind),
-                            o.name,
-                            kw(head)
-                        ))
-                    }
-                }
-            }
-            OKind::Break | OKind::Continue => {
-                let head = stack.iter().rev().copied().find(|&j| {
-                    same(j)
-                        && matches!(
-                            prog.lines[j].oword.as_ref().map(|p| p.kind),
-                            Some(OKind::While | OKind::Do | OKind::Repeat)
-                        )
-                });
-                match head {
-                    Some(j) => prog.partner[i] = Some(j),
-                    None => return fail(format!("{} outside a loop named {}", kw(o.kind), o.name)),
-                }
-            }
-            OKind::Program => {
-                prog.subs
-                    .entry(format!("fanuc {}", key(&o.name)))
-                    .or_insert(i);
-            }
-            OKind::Call | OKind::Return => {}
-        }
-    }
-    if let Some(&j) = stack.first() {
-        // An open structure: the syntax error that cut the program short explains it best.
-        let last = stack[stack.len() - 1];
-        let l = &prog.lines[last];
-        let o = l.oword.as_ref().expect("stacked O-word");
-        return Err(match prog.tail_error.clone() {
-            Some(e) => (j, None, e),
-            None => {
-                let msg = format!("{} {} is never closed", o.name, kw(o.kind));
-                (j, Some(last), GcodeError::invalid(l.line, o.col, msg))
-            }
-        });
-    }
-    Ok(())
-}
-
-fn kw(k: OKind) -> &'static str {
-    match k {
-        OKind::Program => "",
-        OKind::Sub => "sub",
-        OKind::EndSub => "endsub",
-        OKind::Call => "call",
-        OKind::Return => "return",
-        OKind::If => "if",
-        OKind::ElseIf => "elseif",
-        OKind::Else => "else",
-        OKind::EndIf => "endif",
-        OKind::While => "while",
-        OKind::EndWhile => "endwhile",
-        OKind::Do => "do",
-        OKind::Repeat => "repeat",
-        OKind::EndRepeat => "endrepeat",
-        OKind::Break => "break",
-        OKind::Continue => "continue",
-    }
 }
 
 /// Execution state around the modal interpreter.
@@ -237,7 +47,7 @@ pub(super) struct Runner {
     pub(super) interp: Interpreter,
     params: Params,
     frames: Vec<Frame>,
-    /// Remaining iterations of active `repeat` loops, by the index of their `repeat` line.
+    /// Remaining iterations of active `repeat` loops, by the O-word index of their `repeat` line.
     repeats: HashMap<usize, i64>,
     iterations: u64,
     block_delete: bool,
@@ -273,8 +83,8 @@ impl Runner {
             .iter()
             .rev()
             .map(|f| CallSite {
-                file: prog.file_of(f.return_to - 1).cloned(),
-                line: prog.lines[f.return_to - 1].line,
+                file: prog.file_of(f.called_from).cloned(),
+                line: f.called_from.line,
             })
             .collect()
     }
@@ -292,19 +102,22 @@ impl Runner {
         Ok(())
     }
 
-    /// Executes line `pc`; returns the index of the next line.
+    /// Executes line `l`, at `at` (the line after it at `next`); returns where execution
+    /// goes on.
     pub(super) fn step(
         &mut self,
-        prog: &Program,
-        pc: usize,
+        prog: &mut Program,
+        (at, l, next): (Pos, &Line, Pos),
         out: &mut Vec<CanonMove>,
-    ) -> Result<usize, GcodeError> {
-        let l = &prog.lines[pc];
+    ) -> Result<Pos, GcodeError> {
         if l.block_delete && self.block_delete {
-            return Ok(pc + 1);
+            return Ok(next);
         }
         if let Some(o) = &l.oword {
-            return self.oword(prog, pc, l, o, out);
+            let i = prog.oword_at(at).ok_or_else(|| {
+                GcodeError::invalid(l.line, o.col, "the program changed while it was running")
+            })?;
+            return self.oword(prog, (i, next), l, o, out);
         }
         // The line is read left to right: a named parameter a setting targets exists (0 if
         // it is new) for everything after its `#<…>` on the line, as in LinuxCNC; all values
@@ -361,28 +174,28 @@ impl Runner {
             self.probe = self.interp.execute_block(&block, out)?;
             self.interp.sync_params_out(&mut self.params);
             if self.interp.is_ended() {
-                return Ok(pc + 1);
+                return Ok(next);
             }
         }
         if let Some(col) = m98 {
-            return self.fanuc_call(prog, pc, l, col, p, count);
+            return self.fanuc_call(prog, (at, next), l, col, p, count);
         }
         if let Some(col) = m99 {
-            return self.fanuc_return(l, col);
+            return self.fanuc_return(prog, next, l, col);
         }
-        Ok(pc + 1)
+        Ok(next)
     }
 
     /// `M98 P… L…`: runs Fanuc-style subroutine `O…` L times.
     fn fanuc_call(
         &mut self,
-        prog: &Program,
-        pc: usize,
+        prog: &mut Program,
+        (at, next): (Pos, Pos),
         l: &Line,
         col: usize,
         p: Option<Word>,
         count: f64,
-    ) -> Result<usize, GcodeError> {
+    ) -> Result<Pos, GcodeError> {
         let Some(p) = p else {
             return Err(GcodeError::invalid(
                 l.line,
@@ -397,7 +210,9 @@ impl Runner {
                 "M98 L must be a whole number >= 0",
             ));
         }
-        let name = key(&OName::Number(p.value));
+        // The subroutine may lie ahead, unscanned yet.
+        prog.complete()?;
+        let name = sub_key(&OName::Number(p.value));
         let Some(&start) = prog.subs.get(&format!("fanuc {name}")) else {
             if let Some(e) = &prog.tail_error {
                 return Err(e.clone());
@@ -413,7 +228,7 @@ impl Runner {
             return Err(GcodeError::invalid(l.line, p.col, msg));
         };
         if count < 1.0 {
-            return Ok(pc + 1);
+            return Ok(next);
         }
         if self.frames.len() >= MAX_CALL_DEPTH {
             return Err(GcodeError::unsupported(
@@ -424,21 +239,28 @@ impl Runner {
         }
         self.count_iteration(l.line, col)?;
         self.frames.push(Frame {
-            return_to: pc + 1,
+            called_from: at,
+            return_to: next,
             saved: None,
             fanuc: Some((start, count as i64 - 1)),
         });
-        Ok(start + 1)
+        Ok(prog.owords[start].next)
     }
 
     /// `M99`: repeats or ends the Fanuc-style subroutine.
-    fn fanuc_return(&mut self, l: &Line, col: usize) -> Result<usize, GcodeError> {
+    fn fanuc_return(
+        &mut self,
+        prog: &Program,
+        next: Pos,
+        l: &Line,
+        col: usize,
+    ) -> Result<Pos, GcodeError> {
         match self.frames.last_mut() {
             None => {
                 // M99 in the main program: a controller restarts it; LinuxCNC's stand-alone
                 // interpreter, like this one, ends the program there.
                 self.main_m99_end = Some(l.line);
-                Ok(usize::MAX)
+                Ok(next)
             }
             Some(Frame { fanuc: None, .. }) => Err(GcodeError::invalid(
                 l.line,
@@ -454,7 +276,7 @@ impl Runner {
                     *left -= 1;
                     let start = *start;
                     self.count_iteration(l.line, col)?;
-                    Ok(start + 1)
+                    Ok(prog.owords[start].next)
                 } else {
                     let to = *return_to;
                     self.frames.pop();
@@ -483,195 +305,209 @@ impl Runner {
         Ok(())
     }
 
-    fn partner(prog: &Program, pc: usize) -> Result<usize, GcodeError> {
-        prog.partner[pc].ok_or_else(|| {
-            let l = &prog.lines[pc];
-            let col = l.oword.as_ref().map_or(1, |o| o.col);
-            GcodeError::invalid(l.line, col, "O-word without its matching end")
-        })
-    }
-
+    /// Runs O-word line `i` (`l`, its statement `o`; the line after it at `next`).
     fn oword(
         &mut self,
-        prog: &Program,
-        pc: usize,
+        prog: &mut Program,
+        (i, next): (usize, Pos),
         l: &Line,
         o: &OWord,
         out: &mut Vec<CanonMove>,
-    ) -> Result<usize, GcodeError> {
+    ) -> Result<Pos, GcodeError> {
+        let after = |prog: &Program, j: usize| prog.owords[j].next;
         Ok(match o.kind {
-            OKind::Sub => Self::partner(prog, pc)? + 1,
+            OKind::Sub => after(prog, prog.partner(i)?),
             // In the main flow (or inside a subroutine) an `O` line is only a label.
-            OKind::Program => pc + 1,
-            OKind::EndSub | OKind::Return => {
-                let Some(frame) = self.frames.pop().filter(|f| f.fanuc.is_none()) else {
-                    return Err(GcodeError::invalid(
-                        l.line,
-                        o.col,
-                        format!("{} {} outside a subroutine call", o.name, kw(o.kind)),
-                    ));
-                };
-                let value = match o.args.first() {
-                    Some(e) => Some(self.params.eval(e, l.line, o.col)?),
-                    None => None,
-                };
-                if let Some(saved) = &frame.saved {
-                    self.params.leave_call(saved);
-                }
-                // The state saved by M73 in the subroutine comes back.
-                let restored = self.interp.leave_call();
-                out.extend(
-                    restored
-                        .into_iter()
-                        .map(|kind| CanonMove { line: l.line, kind }),
-                );
-                self.params
-                    .set_global("_value_returned", f64::from(u8::from(value.is_some())));
-                self.params.set_global("_value", value.unwrap_or(0.0));
-                frame.return_to
-            }
-            OKind::Call => {
-                let name = match &o.name {
-                    OName::Computed(e) => OName::Number(self.params.eval(e, l.line, o.col)?),
-                    other => other.clone(),
-                };
-                let Some(&start) = prog.subs.get(&key(&name)) else {
-                    // The definition may lie beyond a syntax error.
-                    if let Some(e) = &prog.tail_error {
-                        return Err(e.clone());
-                    }
-                    return Err(match name {
-                        OName::Named(ref n) => GcodeError::unsupported(
-                            l.line,
-                            o.col,
-                            not_found_msg(&name, n, &prog.searched),
-                        ),
-                        _ => GcodeError::invalid(
-                            l.line,
-                            o.col,
-                            format!("{name} call: no such subroutine"),
-                        ),
-                    });
-                };
-                if self.frames.len() >= MAX_CALL_DEPTH {
-                    return Err(GcodeError::unsupported(
-                        l.line,
-                        o.col,
-                        format!("subroutine calls nested deeper than {MAX_CALL_DEPTH}"),
-                    ));
-                }
-                self.count_iteration(l.line, o.col)?;
-                let mut args = Vec::with_capacity(o.args.len());
-                for a in &o.args {
-                    args.push(self.params.eval(a, l.line, o.col)?);
-                }
-                let saved = self.params.enter_call(&args);
-                self.interp.enter_call();
-                self.frames.push(Frame {
-                    return_to: pc + 1,
-                    saved: Some(saved),
-                    fanuc: None,
-                });
-                start + 1
-            }
+            OKind::Program => next,
+            OKind::EndSub | OKind::Return => self.sub_return(l, o, out)?,
+            OKind::Call => self.call(prog, (i, next), l, o)?,
             OKind::If => {
-                let mut at = pc;
+                let mut at = i;
                 let mut take = self.cond(l, o)? != 0.0;
                 loop {
                     if take {
-                        break at + 1;
+                        break after(prog, at);
                     }
-                    at = Self::partner(prog, at)?;
-                    let bl = &prog.lines[at];
-                    let Some(bo) = bl.oword.as_ref() else {
-                        break at + 1;
-                    };
-                    match bo.kind {
-                        OKind::ElseIf => take = self.cond(bl, bo)? != 0.0,
+                    at = prog.partner(at)?;
+                    match prog.owords[at].kind {
+                        OKind::ElseIf => {
+                            let bl = prog.oword_line(at)?;
+                            let bo = bl.oword.as_ref().expect("an O-word line");
+                            take = self.cond(&bl, bo)? != 0.0;
+                        }
                         OKind::Else => take = true,
-                        _ => break at + 1,
+                        _ => break after(prog, at),
                     }
                 }
             }
             OKind::ElseIf | OKind::Else => {
                 // Reached at the end of a taken branch: skip to after `endif`.
-                let mut at = pc;
-                while prog.lines[at].oword.as_ref().map(|p| p.kind) != Some(OKind::EndIf) {
-                    at = Self::partner(prog, at)?;
+                let mut at = i;
+                while prog.owords[at].kind != OKind::EndIf {
+                    at = prog.partner(at)?;
                 }
-                at + 1
+                after(prog, at)
             }
-            OKind::EndIf | OKind::Do => pc + 1,
-            OKind::While => match prog.partner[pc] {
-                // The end of a `do` loop.
-                Some(head)
-                    if prog.lines[head].oword.as_ref().map(|p| p.kind) == Some(OKind::Do)
-                        && head < pc =>
-                {
-                    if self.cond(l, o)? != 0.0 {
-                        self.count_iteration(l.line, o.col)?;
-                        head + 1
-                    } else {
-                        pc + 1
-                    }
-                }
-                Some(end) => {
-                    if self.cond(l, o)? != 0.0 {
-                        pc + 1
-                    } else {
-                        end + 1
-                    }
-                }
-                None => {
-                    return Err(GcodeError::invalid(
-                        l.line,
-                        o.col,
-                        "O-word without its matching end",
-                    ))
-                }
-            },
+            OKind::EndIf | OKind::Do => next,
+            OKind::While => self.while_head(prog, (i, next), l, o)?,
             OKind::EndWhile => {
                 self.count_iteration(l.line, o.col)?;
-                Self::partner(prog, pc)?
+                prog.owords[prog.partner(i)?].pos
             }
             OKind::Repeat => {
                 let n = self.cond(l, o)?.round() as i64;
                 if n <= 0 {
-                    Self::partner(prog, pc)? + 1
+                    after(prog, prog.partner(i)?)
                 } else {
-                    self.repeats.insert(pc, n);
-                    pc + 1
+                    self.repeats.insert(i, n);
+                    next
                 }
             }
             OKind::EndRepeat => {
-                let head = Self::partner(prog, pc)?;
+                let head = prog.partner(i)?;
                 let left = self.repeats.get(&head).copied().unwrap_or(1) - 1;
                 if left > 0 {
                     self.count_iteration(l.line, o.col)?;
                     self.repeats.insert(head, left);
-                    head + 1
+                    after(prog, head)
                 } else {
                     self.repeats.remove(&head);
-                    pc + 1
+                    next
                 }
             }
             OKind::Break => {
-                let head = Self::partner(prog, pc)?;
+                let head = prog.partner(i)?;
                 self.repeats.remove(&head);
-                Self::partner(prog, head)? + 1
+                after(prog, prog.partner(head)?)
             }
             OKind::Continue => {
-                let head = Self::partner(prog, pc)?;
-                match prog.lines[head].oword.as_ref().map(|p| p.kind) {
-                    Some(OKind::While) => {
+                let head = prog.partner(i)?;
+                match prog.owords[head].kind {
+                    OKind::While => {
                         self.count_iteration(l.line, o.col)?;
-                        head
+                        prog.owords[head].pos
                     }
                     // `do … while` and `repeat`: go to the loop's end, which decides.
-                    _ => Self::partner(prog, head)?,
+                    _ => prog.owords[prog.partner(head)?].pos,
                 }
             }
         })
+    }
+
+    /// `while` (O-word line `i`): the head of a `while` loop, or the end of a `do` loop.
+    fn while_head(
+        &mut self,
+        prog: &Program,
+        (i, next): (usize, Pos),
+        l: &Line,
+        o: &OWord,
+    ) -> Result<Pos, GcodeError> {
+        Ok(match prog.partner(i).ok() {
+            // The end of a `do` loop.
+            Some(head) if prog.owords[head].kind == OKind::Do && head < i => {
+                if self.cond(l, o)? != 0.0 {
+                    self.count_iteration(l.line, o.col)?;
+                    prog.owords[head].next
+                } else {
+                    next
+                }
+            }
+            Some(end) => {
+                if self.cond(l, o)? != 0.0 {
+                    next
+                } else {
+                    prog.owords[end].next
+                }
+            }
+            None => {
+                return Err(GcodeError::invalid(
+                    l.line,
+                    o.col,
+                    "O-word without its matching end",
+                ))
+            }
+        })
+    }
+
+    /// `endsub` / `return`: back to the caller, with the value returned.
+    fn sub_return(
+        &mut self,
+        l: &Line,
+        o: &OWord,
+        out: &mut Vec<CanonMove>,
+    ) -> Result<Pos, GcodeError> {
+        let Some(frame) = self.frames.pop().filter(|f| f.fanuc.is_none()) else {
+            return Err(GcodeError::invalid(
+                l.line,
+                o.col,
+                format!("{} {} outside a subroutine call", o.name, kw(o.kind)),
+            ));
+        };
+        let value = match o.args.first() {
+            Some(e) => Some(self.params.eval(e, l.line, o.col)?),
+            None => None,
+        };
+        if let Some(saved) = &frame.saved {
+            self.params.leave_call(saved);
+        }
+        // The state saved by M73 in the subroutine comes back.
+        let restored = self.interp.leave_call();
+        out.extend(
+            restored
+                .into_iter()
+                .map(|kind| CanonMove { line: l.line, kind }),
+        );
+        self.params
+            .set_global("_value_returned", f64::from(u8::from(value.is_some())));
+        self.params.set_global("_value", value.unwrap_or(0.0));
+        Ok(frame.return_to)
+    }
+
+    /// `call`: into the subroutine, with `#1…` the arguments.
+    fn call(
+        &mut self,
+        prog: &Program,
+        (i, next): (usize, Pos),
+        l: &Line,
+        o: &OWord,
+    ) -> Result<Pos, GcodeError> {
+        let name = match &o.name {
+            OName::Computed(e) => OName::Number(self.params.eval(e, l.line, o.col)?),
+            other => other.clone(),
+        };
+        let Some(&start) = prog.subs.get(&sub_key(&name)) else {
+            // The definition may lie beyond a syntax error.
+            if let Some(e) = &prog.tail_error {
+                return Err(e.clone());
+            }
+            return Err(match name {
+                OName::Named(ref n) => {
+                    GcodeError::unsupported(l.line, o.col, not_found_msg(&name, n, &prog.searched))
+                }
+                _ => GcodeError::invalid(l.line, o.col, format!("{name} call: no such subroutine")),
+            });
+        };
+        if self.frames.len() >= MAX_CALL_DEPTH {
+            return Err(GcodeError::unsupported(
+                l.line,
+                o.col,
+                format!("subroutine calls nested deeper than {MAX_CALL_DEPTH}"),
+            ));
+        }
+        self.count_iteration(l.line, o.col)?;
+        let mut args = Vec::with_capacity(o.args.len());
+        for a in &o.args {
+            args.push(self.params.eval(a, l.line, o.col)?);
+        }
+        let saved = self.params.enter_call(&args);
+        self.interp.enter_call();
+        self.frames.push(Frame {
+            called_from: prog.owords[i].pos,
+            return_to: next,
+            saved: Some(saved),
+            fanuc: None,
+        });
+        Ok(prog.owords[start].next)
     }
 }
 

@@ -110,9 +110,11 @@ mod location_tests;
 mod probe;
 #[cfg(test)]
 mod probe_tests;
+mod program;
 mod program_run;
 #[cfg(test)]
 mod rotary_tests;
+mod source;
 mod sub_files;
 #[cfg(test)]
 mod tcp_tests;
@@ -129,6 +131,7 @@ pub use probe::{
     STANDALONE_BACKOFF_MM,
 };
 pub use program_run::{LengthUnit, ProgramRun, RunEvent};
+pub use source::ProgramSource;
 
 /// Largest P (turn count) accepted on G2/G3: guards against programs that would expand to
 /// absurd paths (and hangs downstream).

@@ -3,8 +3,10 @@
 //! stand-alone outcome. Errors are located here: the subroutine file a line belongs to and
 //! the calls that led to it ([`GcodeError::file`], [`GcodeError::calls`]).
 
-use super::flow::{Program, Runner, StructureError};
+use super::flow::Runner;
 use super::probe::{ProbeOutcome, ProbeRequest};
+use super::program::{Pos, Program};
+use super::source::ProgramSource;
 use super::{CanonKind, CanonMove, InterpConfig};
 use crate::syntax::GcodeError;
 
@@ -111,11 +113,11 @@ enum State {
 pub struct ProgramRun {
     prog: Program,
     runner: Runner,
-    pc: usize,
-    structure_error: Option<StructureError>,
+    /// Where the next line is read.
+    pc: Pos,
     state: State,
-    /// Line index of the last probe block.
-    probe_index: usize,
+    /// The place of the last probe block.
+    probe_at: Pos,
     /// Where the length unit changed: (number of moves emitted before, the unit after).
     unit_changes: Vec<(usize, LengthUnit)>,
     /// Where tool centre point control (G43.4) changed: (moves emitted before, tool length
@@ -126,21 +128,37 @@ pub struct ProgramRun {
 }
 
 impl ProgramRun {
-    /// Parses `src` and reads the subroutine files it calls (from
-    /// [`InterpConfig::subroutine_dirs`]); nothing runs yet.
+    /// A run of the program text `src` (held as an in-memory source, see
+    /// [`Self::from_source`]); nothing runs yet.
     ///
     /// # Errors
-    /// A subroutine file that cannot be read, lacks its definition or has a syntax error.
-    /// (Errors of the program itself come from [`Self::resume`], when execution reaches them.)
+    /// As [`Self::from_source`].
     pub fn new(src: &str, cfg: &InterpConfig) -> Result<Self, GcodeError> {
-        let (prog, structure_error) = Program::new(src, cfg)?;
+        Self::from_source(Box::new(std::io::Cursor::new(src.as_bytes().to_vec())), cfg)
+    }
+
+    /// A run of the program read from `source` (a file, from its present position, or a
+    /// `std::io::Cursor`): lines are read as execution reaches them, loops and calls seek
+    /// back to them, and only the O-word lines' places are held (see `program`), so a program
+    /// of any length runs in the same memory. With [`InterpConfig::subroutine_dirs`] the
+    /// text is scanned once now and the subroutine files it calls are read; nothing runs yet.
+    /// The source must not change during the run.
+    ///
+    /// # Errors
+    /// A source that cannot be read; a subroutine file that cannot be read, lacks its
+    /// definition or has a syntax error. (Errors of the program itself come from
+    /// [`Self::resume`], when execution reaches them.)
+    pub fn from_source(
+        source: Box<dyn ProgramSource>,
+        cfg: &InterpConfig,
+    ) -> Result<Self, GcodeError> {
+        let prog = Program::new(source, cfg)?;
         Ok(Self {
+            pc: prog.origin(),
+            probe_at: prog.origin(),
             prog,
             runner: Runner::new(cfg),
-            pc: 0,
-            structure_error,
             state: State::Running,
-            probe_index: 0,
             unit_changes: vec![(0, LengthUnit::Mm)],
             tcp_changes: vec![(0, None)],
             emitted_before: 0,
@@ -228,7 +246,7 @@ impl ProgramRun {
                 Ok(())
             }
             Err(e) => {
-                let e = self.locate(e, Some(self.probe_index));
+                let e = self.locate(e, Some(self.probe_at));
                 self.state = State::Failed(e.clone());
                 Err(e)
             }
@@ -285,19 +303,19 @@ impl ProgramRun {
             if self.runner.interp.is_ended() {
                 return Ok(Some(RunEvent::Ended));
             }
-            if self.pc >= self.prog.lines.len() {
+            let fetched = self.prog.fetch(self.pc);
+            let Some((at, line, next)) = fetched.map_err(|e| self.locate(e, Some(self.pc)))? else {
                 break;
-            }
-            if let Some((at, index, e)) = &self.structure_error {
-                if self.pc >= *at {
+            };
+            if let Some((first, index, e)) = self.prog.structure_error.as_deref() {
+                if at >= *first {
                     return Err(self.locate(e.clone(), *index));
                 }
             }
-            let pc = self.pc;
             let emitted = out.len();
-            self.pc = match self.runner.step(&self.prog, pc, out) {
+            self.pc = match self.runner.step(&mut self.prog, (at, &line, next), out) {
                 Ok(next) => next,
-                Err(e) => return Err(self.locate(e, Some(pc))),
+                Err(e) => return Err(self.locate(e, Some(at))),
             };
             let unit = self.runner.interp.length_unit();
             if self.unit_changes.last().map(|c| c.1) != Some(unit) {
@@ -310,11 +328,11 @@ impl ProgramRun {
                     .push((self.emitted_before + emitted - first, tcp));
             }
             if let Some(request) = self.runner.probe {
-                self.probe_index = pc;
+                self.probe_at = at;
                 return Ok(Some(RunEvent::Probe(request)));
             }
         }
-        if let Some((_, index, e)) = self.structure_error.take() {
+        if let Some((_, index, e)) = self.prog.structure_error.take().map(|b| *b) {
             return Err(self.locate(e, index));
         }
         if let Some(e) = &self.prog.tail_error {
@@ -324,10 +342,10 @@ impl ProgramRun {
         Ok(Some(RunEvent::Ended))
     }
 
-    /// Places an error of line index `index` (`None`: the main program) in its file, with the
-    /// calls active now. Errors located already (those of reading a subroutine file) and the
-    /// main program's syntax error are left as they are.
-    fn locate(&self, mut e: GcodeError, index: Option<usize>) -> GcodeError {
+    /// Places an error of the line at `index` (`None`: the main program) in its file, with
+    /// the calls active now. Errors located already (those of reading a subroutine file) and
+    /// the main program's syntax error are left as they are.
+    fn locate(&self, mut e: GcodeError, index: Option<Pos>) -> GcodeError {
         if e.file.is_some() || !e.calls.is_empty() || self.prog.tail_error.as_ref() == Some(&e) {
             return e;
         }

@@ -2,8 +2,9 @@
 //! [`super::MOVES_PER_PIECE`] canonical moves at a time ([`interp::ProgramRun::resume_at_most`]),
 //! each batch is planned from where the previous one left the machine
 //! ([`motion::plan_from`]), checked (rotary words, tools, travel, in the program's units) and
-//! handed out. A program of any length then holds its parsed text and one piece's moves and
-//! plan, never all its moves or its whole timed plan.
+//! handed out. A program file is read as it runs ([`interp::ProgramRun::from_source`]: only
+//! its O-word lines' places are held), so a program of any length holds one piece's moves and
+//! plan, never its text, all its moves or its whole timed plan.
 //!
 //! Pieces join as those of [`super::PlanPieces`] do (the same planner state carried over); a
 //! program of at most one piece is planned exactly as [`super::load_plan_placed`] plans it.
@@ -11,7 +12,8 @@
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 
-use super::{check_tools, interp, refuse_rotary, InterpConfig, LineUnits, ProgramError};
+use super::{check_tools, interp, interp_config, interp_config_in, refuse_rotary};
+use super::{LineUnits, ProgramError};
 use crate::machine::MachineSpec;
 use crate::motion::{self, Plan, PlanStart, RotaryLimits};
 use crate::setup::Placement;
@@ -47,12 +49,13 @@ pub struct PlanStream<'a> {
 }
 
 impl<'a> PlanStream<'a> {
-    /// Reads the program at `path` placed by `placement` (work offsets; subroutine files from
-    /// the program's folder, then the placement's), starting at rest at `start_mm`; the text is
-    /// parsed and dropped, nothing is interpreted yet.
+    /// The program at `path` placed by `placement` (work offsets; subroutine files from the
+    /// program's folder, then the placement's), starting at rest at `start_mm`: the file is
+    /// checked (UTF-8), scanned for its O-words and subroutine files and kept open, to be read
+    /// as it is interpreted; nothing is interpreted yet.
     ///
     /// # Errors
-    /// Reading, syntax, subroutine files (see [`ProgramRun::new`]).
+    /// Reading, subroutine files (see [`ProgramRun::from_source`]).
     pub fn load(
         path: &Path,
         machine: &'a MachineSpec,
@@ -61,21 +64,31 @@ impl<'a> PlanStream<'a> {
         placement: &Placement,
         moves_per_piece: usize,
     ) -> Result<Self, ProgramError> {
-        let (file, text) = super::read_program(path)?;
-        let dirs = placement.search_path(Some(path));
-        let source = Source {
-            text: &text,
-            file: &file,
-            placement,
-            subroutine_dirs: dirs,
+        let file = path.display().to_string();
+        let (reader, fingerprint) = match crate::read::open_text(path) {
+            Ok(opened) => opened,
+            Err(err) => return Err(ProgramError::Io { file, err }),
         };
-        Self::from_source(source, machine, start_mm, tools, moves_per_piece)
+        let cfg = interp_config(machine, start_mm, tools, placement, Some(path));
+        let run =
+            ProgramRun::from_source(Box::new(reader), &cfg).map_err(|err| ProgramError::Gcode {
+                file: file.clone(),
+                err,
+            })?;
+        Ok(Self::with_run(
+            file,
+            fingerprint,
+            run,
+            (machine, tools),
+            start_mm,
+            moves_per_piece,
+        ))
     }
 
     /// Program text placed by `source`; `moves_per_piece` at least 1.
     ///
     /// # Errors
-    /// Syntax and subroutine files (see [`ProgramRun::new`]).
+    /// Subroutine files (see [`ProgramRun::from_source`]).
     pub fn from_source(
         source: Source<'_>,
         machine: &'a MachineSpec,
@@ -83,24 +96,36 @@ impl<'a> PlanStream<'a> {
         tools: &'a ToolTable,
         moves_per_piece: usize,
     ) -> Result<Self, ProgramError> {
-        let (tool_lengths_mm, tool_diameters_mm) = tools.interp_data(machine);
-        let cfg = InterpConfig {
-            start_mm,
-            work_offsets_mm: source.placement.work_offsets_mm,
-            tool_lengths_mm,
-            tool_diameters_mm,
-            subroutine_dirs: source.subroutine_dirs,
-            ..InterpConfig::default()
-        };
+        let dirs = source.subroutine_dirs;
+        let cfg = interp_config_in(machine, start_mm, tools, source.placement, dirs);
         let run = ProgramRun::new(source.text, &cfg).map_err(|err| ProgramError::Gcode {
             file: source.file.to_string(),
             err,
         })?;
         let mut hasher = std::collections::hash_map::DefaultHasher::new();
         source.text.hash(&mut hasher);
-        Ok(Self {
-            file: source.file.to_string(),
-            fingerprint: hasher.finish(),
+        let file = source.file.to_string();
+        Ok(Self::with_run(
+            file,
+            hasher.finish(),
+            run,
+            (machine, tools),
+            start_mm,
+            moves_per_piece,
+        ))
+    }
+
+    fn with_run(
+        file: String,
+        fingerprint: u64,
+        run: ProgramRun,
+        (machine, tools): (&'a MachineSpec, &'a ToolTable),
+        start_mm: [f64; 3],
+        moves_per_piece: usize,
+    ) -> Self {
+        Self {
+            file,
+            fingerprint,
             run,
             machine,
             tools,
@@ -112,7 +137,7 @@ impl<'a> PlanStream<'a> {
             answering: false,
             pending: None,
             held: Vec::new(),
-        })
+        }
     }
 
     /// This stream with its probe moves answered by the caller (see [`PlanStream`]).
