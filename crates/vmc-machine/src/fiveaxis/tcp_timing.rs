@@ -31,7 +31,9 @@
 //! interval, so `t_{k+1} − t_k = 2Δσ / (σ̇_k + σ̇_{k+1})`. The axes' speeds at the samples are
 //! within their limits by construction; between samples and for the accelerations the
 //! sampling leaves an error of the order of `Δσ·|q''|/|q'|` (a few per cent at most on the
-//! trunnion examples). The tip stays on the programmed path exactly: only the timing changes.
+//! trunnion examples). A ramp from or to rest shorter than one step costs up to `Δσ/σ̇` of
+//! extra time at each end (constant `σ̈` over the first and last interval). The tip stays on
+//! the programmed path exactly: only the timing changes.
 //!
 //! Units: mm, degrees, s.
 
@@ -417,3 +419,7 @@ fn slowest(
     });
     (ratio, binding)
 }
+
+#[cfg(test)]
+#[path = "tcp_timing_tests.rs"]
+mod tests;
