@@ -21,8 +21,18 @@ fn x_move() -> (Segment, Geometry, f64) {
     let s = spec();
     let program = "G10 L2 P1 X-150 Y0 Z-100\nG43.4 H1\nG0 X-50 Y0 Z50 B0 C0\nG1 X50 F1500\nM2\n";
     let plan = plan_program(program, "t.ngc", &s, "m.toml").unwrap();
-    let piece = plan.pieces.iter().find(|p| p.tcp_length_mm.is_some()).unwrap();
-    let seg = piece.plan.segments().iter().find(|s| s.line == 4).unwrap().clone();
+    let piece = plan
+        .pieces
+        .iter()
+        .find(|p| p.tcp_length_mm.is_some())
+        .unwrap();
+    let seg = piece
+        .plan
+        .segments()
+        .iter()
+        .find(|s| s.line == 4)
+        .unwrap()
+        .clone();
     (seg, s.geometry(), piece.tcp_length_mm.unwrap())
 }
 
@@ -52,7 +62,12 @@ fn a_speed_limit_on_x_gives_the_trapezoid_at_that_speed() {
     // The ramps (4 µm here) are shorter than one sample step of 0.1 mm: starting and stopping
     // take at most one step at the speed reached each, 2 × 0.1 / 5 s.
     let late_s = r.duration_s() - want.duration_s();
-    assert!((0.0..=0.04 + 1e-9).contains(&late_s), "{} vs {}", r.duration_s(), want.duration_s());
+    assert!(
+        (0.0..=0.04 + 1e-9).contains(&late_s),
+        "{} vs {}",
+        r.duration_s(),
+        want.duration_s()
+    );
     assert_eq!(r.binding, ('X', LimitKind::Velocity));
     assert!((r.slowest_ratio - 5.0 / 25.0).abs() < 1e-9);
     // Half-way in time, half-way along (the profile is symmetric).
