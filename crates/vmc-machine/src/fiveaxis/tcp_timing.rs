@@ -193,6 +193,12 @@ fn derivatives(
     (h, d1, d2)
 }
 
+/// One limit's own cap on `x = σ̇²` at a sample: the cap, the axis index, the kind.
+type Cap = (f64, usize, LimitKind);
+
+/// A sample's largest admissible `x` and the caps of the single limits.
+type SampleCaps = (f64, Vec<Cap>);
+
 /// One sample's limits on the path motion.
 #[derive(Clone, Copy)]
 struct SampleLimits<'a> {
@@ -222,7 +228,7 @@ impl SampleLimits<'_> {
     }
 
     /// Largest `x = σ̇²` allowed by the axes' limits, each limit's own cap and which it is.
-    fn caps(&self) -> (f64, Vec<(f64, usize, LimitKind)>) {
+    fn caps(&self) -> SampleCaps {
         let mut caps = Vec::new();
         for j in 0..6 {
             let (d1, d2) = (self.d1[j].abs(), self.d2[j].abs());
@@ -331,8 +337,7 @@ pub fn retime(
             only: None,
         })
         .collect();
-    let caps: Vec<(f64, Vec<(f64, usize, LimitKind)>)> =
-        samples.iter().map(SampleLimits::caps).collect();
+    let caps: Vec<SampleCaps> = samples.iter().map(SampleLimits::caps).collect();
     let mvc: Vec<f64> = caps.iter().map(|c| c.0.min(v_prog * v_prog)).collect();
     let x = passes(&samples, &mvc, h);
     let speed: Vec<f64> = x.iter().map(|x| x.max(0.0).sqrt()).collect();
@@ -383,7 +388,7 @@ fn passes(samples: &[SampleLimits], mvc: &[f64], h: f64) -> Vec<f64> {
 /// ramps broke).
 fn slowest(
     samples: &[SampleLimits],
-    caps: &[(f64, Vec<(f64, usize, LimitKind)>)],
+    caps: &[SampleCaps],
     v_prog: f64,
     exceeded: (char, LimitKind),
 ) -> (f64, (char, LimitKind)) {
