@@ -135,8 +135,9 @@ impl PieceTiming {
                 seg.kind,
                 SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc
             );
+            let ik = |p_mm, abc_deg| joints_for_tip(geom, Some(length_mm), p_mm, abc_deg);
             let r = if moving {
-                tcp_timing::retime(seg, geom, length_mm, limits)
+                tcp_timing::retime(seg, &ik, limits)
             } else {
                 None
             };

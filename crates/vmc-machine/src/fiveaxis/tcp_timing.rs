@@ -7,7 +7,7 @@
 //! trapezoidal profile of the path parameter `σ` (mm of tip path, or degrees of rotary angle
 //! for a move of the rotary axes alone) at the programmed feed `v_F` and path acceleration
 //! `a_F`. The axes are `q(σ)`: X, Y, Z from the nominal inverse kinematics
-//! ([`super::plan::joints_for_tip`]) and A, B, C linear in `σ`. Near the rotary singularity
+//! (`super::plan::joints_for_tip`) and A, B, C linear in `σ`. Near the rotary singularity
 //! (B ≈ 0 on a B/C table, A ≈ 0 on an A/C one) a move that swings C quickly drags the linear
 //! axes around the C line far faster than the tip moves, so the programmed profile can ask
 //! more of an axis than it has.
@@ -37,10 +37,11 @@
 //!
 //! Units: mm, degrees, s.
 
-use vmc_identify::chain::Geometry;
-
-use super::plan::joints_for_tip;
 use crate::motion::{MotionLimits, RotaryLimits, Segment};
+
+/// The linear axes X, Y, Z (mm) for a position (the tool tip in the part frame, mm) at
+/// rotary angles A, B, C (degrees): the inverse kinematics under G43.4.
+pub type InverseKinematics<'a> = &'a dyn Fn([f64; 3], [f64; 3]) -> [f64; 3];
 
 /// Largest step of the path parameter between samples: mm of tip path (degrees for a move of
 /// the rotary axes alone), and degrees of any rotary axis.
@@ -151,23 +152,18 @@ impl Retimed {
     }
 }
 
-/// The axes X, Y, Z, A, B, C at path parameter `sigma` of `seg` under G43.4 with a tool of
-/// `length_mm`.
-fn joints_at(seg: &Segment, geom: &Geometry, length_mm: f64, sigma: f64) -> [f64; 6] {
+/// The axes X, Y, Z, A, B, C at path parameter `sigma` of `seg` under G43.4.
+fn joints_at(seg: &Segment, ik: InverseKinematics, sigma: f64) -> [f64; 6] {
     let f = sigma / seg.profile.length_mm;
     let p = seg.geometry.point_at(seg.start_mm, sigma);
     let abc =
         [0, 1, 2].map(|i| seg.start_abc_deg[i] + f * (seg.end_abc_deg[i] - seg.start_abc_deg[i]));
-    let q = joints_for_tip(geom, Some(length_mm), p, abc);
+    let q = ik(p, abc);
     [q[0], q[1], q[2], abc[0], abc[1], abc[2]]
 }
 
 /// The samples' `q'` and `q''` along `seg`, with the step.
-fn derivatives(
-    seg: &Segment,
-    geom: &Geometry,
-    length_mm: f64,
-) -> (f64, Vec<[f64; 6]>, Vec<[f64; 6]>) {
+fn derivatives(seg: &Segment, ik: InverseKinematics) -> (f64, Vec<[f64; 6]>, Vec<[f64; 6]>) {
     let len = seg.profile.length_mm;
     let turn_deg = (0..3)
         .map(|i| (seg.end_abc_deg[i] - seg.start_abc_deg[i]).abs())
@@ -175,7 +171,7 @@ fn derivatives(
     let n = ((len.max(turn_deg) / MAX_STEP).ceil() as usize).clamp(MIN_INTERVALS, MAX_INTERVALS);
     let h = len / n as f64;
     let q: Vec<[f64; 6]> = (0..=n)
-        .map(|k| joints_at(seg, geom, length_mm, (k as f64 * h).min(len)))
+        .map(|k| joints_at(seg, ik, (k as f64 * h).min(len)))
         .collect();
     let mut d1 = vec![[0.0; 6]; n + 1];
     let mut d2 = vec![[0.0; 6]; n + 1];
@@ -312,20 +308,15 @@ fn programmed_violation(
     worst.map(|w| w.1)
 }
 
-/// Retimes the G43.4 move `seg` (tool of `length_mm` on `geom`) within `lim`; `None` when its
-/// programmed profile already keeps every axis within its limits (or it does not move).
+/// Retimes the G43.4 move `seg` (its axes by the inverse kinematics `ik`) within `lim`; `None`
+/// when its programmed profile already keeps every axis within its limits (or it does not move).
 #[must_use]
-pub fn retime(
-    seg: &Segment,
-    geom: &Geometry,
-    length_mm: f64,
-    lim: &JointLimits,
-) -> Option<Retimed> {
+pub fn retime(seg: &Segment, ik: InverseKinematics, lim: &JointLimits) -> Option<Retimed> {
     let profile = &seg.profile;
     if profile.length_mm <= 0.0 || seg.duration_s <= 0.0 {
         return None;
     }
-    let (h, d1, d2) = derivatives(seg, geom, length_mm);
+    let (h, d1, d2) = derivatives(seg, ik);
     let exceeded = programmed_violation(seg, h, &d1, &d2, lim)?;
     let v_prog = profile.v_limit_mm_per_s;
     let samples: Vec<SampleLimits> = (0..d1.len())

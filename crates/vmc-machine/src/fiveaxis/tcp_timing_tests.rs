@@ -1,39 +1,29 @@
-//! The retiming against closed forms: with B = C = 0 the part frame is parallel to the bed, so
-//! under G43.4 X, Y, Z follow the tip one for one and a limit on X alone must give the
-//! trapezoid of [`SpeedProfile`] at that limit.
+//! The retiming against closed forms: with the part frame parallel to the bed (B = C = 0 on a
+//! trunnion) X, Y, Z follow the tip one for one, so a limit on X alone must give the trapezoid
+//! of [`SpeedProfile`] at that limit.
 
 use super::*;
-use crate::fiveaxis::plan::plan_program;
-use crate::fiveaxis::FiveAxisSpec;
-use crate::motion::SpeedProfile;
+use crate::motion::{plan, SpeedProfile};
+use vmc_gcode::interp::{CanonKind, CanonMove};
 
-fn spec() -> FiveAxisSpec {
-    FiveAxisSpec::from_toml_str(
-        include_str!("../../../../machines/trunnion-bc.toml"),
-        "trunnion-bc.toml",
-    )
-    .unwrap()
+/// The axes one for one with the tip, shifted (B = C = 0 on a trunnion).
+fn parallel(p_mm: [f64; 3], _abc_deg: [f64; 3]) -> [f64; 3] {
+    [p_mm[0] - 150.0, p_mm[1], p_mm[2] - 250.0]
 }
 
-/// The line-4 segment of a G43.4 program moving 100 mm along X at F1500 with B = C = 0, and
-/// the machine's geometry and tool length.
-fn x_move() -> (Segment, Geometry, f64) {
-    let s = spec();
-    let program = "G10 L2 P1 X-150 Y0 Z-100\nG43.4 H1\nG0 X-50 Y0 Z50 B0 C0\nG1 X50 F1500\nM2\n";
-    let plan = plan_program(program, "t.ngc", &s, "m.toml").unwrap();
-    let piece = plan
-        .pieces
-        .iter()
-        .find(|p| p.tcp_length_mm.is_some())
-        .unwrap();
-    let seg = piece
-        .plan
-        .segments()
-        .iter()
-        .find(|s| s.line == 4)
-        .unwrap()
-        .clone();
-    (seg, s.geometry(), piece.tcp_length_mm.unwrap())
+/// A 100 mm move along X at F1500 (25 mm/s), planned with the default limits.
+fn x_move() -> Segment {
+    let mv = CanonMove {
+        line: 4,
+        kind: CanonKind::Feed {
+            end_mm: [50.0, 0.0, 50.0],
+            end_abc_deg: [0.0; 3],
+            feed_mm_per_min: 1500.0,
+        },
+    };
+    let limits = MotionLimits::default();
+    let p = plan(&[mv], [-50.0, 0.0, 50.0], &limits).unwrap();
+    p.segments()[0].clone()
 }
 
 fn unlimited() -> JointLimits {
@@ -45,19 +35,18 @@ fn unlimited() -> JointLimits {
 
 #[test]
 fn a_move_within_every_limit_keeps_its_programmed_timing() {
-    let (seg, geom, len) = x_move();
-    assert_eq!(retime(&seg, &geom, len, &unlimited()), None);
-    let s = spec();
-    let machine = JointLimits::new(&s.motion, &s.rotary_limits("m.toml").unwrap());
-    assert_eq!(retime(&seg, &geom, len, &machine), None);
+    let seg = x_move();
+    assert_eq!(retime(&seg, &parallel, &unlimited()), None);
+    let machine = JointLimits::new(&MotionLimits::default(), &RotaryLimits::default());
+    assert_eq!(retime(&seg, &parallel, &machine), None);
 }
 
 #[test]
 fn a_speed_limit_on_x_gives_the_trapezoid_at_that_speed() {
-    let (seg, geom, len) = x_move();
+    let seg = x_move();
     let mut lim = unlimited();
     lim.vel[0] = 5.0;
-    let r = retime(&seg, &geom, len, &lim).expect("retimed");
+    let r = retime(&seg, &parallel, &lim).expect("retimed");
     let want = SpeedProfile::new(100.0, 5.0, seg.profile.accel_mm_per_s2);
     // The ramps (4 µm here) are shorter than one sample step of 0.1 mm: starting and stopping
     // take at most one step at the speed reached each, 2 × 0.1 / 5 s.
@@ -76,10 +65,10 @@ fn a_speed_limit_on_x_gives_the_trapezoid_at_that_speed() {
 
 #[test]
 fn an_acceleration_limit_on_x_gives_the_gentler_trapezoid_at_the_feed() {
-    let (seg, geom, len) = x_move();
+    let seg = x_move();
     let mut lim = unlimited();
     lim.accel[0] = 50.0;
-    let r = retime(&seg, &geom, len, &lim).expect("retimed");
+    let r = retime(&seg, &parallel, &lim).expect("retimed");
     let want = SpeedProfile::new(100.0, 25.0, 50.0);
     let rel = (r.duration_s() - want.duration_s()).abs() / want.duration_s();
     assert!(rel < 1e-3, "{} vs {}", r.duration_s(), want.duration_s());
@@ -89,11 +78,11 @@ fn an_acceleration_limit_on_x_gives_the_gentler_trapezoid_at_the_feed() {
 
 #[test]
 fn the_retimed_distance_rises_from_zero_to_the_length() {
-    let (seg, geom, len) = x_move();
+    let seg = x_move();
     let mut lim = unlimited();
     lim.vel[0] = 7.0;
     lim.accel[0] = 40.0;
-    let r = retime(&seg, &geom, len, &lim).unwrap();
+    let r = retime(&seg, &parallel, &lim).unwrap();
     assert_eq!(r.distance_at(0.0), 0.0);
     assert_eq!(r.distance_at(r.duration_s()), 100.0);
     let mut last = 0.0;
