@@ -269,7 +269,7 @@ impl SampleLimits<'_> {
     }
 }
 
-/// The programmed profile's path acceleration at path parameter `sigma` (start of the phase).
+/// The programmed profile's path acceleration at local time `t_s`.
 fn programmed_accel(seg: &Segment, t_s: f64) -> f64 {
     let p = &seg.profile;
     if t_s < p.t_accel_s {
