@@ -69,6 +69,13 @@ fn the_g43_4_program_is_compensated_in_position_and_tool_axis_on_the_b_c_machine
     }
     assert!(reports[0].contains("the controller corrects X, Y, Z and the rotary axes"));
     assert!(reports[0].contains("tool-centre-point control: under G43.4"));
+    // The rapids that swing the table's side faces into place drag X beyond its speed limit
+    // at their programmed timing: they are slowed.
+    assert!(
+        reports[0].contains("G43.4: feed limited by the axes' limits on 2 moves, slowest 78 % of programmed (line 36, axis X velocity)"),
+        "{}",
+        reports[0].lines().take(6).collect::<Vec<_>>().join("\n")
+    );
     assert!(reports[1].contains("the controller corrects X, Y, Z (--rotary-comp off)"));
     let (on, off) = (summary(dir.path(), "on"), summary(dir.path(), "off"));
     // One point per dwell of the program.
@@ -113,6 +120,7 @@ fn g43_4_is_refused_where_it_cannot_work_with_line_and_column() {
     let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
     write("h.ngc", "G0 Z0\nG43.4 H7\nM2\n");
     write("a.ngc", "G43.4 H1\nG0 X0 Y0 Z50 A10\nM2\n");
+    write("v.ngc", "G0 Z0\nG43.5 H1 I0 J0 K1\nM2\n");
     let bc = path("machines/trunnion-bc.toml");
     let err = refused(
         &vmc(dir.path(), &["run", "h.ngc", "--machine", &bc]),
@@ -128,6 +136,15 @@ fn g43_4_is_refused_where_it_cannot_work_with_line_and_column() {
     );
     assert!(
         err.contains("line 2, column 14: G43.4: this machine has no A axis"),
+        "{err}"
+    );
+    // The tool axis as a vector (Fanuc's G43.5) is not implemented: angles under G43.4 are.
+    let err = refused(
+        &vmc(dir.path(), &["run", "v.ngc", "--machine", &bc]),
+        "G43.5",
+    );
+    assert!(
+        err.contains("v.ngc: line 2, column 1: G43.5 (tool centre point control with the tool axis as a vector I J K; program the rotary angles under G43.4) is not supported"),
         "{err}"
     );
     // The three-axis machine has no kinematics for it.

@@ -13,7 +13,7 @@ use crate::record;
 use crate::report::fiveaxis::{self as five_report, FiveAxisSummary};
 use vmc_identify::chain::Pose;
 use vmc_machine::fiveaxis::identified::IdentifiedModel;
-use vmc_machine::fiveaxis::plan::plan_program;
+use vmc_machine::fiveaxis::plan::{plan_program, TcpLimitReport};
 use vmc_machine::fiveaxis::run::{self as five, Controller, FivePoint, Sampling};
 use vmc_machine::fiveaxis::{FiveAxisSpec, TrueMachine};
 
@@ -90,7 +90,11 @@ pub fn run(cfg: &FiveAxisRunConfig, out: &mut dyn Write) -> Result<()> {
     .with_context(|| {
         format!("{name}: the program has no measurement points (no G4 dwell); use --every-cycle to measure during motion")
     })?;
-    let tcp = plan.pieces.iter().any(|p| p.tcp_length_mm.is_some());
+    let tcp = plan
+        .pieces
+        .iter()
+        .any(|p| p.tcp_length_mm.is_some())
+        .then(|| plan.tcp_limits());
     let report = report_text(cfg, &evaluated, &summary, model.as_ref(), tcp)?;
     out.write_all(report.as_bytes())?;
     if let Some(rrd) = &cfg.rrd {
@@ -131,7 +135,7 @@ fn report_text(
     points: &[FivePoint],
     summary: &FiveAxisSummary,
     model: Option<&IdentifiedModel>,
-    tcp: bool,
+    tcp: Option<Option<TcpLimitReport>>,
 ) -> Result<String> {
     let mut out: Vec<u8> = Vec::new();
     let spec = &cfg.machine;
@@ -144,8 +148,9 @@ fn report_text(
         spec.machine.chain
     )?;
     writeln!(out, "thermal state: {}", five_report::NO_THERMAL_MODEL)?;
-    if tcp {
+    if let Some(limits) = tcp {
         writeln!(out, "tool-centre-point control: under G43.4 the program gives the tool tip in the part frame; the axes come from the nominal inverse kinematics")?;
+        writeln!(out, "{}", tcp_limits_line(limits.as_ref()))?;
     }
     if let (Some(m), Some(path)) = (model, &cfg.identified) {
         writeln!(
@@ -169,4 +174,28 @@ fn report_text(
     five_report::write_table(&spec.geometry(), points, &mut out)?;
     five_report::write_summary(summary, &mut out)?;
     Ok(String::from_utf8_lossy(&out).to_string())
+}
+
+/// What the axes' limits did to the G43.4 moves, in one line.
+fn tcp_limits_line(limits: Option<&TcpLimitReport>) -> String {
+    let Some(r) = limits else {
+        return "G43.4: no move had to be slowed for the axes' speed and acceleration limits"
+            .to_string();
+    };
+    let (axis, kind) = (r.binding.0, r.binding.1.name());
+    let moves = if r.moves == 1 { "move" } else { "moves" };
+    if r.slowest_ratio < 1.0 {
+        format!(
+            "G43.4: feed limited by the axes' limits on {} {moves}, slowest {:.0} % of programmed (line {}, axis {axis} {kind}); {:+.3} s of machine time",
+            r.moves,
+            100.0 * r.slowest_ratio,
+            r.slowest_line,
+            r.added_s
+        )
+    } else {
+        format!(
+            "G43.4: gentler speed ramps on {} {moves} for the axes' limits (axis {axis} {kind}), the programmed feed kept; {:+.3} s of machine time",
+            r.moves, r.added_s
+        )
+    }
 }

@@ -488,7 +488,8 @@ fn g_action(code: u32) -> Result<(u32, GAction), Rejected> {
     })
 }
 
-/// Classifies a G code we do not implement: known to LinuxCNC (unsupported) or unknown.
+/// Classifies a G code we do not implement: known to LinuxCNC, or (G43.5) to the controllers
+/// whose G43.4 the interpreter follows (unsupported), or unknown.
 fn g_unsupported(code: u32) -> Rejected {
     let what = match code {
         50..=53 => "spline",
@@ -496,6 +497,7 @@ fn g_unsupported(code: u32) -> Rejected {
         171 | 181 | 191 => "UVW plane",
         330 | 331 => "spindle-synchronised motion",
         432 => "additional tool length offset",
+        435 => "tool centre point control with the tool axis as a vector I J K; program the rotary angles under G43.4",
         700 | 710..=712 | 720..=722 | 760 => "lathe cycle",
         960 | 970 => "spindle speed mode",
         _ => return Rejected::Unknown,
@@ -608,7 +610,7 @@ mod tests {
 
     #[test]
     fn known_linuxcnc_codes_are_unsupported_and_unknown_codes_invalid() {
-        for text in ["G43.2", "G76 Z1", "G33", "M98", "G5.2"] {
+        for text in ["G43.2", "G43.5 I0 J0 K1", "G76 Z1", "G33", "M98", "G5.2"] {
             let e = dec(text).unwrap_err();
             assert_eq!(e.kind, GcodeErrorKind::Unsupported, "{text}: {e}");
             assert!(

@@ -15,6 +15,7 @@ pub mod plan;
 pub mod probe;
 pub mod run;
 pub mod spec;
+pub mod tcp_timing;
 pub mod truth;
 
 pub use spec::FiveAxisSpec;

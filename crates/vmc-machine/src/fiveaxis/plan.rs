@@ -14,9 +14,14 @@
 //!   (the nominal chain's forward kinematics of the axes, or its inverse). A G43.4 piece is
 //!   thus interpolated in the part frame: the tip runs along the programmed line or arc at the
 //!   programmed feed relative to the part while the rotary axes turn in step, and the axes
-//!   follow from the nominal inverse kinematics at every instant ([`joints_for_tip`]). The
-//!   linear axes' own speeds are not limited under G43.4 (a real controller slows the tip
-//!   where they would exceed theirs); their travel is checked every [`TRAVEL_CHECK_STEP_S`].
+//!   follow from the nominal inverse kinematics at every instant ([`joints_for_tip`]). Their
+//!   travel is checked every [`TRAVEL_CHECK_STEP_S`] of the programmed timing.
+//! - **Axis limits under G43.4.** A move whose programmed timing would drive an axis beyond
+//!   its speed or acceleration limit is retimed along the same path
+//!   ([`super::tcp_timing`]): the tip slows where it must, as a real controller's does; the
+//!   piece's [`Piece::timing`] holds the new timing and every reading over time (the
+//!   commanded points, [`FivePlan::joints_at`], the durations) follows it. Pieces without
+//!   G43.4 keep the planner's timing unchanged.
 //!
 //! The inverse kinematics is the nominal chain's: the controller's model without errors (the
 //! compensation of [`super::run`] acts on top of it). Units: mm, degrees, s.
@@ -31,6 +36,7 @@ use vmc_identify::errors::ErrorState;
 use vmc_identify::htm::tip_in_workpiece_mm;
 use vmc_identify::inverse::nominal_linear_axes;
 
+use super::tcp_timing::{self, JointLimits, LimitKind, Retimed};
 use super::FiveAxisSpec;
 use crate::machine::MachineError;
 use vmc_identify::inverse::HtmError;
@@ -105,6 +111,137 @@ pub struct Piece {
     /// The tool length under G43.4 (positions are tool tips in the part frame), `None` for
     /// machine positions.
     pub tcp_length_mm: Option<f64>,
+    /// Under G43.4, the timing within the axes' limits; `None`: the plan's own timing.
+    pub timing: Option<PieceTiming>,
+}
+
+/// The timing of a G43.4 piece's segments within the axes' limits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PieceTiming {
+    /// Start of each segment from the piece's start, s.
+    pub t_start_s: Vec<f64>,
+    /// Each segment's retiming; `None` where the planned timing keeps within the limits.
+    pub retimed: Vec<Option<Retimed>>,
+}
+
+impl PieceTiming {
+    /// Retimes every moving segment of `plan` (under G43.4 with a tool of `length_mm`).
+    fn new(plan: &Plan, geom: &Geometry, length_mm: f64, limits: &JointLimits) -> Self {
+        let mut t_s = 0.0;
+        let mut t_start_s = Vec::with_capacity(plan.segments().len());
+        let mut retimed = Vec::with_capacity(plan.segments().len());
+        for seg in plan.segments() {
+            let moving = matches!(
+                seg.kind,
+                SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc
+            );
+            let ik = |p_mm, abc_deg| joints_for_tip(geom, Some(length_mm), p_mm, abc_deg);
+            let r = if moving {
+                tcp_timing::retime(seg, &ik, limits)
+            } else {
+                None
+            };
+            t_start_s.push(t_s);
+            // The same sum as the planner's: unchanged segments keep their times exactly.
+            t_s += r.as_ref().map_or(seg.duration_s, Retimed::duration_s);
+            retimed.push(r);
+        }
+        Self { t_start_s, retimed }
+    }
+}
+
+impl Piece {
+    /// The piece's duration, s.
+    #[must_use]
+    pub fn duration_s(&self) -> f64 {
+        match &self.timing {
+            Some(t) => t.t_start_s.last().map_or(0.0, |t0| {
+                t0 + self.segment_duration_s(t.t_start_s.len() - 1)
+            }),
+            None => self.plan.duration_s(),
+        }
+    }
+
+    /// Start of segment `i` from the piece's start, s.
+    #[must_use]
+    pub fn segment_start_s(&self, i: usize) -> f64 {
+        match &self.timing {
+            Some(t) => t.t_start_s[i],
+            None => self.plan.segments()[i].t_start_s,
+        }
+    }
+
+    /// Duration of segment `i`, s.
+    #[must_use]
+    pub fn segment_duration_s(&self, i: usize) -> f64 {
+        match self.timing.as_ref().and_then(|t| t.retimed[i].as_ref()) {
+            Some(r) => r.duration_s(),
+            None => self.plan.segments()[i].duration_s,
+        }
+    }
+
+    /// Position (tool tip in the part frame under G43.4, axes otherwise; mm) and A, B, C
+    /// (degrees) at local time `t_local_s` of segment `i`.
+    #[must_use]
+    pub fn segment_state_at(&self, i: usize, t_local_s: f64) -> ([f64; 3], [f64; 3]) {
+        let seg = &self.plan.segments()[i];
+        match self.timing.as_ref().and_then(|t| t.retimed[i].as_ref()) {
+            None => (
+                seg.position_at_local(t_local_s),
+                seg.abc_at_local(t_local_s),
+            ),
+            Some(r) => {
+                if t_local_s >= r.duration_s() {
+                    return (seg.end_mm, seg.end_abc_deg);
+                }
+                let sigma = r.distance_at(t_local_s);
+                let f = sigma / seg.profile.length_mm;
+                let abc = [0, 1, 2].map(|k| {
+                    seg.start_abc_deg[k] + f * (seg.end_abc_deg[k] - seg.start_abc_deg[k])
+                });
+                (seg.geometry.point_at(seg.start_mm, sigma), abc)
+            }
+        }
+    }
+
+    /// Position and A, B, C at time `t_s` from the piece's start (see
+    /// [`Self::segment_state_at`]); the start before 0, the end after the piece.
+    #[must_use]
+    pub fn state_at(&self, t_s: f64) -> ([f64; 3], [f64; 3]) {
+        let Some(timing) = &self.timing else {
+            return (self.plan.position_at(t_s), self.plan.abc_at(t_s));
+        };
+        match timing
+            .t_start_s
+            .partition_point(|&t0| t0 <= t_s)
+            .checked_sub(1)
+        {
+            Some(i) => self.segment_state_at(i, t_s - timing.t_start_s[i]),
+            None => (
+                self.plan.start_mm(),
+                self.plan
+                    .segments()
+                    .first()
+                    .map_or([0.0; 3], |s| s.start_abc_deg),
+            ),
+        }
+    }
+}
+
+/// How the axes' limits slowed a program's G43.4 moves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TcpLimitReport {
+    /// Moves retimed.
+    pub moves: usize,
+    /// Lowest admissible path speed over the programmed one, over all retimed moves (1 when
+    /// only their ramps were made gentler).
+    pub slowest_ratio: f64,
+    /// Source line of the move with the lowest ratio.
+    pub slowest_line: usize,
+    /// The axis and the kind of limit there.
+    pub binding: (char, LimitKind),
+    /// Time the retimed moves take beyond their programmed timing, s.
+    pub added_s: f64,
 }
 
 /// A five-axis program planned: its pieces in time order and the nominal geometry.
@@ -125,9 +262,37 @@ impl FivePlan {
     /// The program's duration, s.
     #[must_use]
     pub fn duration_s(&self) -> f64 {
-        self.pieces
-            .last()
-            .map_or(0.0, |p| p.t0_s + p.plan.duration_s())
+        self.pieces.last().map_or(0.0, |p| p.t0_s + p.duration_s())
+    }
+
+    /// How the axes' limits slowed the G43.4 moves; `None` when none had to be.
+    #[must_use]
+    pub fn tcp_limits(&self) -> Option<TcpLimitReport> {
+        let mut report: Option<TcpLimitReport> = None;
+        for piece in &self.pieces {
+            let Some(timing) = &piece.timing else {
+                continue;
+            };
+            for (seg, r) in piece.plan.segments().iter().zip(&timing.retimed) {
+                let Some(r) = r else { continue };
+                let added_s = r.duration_s() - r.programmed_s;
+                let rep = report.get_or_insert(TcpLimitReport {
+                    moves: 0,
+                    slowest_ratio: f64::INFINITY,
+                    slowest_line: seg.line,
+                    binding: r.binding,
+                    added_s: 0.0,
+                });
+                rep.moves += 1;
+                rep.added_s += added_s;
+                if r.slowest_ratio < rep.slowest_ratio {
+                    rep.slowest_ratio = r.slowest_ratio;
+                    rep.slowest_line = seg.line;
+                    rep.binding = r.binding;
+                }
+            }
+        }
+        report
     }
 
     /// The commanded axes (linear mm, A B C degrees) at program time `t_s`.
@@ -141,14 +306,8 @@ impl FivePlan {
             .or(self.pieces.first());
         match piece {
             Some(p) => {
-                let local_s = t_s - p.t0_s;
-                let abc = p.plan.abc_at(local_s);
-                let q = joints_for_tip(
-                    &self.geom,
-                    p.tcp_length_mm,
-                    p.plan.position_at(local_s),
-                    abc,
-                );
+                let (pos_mm, abc) = p.state_at(t_s - p.t0_s);
+                let q = joints_for_tip(&self.geom, p.tcp_length_mm, pos_mm, abc);
                 (q, abc)
             }
             None => ([0.0; 3], [0.0; 3]),
@@ -250,6 +409,7 @@ pub fn plan_program(
         unit: interp::LengthUnit::Mm,
     };
     let geom = spec.geometry();
+    let joint_limits = JointLimits::new(&spec.motion, &rotary);
     let (mut q_mm, mut abc_deg, mut t0_s) = (spec.axes.home_mm, [0.0; 3], 0.0);
     let mut pieces = Vec::new();
     for (moves, length_mm) in runs(&moves, &tcp) {
@@ -273,13 +433,15 @@ pub fn plan_program(
         let end = plan.end_state();
         abc_deg = end.abc_deg;
         q_mm = joints_for_tip(&geom, length_mm, end.pos_mm, abc_deg);
-        let duration_s = plan.duration_s();
-        pieces.push(Piece {
+        let timing = length_mm.map(|l| PieceTiming::new(&plan, &geom, l, &joint_limits));
+        let piece = Piece {
             plan,
             t0_s,
             tcp_length_mm: length_mm,
-        });
-        t0_s += duration_s;
+            timing,
+        };
+        t0_s += piece.duration_s();
+        pieces.push(piece);
     }
     Ok(FivePlan { pieces, geom })
 }

@@ -108,31 +108,30 @@ pub fn commanded_points(plan: &FivePlan, sampling: Sampling) -> Vec<Commanded> {
 fn piece_points(plan: &FivePlan, piece: &Piece, sampling: Sampling, out: &mut Vec<Commanded>) {
     let joints =
         |p_mm, abc_deg| joints_for_tip(plan.geometry(), piece.tcp_length_mm, p_mm, abc_deg);
-    for seg in piece.plan.segments() {
+    for (i, seg) in piece.plan.segments().iter().enumerate() {
         let moving = matches!(
             seg.kind,
             SegmentKind::Rapid | SegmentKind::Feed | SegmentKind::Arc
         );
+        let (t_start_s, duration_s) = (piece.segment_start_s(i), piece.segment_duration_s(i));
         match (seg.kind, sampling) {
             (SegmentKind::Dwell, _) => out.push(Commanded {
-                time_s: piece.t0_s + seg.t_start_s + 0.5 * seg.duration_s,
+                time_s: piece.t0_s + t_start_s + 0.5 * duration_s,
                 line: seg.line,
                 q_mm: joints(seg.end_mm, seg.end_abc_deg),
                 abc_deg: seg.end_abc_deg,
                 at_dwell: true,
             }),
-            (_, Sampling::EveryCycle(dt_s)) if moving && seg.duration_s > 0.0 => {
-                let n = (seg.duration_s / dt_s).ceil() as usize;
+            (_, Sampling::EveryCycle(dt_s)) if moving && duration_s > 0.0 => {
+                let n = (duration_s / dt_s).ceil() as usize;
                 for k in 0..n {
                     let t_local_s = k as f64 * dt_s;
+                    let (pos_mm, abc_deg) = piece.segment_state_at(i, t_local_s);
                     out.push(Commanded {
-                        time_s: piece.t0_s + seg.t_start_s + t_local_s,
+                        time_s: piece.t0_s + t_start_s + t_local_s,
                         line: seg.line,
-                        q_mm: joints(
-                            seg.position_at_local(t_local_s),
-                            seg.abc_at_local(t_local_s),
-                        ),
-                        abc_deg: seg.abc_at_local(t_local_s),
+                        q_mm: joints(pos_mm, abc_deg),
+                        abc_deg,
                         at_dwell: false,
                     });
                 }
