@@ -167,3 +167,16 @@ fn a_program_branching_on_probed_micrometres_is_refused_not_run_on_another_path(
     assert!(err.contains("took another path"), "{err}");
     assert!(err.contains("after the probe move at line 4"), "{err}");
 }
+
+#[test]
+fn probe_update_without_compensation_is_refused_by_the_command_line() {
+    let dir = example_folder("probe-update-alone");
+    let out = vmc(
+        dir.path(),
+        &["run", "probe_drift_diag.ngc", "--probe-update", "off"],
+    );
+    assert_eq!(out.status.code(), Some(2), "a usage error");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--compensate"), "{err}");
+    assert!(!dir.path().join("out").exists());
+}

@@ -258,9 +258,10 @@ pub struct RunArgs {
     pub rrd: RrdArgs,
     /// With --compensate: `on` (default) updates the model's drift from the program's probe
     /// moves touching a `reference = true` artefact of the setup, `off` only reports them.
-    #[arg(long, value_name = "on|off", default_value = "on", action = clap::ArgAction::Set,
+    #[arg(long, value_name = "on|off", requires = "compensate", hide_possible_values = true,
+          action = clap::ArgAction::Set,
           value_parser = clap::builder::BoolishValueParser::new())]
-    pub probe_update: bool,
+    pub probe_update: Option<bool>,
 }
 
 impl RunArgs {
@@ -326,7 +327,7 @@ impl RunArgs {
             rrd,
             strict: self.run.strict,
             allow_other_machine: self.run.allow_other_machine,
-            probe_update: self.probe_update,
+            probe_update: self.probe_update.unwrap_or(true),
         })
     }
 }
