@@ -186,6 +186,26 @@ fn every_bad_machine_value_names_its_field_or_line() {
 }
 
 #[test]
+fn a_five_axis_machine_given_to_a_three_axis_command_is_named_as_such() {
+    let t = TempDir::new("five-axis-to-three");
+    let machine = repo("machines/trunnion-bc.toml").display().to_string();
+    let prog = repo("trajectories/trunnion_bc_tcp.ngc")
+        .display()
+        .to_string();
+    for args in [
+        vec!["check", &prog, "--machine", &machine],
+        vec!["interpret", &prog, "--machine", &machine],
+    ] {
+        let err = one_line_error(t.path(), &args);
+        assert!(
+            err.starts_with(&format!("{machine}: a five-axis machine")),
+            "{args:?}: {err}"
+        );
+        assert!(err.contains("`run`"), "what to use instead: {err}");
+    }
+}
+
+#[test]
 fn absurd_steps_are_refused_before_any_simulation() {
     let t = TempDir::new("steps");
     let prog = repo("trajectories/diag_xy.ngc").display().to_string();

@@ -118,7 +118,12 @@ pub struct RrdOutput {
 /// An unreadable or invalid machine file or sensor set, or a sensor set that does not fit.
 pub fn load_machine(path: Option<&Path>, sensors: Option<&Path>) -> Result<MachineSpec> {
     let spec = match path {
-        Some(p) => MachineSpec::load(p)?,
+        Some(p) => MachineSpec::load(p).map_err(|e| match e {
+            vmc_machine::machine::MachineError::FiveAxis { .. } => anyhow::anyhow!(
+                "{e}; five-axis machines are run with `run`, probed with `probe-campaign` and identified with `identify`"
+            ),
+            e => e.into(),
+        })?,
         None => MachineSpec::reference(),
     };
     let Some(file) = sensors else {

@@ -50,6 +50,12 @@ pub enum MachineError {
         /// What is wrong.
         msg: String,
     },
+    /// A five-axis machine file (it has `[[rotary]]` axes) where a three-axis one is expected.
+    #[error("{path}: a five-axis machine (it has `[[rotary]]` axes) where a three-axis machine is expected")]
+    FiveAxis {
+        /// The file.
+        path: String,
+    },
 }
 
 /// Name and kinematic structure.
@@ -210,7 +216,17 @@ impl MachineSpec {
 
     /// Parses and validates a machine description; `path` names it in errors.
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, MachineError> {
-        let spec: MachineSpec = parse_machine_toml(text, path)?;
+        let spec: MachineSpec = parse_machine_toml(text, path).map_err(|e| {
+            // A five-axis file fails the three-axis schema on its own sections: say what it is.
+            let five = toml::from_str::<toml::Table>(text).is_ok_and(|t| t.contains_key("rotary"));
+            if five {
+                MachineError::FiveAxis {
+                    path: path.to_string(),
+                }
+            } else {
+                e
+            }
+        })?;
         spec.validate(path)?;
         Ok(spec)
     }
@@ -406,6 +422,25 @@ mod tests {
             to,
             &REFERENCE_TOML[at + from.len()..]
         )
+    }
+
+    #[test]
+    fn a_five_axis_file_is_named_as_such_not_as_a_schema_error() {
+        let five = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../machines/trunnion-bc.toml"
+        ))
+        .expect("the B/C machine file is in the repository");
+        let err = MachineSpec::from_toml_str(&five, "bc.toml").unwrap_err();
+        assert!(matches!(err, MachineError::FiveAxis { .. }), "{err:?}");
+        assert!(
+            err.to_string().starts_with("bc.toml: a five-axis machine"),
+            "{err}"
+        );
+        // A three-axis file with a misspelt section still gets the schema's message.
+        let bad = reference_text_with("[axes]", "[axes]", "[axis]");
+        let err = MachineSpec::from_toml_str(&bad, "m.toml").unwrap_err();
+        assert!(matches!(err, MachineError::Parse { .. }), "{err:?}");
     }
 
     /// Validates `spec` and returns the invalid field's path and the whole message.
