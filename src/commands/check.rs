@@ -119,6 +119,18 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
         )?;
         wrote_recording(out, path, bytes, "")?;
     }
+    verdict(out, &file, sum, (probes, &station), stopped.as_ref())
+}
+
+/// The totals, the probe moves and the stop, then the verdict: `Ok` when clean, else the error
+/// the command exits with.
+fn verdict(
+    out: &mut dyn Write,
+    file: &str,
+    sum: collision::CheckSummary,
+    (probes, station): (usize, &vmc_machine::touch_probe::ProbeStation),
+    stopped: Option<&program::ProgramError>,
+) -> Result<()> {
     writeln!(
         out,
         "checked {} moves ({:.1} mm of path, {} poses): {} collision(s), {} travel violation(s)",
@@ -133,7 +145,7 @@ pub fn check(cfg: &CheckConfig, out: &mut dyn Write) -> Result<()> {
             station.probe().pretravel_mm() * 1e3
         )?;
     }
-    if let Some(stop) = &stopped {
+    if let Some(stop) = stopped {
         writeln!(
             out,
             "{stop} (on the nominal machine; the program stops here)"
