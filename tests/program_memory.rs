@@ -10,6 +10,9 @@
 //! during motion), back and forth, repeated in an O-word loop: a program of 100 000 moves
 //! against one of 10 000, and 10× the points of one program against its default sampling;
 //! the same moves written out line by line: a 3 MB text against a 0.3 MB one.
+//!
+//! `check` streams its program too (interpreted, planned and checked piece by piece): the same
+//! two texts hold the same peak memory.
 
 mod common;
 use common::*;
@@ -119,5 +122,24 @@ fn ten_times_the_points_hold_no_more_memory() {
     assert!(
         many_kb as f64 <= 1.2 * few_kb as f64,
         "peak RSS grew with the points: {many_kb} kB against {few_kb} kB"
+    );
+}
+
+#[test]
+fn check_holds_no_more_memory_for_ten_times_the_program() {
+    let dir = TempDir::new("program-memory-check");
+    let mut kb = Vec::new();
+    for (name, repeats) in [("short", 1_000), ("long", 10_000)] {
+        let file = dir.path().join(format!("{name}.ngc"));
+        std::fs::write(&file, flat_diagonals(repeats)).unwrap();
+        // Exit status 0: the program was checked to its end and found clean.
+        kb.push(peak_rss_kb(dir.path(), &["check", file.to_str().unwrap()]));
+    }
+    let (short_kb, long_kb) = (kb[0], kb[1]);
+    eprintln!("check peak RSS: 10 000 moves {short_kb} kB, 100 000 moves {long_kb} kB");
+    // Held whole, the longer program's text, moves and plan are some 40 MB more.
+    assert!(
+        long_kb as f64 <= 1.2 * short_kb as f64,
+        "check's peak RSS grew with the program: {long_kb} kB against {short_kb} kB"
     );
 }

@@ -53,6 +53,8 @@
 
 pub use crate::collision_spec as spec;
 mod artefacts;
+mod checker;
+pub use checker::{check_plan, PlanChecker};
 pub mod stock;
 #[cfg(test)]
 mod tests;
@@ -63,7 +65,7 @@ use parry3d_f64::shape::{Cuboid, Cylinder, Shape};
 use serde::Serialize;
 
 use crate::machine::MachineSpec;
-use crate::motion::{self, Geometry, MotionError, Plan, Segment, SegmentKind};
+use crate::motion::{Geometry, MotionError, Segment, SegmentKind};
 use crate::tools::ToolTable;
 pub use spec::{BodyRole, BodySpec, CollisionSpec, FixtureSpec, ShapeKind, SpindleCylinder};
 use stock::CutStock;
@@ -660,114 +662,4 @@ impl PairHits {
             c.contact_point_mm = point;
         }
     }
-}
-
-/// Checks every segment of `plan` against the travel limits of `machine` and, with a `scene`,
-/// for collisions; reports each problem to `observer` move by move, in plan order.
-///
-/// Errors when the machine's travel range itself is invalid or a contact query is unsupported.
-pub fn check_plan(
-    plan: &Plan,
-    machine: &MachineSpec,
-    scene: Option<&Scene>,
-    observer: &mut dyn CheckObserver,
-) -> Result<CheckSummary, CheckError> {
-    let (tmin, tmax) = (machine.axes.travel_min_mm, machine.axes.travel_max_mm);
-    let mut sum = CheckSummary::default();
-    // Pairs (head body, static body) reported on the previous move: a move that starts in such
-    // a contact and gets no deeper is the same crash continuing (e.g. the retraction out of
-    // it), and is not reported again.
-    let mut reported_prev: Vec<(HeadBody, usize)> = Vec::new();
-    let mut cut_stock = scene.map(CutStock::new).transpose()?;
-    // The head's bodies; the tool's follows the tool changes.
-    let mut heads: Vec<Moving> = scene.map(|s| s.moving.clone()).unwrap_or_default();
-    for seg in plan.segments() {
-        if let (SegmentKind::ToolChange { tool }, Some(sc)) = (seg.kind, scene) {
-            if let Some(h) = heads.iter_mut().find(|h| h.body == HeadBody::Tool) {
-                *h = sc.loaded_tool_body(tool, machine, h);
-            }
-        }
-        let Some(kind) = move_kind(seg) else {
-            continue;
-        };
-        sum.segments += 1;
-        let length_mm = seg.geometry.length_mm();
-        sum.path_mm += length_mm;
-        for err in motion::segment_travel_violations(seg, tmin, tmax)? {
-            if let MotionError::AxisOutOfTravel {
-                line,
-                axis,
-                pos_mm,
-                min_mm,
-                max_mm,
-            } = err
-            {
-                sum.travel_violations += 1;
-                observer.on_problem(&Problem::Travel(TravelViolation {
-                    line,
-                    time_s: seg.t_start_s,
-                    axis,
-                    pos_mm,
-                    min_mm,
-                    max_mm,
-                }));
-            }
-        }
-        let Some(scene) = scene else { continue };
-        if length_mm <= 0.0 {
-            continue;
-        }
-        let mut hits: Vec<PairHits> = Vec::new();
-        let n = (length_mm / SAMPLE_SPACING_MM).ceil().max(1.0) as usize;
-        let (lo, hi) = segment_bounds(seg);
-        for m in &heads {
-            let (mlo, mhi) = Scene::moving_box(m, lo, hi);
-            for (si, s) in scene.statics.iter().enumerate() {
-                if s.cut || !overlap(mlo, mhi, s.lo_mm, s.hi_mm) {
-                    continue;
-                }
-                let Some(reason) = crash_reason(m.body, s.role, seg) else {
-                    continue;
-                };
-                let mut pair = PairHits::new(m.body, si, reason);
-                // On a line, only the samples whose bounding boxes can overlap (same results,
-                // cost ∝ the length near the body rather than the whole move).
-                let (k0, k1) = match line_window(seg, m, s) {
-                    Some((s0, s1)) => {
-                        let k0 = ((s0 / length_mm) * n as f64).floor().max(0.0) as usize;
-                        let k1 = ((s1 / length_mm) * n as f64).ceil().min(n as f64) as usize;
-                        (k0, k1)
-                    }
-                    None if matches!(seg.geometry, Geometry::Line { .. }) => continue,
-                    None => (0, n),
-                };
-                for k in k0..=k1 {
-                    let s_mm = length_mm * k as f64 / n as f64;
-                    let tip = seg.geometry.point_at(seg.start_mm, s_mm);
-                    sum.samples += 1;
-                    if let Some((depth_mm, point)) = scene.penetration(m, s, tip)? {
-                        pair.add(seg, kind, s, k, s_mm, tip, depth_mm, point);
-                    }
-                }
-                hits.push(pair);
-            }
-        }
-        if let Some(stock) = cut_stock.as_mut() {
-            hits.extend(stock.check_and_cut(seg, kind, scene, &heads, n, &mut sum.samples));
-        }
-        let mut reported_now = Vec::new();
-        for pair in hits {
-            let Some(c) = pair.found else { continue };
-            let continuing = reported_prev.contains(&(pair.head, pair.static_index))
-                && pair.start_depth_mm > 0.0
-                && c.depth_mm <= pair.start_depth_mm + CONTACT_TOLERANCE_MM;
-            reported_now.push((pair.head, pair.static_index));
-            if !continuing {
-                sum.collisions += 1;
-                observer.on_problem(&Problem::Collision(c));
-            }
-        }
-        reported_prev = reported_now;
-    }
-    Ok(sum)
 }

@@ -363,3 +363,76 @@ fn a_bad_collision_section_in_the_machine_file_names_the_field() {
     m.collision = None;
     assert!(Scene::new(&m, None).is_err());
 }
+
+#[test]
+fn a_program_checked_piece_by_piece_reports_what_its_whole_plan_reports() {
+    // A hole drilled, a rapid back into it (free: the Z-map carries the cut across pieces), a
+    // rapid beside it (a crash), a crash into the table that continues on the next move (one
+    // report, even when the two moves fall in different pieces) and a move beyond the travel.
+    let src = "S5000 M3\nG0 X150 Y140 Z-390\nG1 Z-410 F200\nG0 Z-395\nG0 Z-409\nG0 Z-395\n\
+               G0 X156\nG0 Z-403\nG0 Z-300\nG0 X250 Y250\nG1 Z-445 F300\nG1 X270 F300\n\
+               G1 Z-447\nG0 Z0\nG0 X800\nG0 X300\nM30";
+    let (m, s) = scene(BLOCK);
+    let plan = program::plan_source_unchecked(src, "p.ngc", &m, m.axes.home_mm).expect("plan");
+    let mut whole = Vec::new();
+    let whole_sum = check_plan(&plan, &m, Some(&s), &mut whole).expect("check");
+    assert_eq!((whole_sum.collisions, whole_sum.travel_violations), (3, 2));
+    let placement = crate::setup::Placement::of_machine(&m);
+    let tools = ToolTable::default();
+    for moves_per_piece in [1, 2, 3, 5] {
+        let source = program::Source {
+            text: src,
+            file: "p.ngc",
+            placement: &placement,
+            subroutine_dirs: Vec::new(),
+        };
+        let stream =
+            program::PlanStream::from_source(source, &m, m.axes.home_mm, &tools, moves_per_piece)
+                .expect("stream")
+                .without_travel_check();
+        let mut checker = PlanChecker::new(&m, Some(&s)).expect("checker");
+        let mut pieces = Vec::new();
+        for piece in stream {
+            checker
+                .check(&piece.expect("piece"), &mut pieces)
+                .expect("check");
+        }
+        let sum = checker.summary();
+        assert_eq!(
+            (
+                sum.segments,
+                sum.samples,
+                sum.collisions,
+                sum.travel_violations
+            ),
+            (
+                whole_sum.segments,
+                whole_sum.samples,
+                whole_sum.collisions,
+                whole_sum.travel_violations
+            ),
+            "{moves_per_piece} moves a piece"
+        );
+        assert!((sum.path_mm - whole_sum.path_mm).abs() < 1e-9);
+        assert_eq!(pieces.len(), whole.len(), "{moves_per_piece} moves a piece");
+        for (p, w) in pieces.iter().zip(&whole) {
+            // Times from the first piece's start, as in the whole plan.
+            let time_s = |p: &Problem| match p {
+                Problem::Collision(c) => c.time_s,
+                Problem::Travel(t) => t.time_s,
+            };
+            assert!((time_s(p) - time_s(w)).abs() < 1e-6, "{p} / {w}");
+            match (p, w) {
+                (Problem::Collision(p), Problem::Collision(w)) => {
+                    assert_eq!(
+                        (p.line, &p.other_body, p.reason),
+                        (w.line, &w.other_body, w.reason)
+                    );
+                    assert!((p.depth_mm - w.depth_mm).abs() < 1e-9, "{p:?} / {w:?}");
+                }
+                (Problem::Travel(p), Problem::Travel(w)) => assert_eq!(p.line, w.line),
+                _ => panic!("{p} / {w}"),
+            }
+        }
+    }
+}

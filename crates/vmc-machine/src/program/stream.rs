@@ -46,6 +46,12 @@ pub struct PlanStream<'a> {
     pending: Option<ProbeRequest>,
     /// The probe move (and any stop of its block) held for the next piece.
     held: Vec<CanonMove>,
+    /// Pieces are refused when a move leaves the travel (else: left to the caller's check).
+    travel_checked: bool,
+    /// The unit of length at each line of the last piece handed out.
+    units: LineUnits,
+    /// A probe answer stopped the program: the probe move is the last piece.
+    stopped: bool,
 }
 
 impl<'a> PlanStream<'a> {
@@ -137,6 +143,9 @@ impl<'a> PlanStream<'a> {
             answering: false,
             pending: None,
             held: Vec::new(),
+            travel_checked: true,
+            units: LineUnits::default(),
+            stopped: false,
         }
     }
 
@@ -147,13 +156,28 @@ impl<'a> PlanStream<'a> {
         self
     }
 
+    /// This stream without the travel check: a move beyond the travel is planned and handed
+    /// out, for a checker that reports every such move (as `check` does).
+    #[must_use]
+    pub fn without_travel_check(mut self) -> Self {
+        self.travel_checked = false;
+        self
+    }
+
+    /// The unit of length (G20/G21) at each line of the last piece handed out.
+    pub fn units(&self) -> &LineUnits {
+        &self.units
+    }
+
     /// The probe move the last piece stopped before, while it waits for its answer.
     pub fn pending_probe(&self) -> Option<ProbeRequest> {
         self.pending
     }
 
     /// Gives the pending probe move the machine's answer; returns #5061…#5070 as the program
-    /// reads them and its unit of length at the probe.
+    /// reads them and its unit of length at the probe. After an answer that stops the program
+    /// (an error), the stream's last piece is the probe move, made to its programmed end as on
+    /// the machine.
     ///
     /// # Errors
     /// No probe move waits; a G38.2/G38.4 without contact (LinuxCNC's words, with the file and
@@ -173,7 +197,10 @@ impl<'a> PlanStream<'a> {
         if let Some(mv) = self.held.first_mut() {
             super::end_probe_move(mv, &request, &outcome);
         }
-        self.run.probe_result(outcome).map_err(gcode)?;
+        if let Err(err) = self.run.probe_result(outcome) {
+            self.stopped = true;
+            return Err(gcode(err));
+        }
         let params = self.run.probe_params().unwrap_or_default();
         Ok((params, self.run.length_unit_at(self.emitted)))
     }
@@ -194,6 +221,9 @@ impl<'a> PlanStream<'a> {
         self.moves.clear();
         // The answered probe move starts this piece.
         self.moves.append(&mut self.held);
+        if self.stopped {
+            return Ok(true);
+        }
         let gcode = |err| ProgramError::Gcode {
             file: self.file.clone(),
             err,
@@ -255,12 +285,15 @@ impl<'a> PlanStream<'a> {
             motion_err(err)
         })?;
         check_tools(&plan, &self.file, self.machine, self.tools)?;
-        motion::check_travel(
-            &plan,
-            self.machine.axes.travel_min_mm,
-            self.machine.axes.travel_max_mm,
-        )
-        .map_err(motion_err)?;
+        if self.travel_checked {
+            motion::check_travel(
+                &plan,
+                self.machine.axes.travel_min_mm,
+                self.machine.axes.travel_max_mm,
+            )
+            .map_err(motion_err)?;
+        }
+        self.units = units;
         let ended = program_ended || plan.program_end_line().is_some();
         Ok((plan, ended))
     }
@@ -361,5 +394,32 @@ mod tests {
         assert_eq!(err, whole);
         assert!(err.contains(" in"), "{err}");
         assert!(results[..results.len() - 1].iter().all(Result::is_ok));
+    }
+
+    #[test]
+    fn a_probe_answer_that_stops_the_program_leaves_the_probe_move_as_the_last_piece() {
+        let spec = MachineSpec::reference();
+        let text = "G21 G90\nG0 X50 Y50 Z-100\nG38.2 Z-110 F50\nG0 Z-50\nM2\n";
+        let tools = ToolTable::default();
+        let placement = Placement::of_machine(&spec);
+        let start = spec.axes.home_mm;
+        let mut stream =
+            PlanStream::from_source(source(text, &placement), &spec, start, &tools, 16)
+                .unwrap()
+                .answering_probes();
+        let first = stream.next().unwrap().unwrap();
+        assert_eq!(first.segments().last().map(|s| s.line), Some(2));
+        assert!(stream.pending_probe().is_some());
+        let err = stream.answer_probe(ProbeOutcome::NoContact).unwrap_err();
+        assert!(err.to_string().contains("line 3"), "{err}");
+        // The probe move, made to its programmed end, and nothing after it.
+        let last = stream.next().unwrap().unwrap();
+        let lines: Vec<usize> = last.segments().iter().map(|s| s.line).collect();
+        assert!(
+            !lines.is_empty() && lines.iter().all(|l| *l == 3),
+            "{lines:?}"
+        );
+        assert_eq!(last.segments().last().unwrap().end_mm[2], -110.0);
+        assert!(stream.next().is_none());
     }
 }
